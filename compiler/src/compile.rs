@@ -1,0 +1,108 @@
+//! The compiler's front door: load the library once, then compile documents (read → graph IR
+//! → WGSL pattern kernel) and report positioned diagnostics.
+
+use crate::graph_builder::{document_outputs, GraphBuilder, OutputRef};
+use crate::ir::Graph;
+use crate::kernel::PatternKernel;
+use crate::lower::lower;
+use crate::node_library::NodeLibrary;
+use mtlx::{has_errors, Diagnostic, Document, Library};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// A loaded node library, reused across documents.
+pub struct Compiler {
+    pub library: NodeLibrary,
+}
+
+/// What to compile: every numeric output, or the outputs named (`graph/output` or `output`).
+#[derive(Clone, Debug, Default)]
+pub enum OutputSelection {
+    #[default]
+    AllNumeric,
+    Named(Vec<String>),
+}
+
+/// The outcome of compiling one document.
+pub struct Compilation {
+    pub kernel: Option<PatternKernel>,
+    pub graph: Option<Graph>,
+    pub diagnostics: Vec<Diagnostic>,
+    /// Outputs skipped because their type is a closure or shader (not a pattern output).
+    pub skipped_closures: Vec<String>,
+}
+
+impl Compiler {
+    /// Loads the builtin library plus `extra` folders and `MATERIALX_SEARCH_PATH`.
+    pub fn new(extra: &[PathBuf]) -> Compiler {
+        Compiler { library: NodeLibrary::new(Library::load(extra)) }
+    }
+
+    /// Only the library embedded in the crate (tests, benchmarks).
+    pub fn builtin() -> Compiler {
+        Compiler { library: NodeLibrary::new(Library::builtin()) }
+    }
+
+    /// Reads and checks a document: every diagnostic from reading, resolving and building all
+    /// of its outputs (closure outputs are resolved too, not lowered).
+    pub fn check_file(&self, path: &Path) -> Vec<Diagnostic> {
+        let c = self.compile_file(path, &OutputSelection::AllNumeric);
+        c.diagnostics
+    }
+
+    pub fn compile_file(&self, path: &Path, selection: &OutputSelection) -> Compilation {
+        let (doc, diags) = mtlx::read_file(path);
+        self.compile_document(doc, diags, &path.display().to_string(), selection)
+    }
+
+    /// Compiles an already-read document. `read_diags` are the reader's diagnostics.
+    pub fn compile_document(&self, doc: Document, read_diags: Vec<Diagnostic>, source: &str, selection: &OutputSelection) -> Compilation {
+        let mut diagnostics = read_diags;
+        let fail = |diagnostics| Compilation { kernel: None, graph: None, diagnostics, skipped_closures: Vec::new() };
+        if has_errors(&diagnostics) {
+            return fail(diagnostics);
+        }
+        let all = document_outputs(&doc);
+        let chosen: Vec<OutputRef> = match selection {
+            OutputSelection::AllNumeric => all.iter().filter(|o| o.ty.is_numeric()).cloned().collect(),
+            OutputSelection::Named(names) => {
+                let mut v = Vec::new();
+                for n in names {
+                    let found: Vec<&OutputRef> = all.iter().filter(|o| &o.name == n || o.name.rsplit('/').next() == Some(n.as_str())).collect();
+                    match found.as_slice() {
+                        [one] => v.push((*one).clone()),
+                        [] => diagnostics.push(Diagnostic::error(doc.get(doc.root()).pos.clone(), format!("no output named `{n}`; outputs: {}", all.iter().map(|o| o.name.as_str()).collect::<Vec<_>>().join(", ")))),
+                        _ => diagnostics.push(Diagnostic::error(doc.get(doc.root()).pos.clone(), format!("output name `{n}` is ambiguous; write it as graph/output"))),
+                    }
+                }
+                v
+            }
+        };
+        let skipped_closures: Vec<String> = all.iter().filter(|o| !o.ty.is_numeric()).map(|o| o.name.clone()).collect();
+        if chosen.is_empty() {
+            if !has_errors(&diagnostics) {
+                diagnostics.push(Diagnostic::error(doc.get(doc.root()).pos.clone(), "no numeric output to compile (closure and shader outputs are not pattern outputs)"));
+            }
+            return Compilation { kernel: None, graph: None, diagnostics, skipped_closures };
+        }
+        for o in &chosen {
+            if !o.ty.is_numeric() {
+                diagnostics.push(Diagnostic::error(o.pos.clone(), format!("output `{}` is {}, not a pattern value", o.name, o.ty)));
+            }
+        }
+        let builder = GraphBuilder::new(&self.library, Arc::new(doc));
+        let (graph, build_diags) = builder.build(&chosen);
+        diagnostics.extend(build_diags);
+        if has_errors(&diagnostics) {
+            return Compilation { kernel: None, graph: Some(graph), diagnostics, skipped_closures };
+        }
+        match lower(&self.library, graph.clone(), source) {
+            Ok(k) => Compilation { kernel: Some(k), graph: Some(graph), diagnostics, skipped_closures },
+            Err(e) => {
+                let pos = graph.outputs.first().map(|o| o.pos.clone()).unwrap_or_else(|| mtlx::SourcePos::synthetic(source));
+                diagnostics.push(Diagnostic::error(pos, e.0));
+                Compilation { kernel: None, graph: Some(graph), diagnostics, skipped_closures }
+            }
+        }
+    }
+}

@@ -1,0 +1,592 @@
+//! Builds the graph IR from a document: finds each requested output, walks upstream through
+//! `nodename`/`nodegraph`/`interfacename` connections, matches every node to its nodedef,
+//! inlines nodegraph implementations, binds unauthored inputs to nodedef defaults and
+//! geometric properties, turns filename inputs into texture bindings, and appends one IR value
+//! per node output. Identity implementations fold away and equal values are shared (value
+//! numbering). Every error carries the source position of the element at fault.
+
+use crate::arena::Handle;
+use crate::ir::{GeomProp, Graph, GraphOutput, InterfaceInput, TextureBinding, Value, ValueKind};
+use crate::node_library::{match_nodedef, Definitions, NodeLibrary, NodeQuery};
+use mtlx::schema::{NodeDef, PortDef};
+use mtlx::{DataType, Diagnostic, Document, ElementId, SourcePos, Value as Literal};
+use std::collections::{HashMap, HashSet};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+type H = Handle<Value>;
+
+/// The result of building one node: one value per output.
+#[derive(Clone, Debug)]
+enum NodeResult {
+    Single(H),
+    Multi(Vec<(String, H)>),
+}
+
+/// How a scope's `interfacename` references resolve.
+#[derive(Clone, Debug)]
+enum Interface {
+    /// A nodegraph implementing a nodedef: names bind to the instantiating node's inputs.
+    Functional(HashMap<String, H>),
+    /// A compound nodegraph: names are the graph's own `<input>` elements. In the kernel's
+    /// graph they become kernel interface inputs; elsewhere they resolve in the parent scope.
+    Compound { kernel: bool },
+    /// The document root.
+    Root,
+}
+
+#[derive(Clone, Debug)]
+struct Scope {
+    doc: Arc<Document>,
+    graph: ElementId,
+    interface: Interface,
+    parent: Option<usize>,
+    path: String,
+}
+
+/// An output the caller asks for: a document-level `<output>` or a compound nodegraph's.
+#[derive(Clone, Debug)]
+pub struct OutputRef {
+    /// `graph/output`, or just `output` at document level.
+    pub name: String,
+    /// The graph holding it (root or nodegraph element) and the `<output>` element.
+    pub graph: ElementId,
+    pub element: ElementId,
+    pub ty: DataType,
+    pub pos: SourcePos,
+}
+
+/// Every output of `doc` that a pattern kernel could evaluate (numeric types), and the
+/// others (closures, strings), in document order.
+pub fn document_outputs(doc: &Document) -> Vec<OutputRef> {
+    let mut out = Vec::new();
+    let mut push = |graph: ElementId, prefix: &str| {
+        for o in doc.children_of(graph, "output") {
+            let e = doc.get(o);
+            out.push(OutputRef {
+                name: format!("{prefix}{}", e.name()),
+                graph,
+                element: o,
+                ty: DataType::from_name(e.attr("type").unwrap_or("")),
+                pos: e.pos.clone(),
+            });
+        }
+    };
+    push(doc.root(), "");
+    for g in doc.children_of(doc.root(), "nodegraph") {
+        let e = doc.get(g);
+        if e.attr("nodedef").is_none() {
+            push(g, &format!("{}/", e.name()));
+        }
+    }
+    out
+}
+
+pub struct GraphBuilder<'a> {
+    lib: &'a NodeLibrary,
+    local: Definitions,
+    graph: Graph,
+    scopes: Vec<Scope>,
+    scope_of_graph: HashMap<(usize, ElementId), usize>,
+    memo: HashMap<(usize, ElementId), NodeResult>,
+    visiting: HashSet<(usize, ElementId)>,
+    consing: HashMap<String, H>,
+    kernel_inputs: HashMap<(usize, String), H>,
+    signature_checked: HashMap<String, Result<(), String>>,
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+/// An error that stops building one output.
+struct Fail;
+
+impl<'a> GraphBuilder<'a> {
+    pub fn new(lib: &'a NodeLibrary, doc: Arc<Document>) -> Self {
+        let local = Definitions::new(vec![doc.clone()]);
+        let root = Scope { doc: doc.clone(), graph: doc.root(), interface: Interface::Root, parent: None, path: String::new() };
+        let mut b = GraphBuilder {
+            lib,
+            local,
+            graph: Graph::default(),
+            scopes: vec![root],
+            scope_of_graph: HashMap::new(),
+            memo: HashMap::new(),
+            visiting: HashSet::new(),
+            consing: HashMap::new(),
+            kernel_inputs: HashMap::new(),
+            signature_checked: HashMap::new(),
+            diagnostics: Vec::new(),
+        };
+        b.check_names(&doc);
+        b
+    }
+
+    fn doc(&self) -> &Arc<Document> {
+        &self.scopes[0].doc
+    }
+
+    /// Reports duplicate element names within one parent.
+    fn check_names(&mut self, doc: &Document) {
+        for id in doc.descendants(doc.root()) {
+            let mut seen: HashMap<&str, &SourcePos> = HashMap::new();
+            for &c in doc.children(id) {
+                let e = doc.get(c);
+                let n = e.name();
+                if n.is_empty() {
+                    continue;
+                }
+                if let Some(first) = seen.insert(n, &e.pos) {
+                    self.diagnostics.push(Diagnostic::error(
+                        e.pos.clone(),
+                        format!("duplicate name `{n}` (first defined at {first})"),
+                    ));
+                }
+            }
+        }
+    }
+
+    fn error(&mut self, pos: &SourcePos, msg: impl Into<String>) -> Fail {
+        self.diagnostics.push(Diagnostic::error(pos.clone(), msg));
+        Fail
+    }
+
+    /// Builds the requested outputs; outputs that fail are left out (their errors are in
+    /// `diagnostics`). Returns the graph with dead values removed.
+    pub fn build(mut self, outputs: &[OutputRef]) -> (Graph, Vec<Diagnostic>) {
+        for o in outputs {
+            let scope = if o.graph == self.doc().root() {
+                0
+            } else {
+                self.compound_scope(o.graph, true)
+            };
+            if let Ok(h) = self.resolve_connection(scope, o.element, Some(&o.ty)) {
+                self.graph.outputs.push(GraphOutput { name: o.name.clone(), ty: o.ty.clone(), value: h, pos: o.pos.clone() });
+            }
+        }
+        self.graph.remove_dead();
+        (self.graph, self.diagnostics)
+    }
+
+    /// The scope of a compound nodegraph at the document's top level.
+    fn compound_scope(&mut self, graph: ElementId, kernel: bool) -> usize {
+        if let Some(&s) = self.scope_of_graph.get(&(0, graph)) {
+            return s;
+        }
+        let doc = self.doc().clone();
+        let name = doc.get(graph).name().to_string();
+        self.scopes.push(Scope { doc, graph, interface: Interface::Compound { kernel }, parent: Some(0), path: format!("{name}/") });
+        let s = self.scopes.len() - 1;
+        self.scope_of_graph.insert((0, graph), s);
+        s
+    }
+
+    // ---- values -----------------------------------------------------------------------
+
+    fn add(&mut self, kind: ValueKind, ty: DataType, origin: String, pos: SourcePos) -> H {
+        let key = format!("{kind:?}|{ty}");
+        if let Some(&h) = self.consing.get(&key) {
+            return h;
+        }
+        let h = self.graph.values.append(Value { kind, ty, origin, pos });
+        self.consing.insert(key, h);
+        h
+    }
+
+    fn constant(&mut self, ty: &DataType, text: &str, pos: &SourcePos, origin: &str) -> Result<H, Fail> {
+        match Literal::parse(ty, text) {
+            Ok(v) => Ok(self.add(ValueKind::Constant(v), ty.clone(), origin.to_string(), pos.clone())),
+            Err(m) => Err(self.error(pos, m)),
+        }
+    }
+
+    fn zero(&mut self, ty: &DataType, pos: &SourcePos, origin: &str) -> Result<H, Fail> {
+        let lit = match ty {
+            DataType::Boolean => Literal::Boolean(false),
+            DataType::Integer => Literal::Integer(0),
+            DataType::String | DataType::Filename => Literal::String(String::new()),
+            t if t.is_numeric() => Literal::Floats(vec![0.0; t.components().unwrap()]),
+            t => return Err(self.error(pos, format!("no default value for type {t}"))),
+        };
+        Ok(self.add(ValueKind::Constant(lit), ty.clone(), origin.to_string(), pos.clone()))
+    }
+
+    // ---- connections ---------------------------------------------------------------------
+
+    /// Resolves an `<input>` or `<output>` element of scope `s`: its connection, or its value.
+    /// `expected` is the type the consumer needs (checked against what is connected).
+    fn resolve_connection(&mut self, s: usize, el: ElementId, expected: Option<&DataType>) -> Result<H, Fail> {
+        let doc = self.scopes[s].doc.clone();
+        let e = doc.get(el);
+        let pos = e.pos.clone();
+        let ty = e.attr("type").map(DataType::from_name).or_else(|| expected.cloned());
+        let Some(ty) = ty else { return Err(self.error(&pos, format!("`{}` has no type", e.name()))) };
+        if let Some(exp) = expected {
+            if *exp != ty {
+                return Err(self.error(&pos, format!("type mismatch: `{}` is declared {ty} but {exp} is expected", e.name())));
+            }
+        }
+        let origin = format!("{}{}", self.scopes[s].path, e.name());
+        let h = if let Some(node_name) = e.attr("nodename") {
+            let graph = self.scopes[s].graph;
+            let Some(node) = doc.child(graph, node_name).filter(|n| mtlx::schema::is_node_category(&doc.get(*n).category)) else {
+                return Err(self.error(&pos, format!("dangling reference: no node named `{node_name}` in this scope")));
+            };
+            let result = self.build_node(s, node)?;
+            self.pick_output(result, e.attr("output"), node_name, &pos)?
+        } else if let Some(graph_name) = e.attr("nodegraph") {
+            let root = doc.root();
+            let Some(g) = doc.child(root, graph_name).filter(|g| doc.get(*g).category == "nodegraph") else {
+                return Err(self.error(&pos, format!("dangling reference: no nodegraph named `{graph_name}`")));
+            };
+            let outs: Vec<ElementId> = doc.children_of(g, "output").collect();
+            let out = match (e.attr("output"), outs.as_slice()) {
+                (Some(o), _) => doc.child(g, o).filter(|x| doc.get(*x).category == "output"),
+                (None, [one]) => Some(*one),
+                (None, _) => None,
+            };
+            let Some(out) = out else {
+                return Err(self.error(&pos, format!("nodegraph `{graph_name}` has no output named `{}`", e.attr("output").unwrap_or("(unnamed; it has several)"))));
+            };
+            let gs = self.compound_scope(g, false);
+            self.resolve_connection(gs, out, None)?
+        } else if let Some(iname) = e.attr("interfacename") {
+            self.resolve_interface(s, iname, &pos)?
+        } else if let Some(v) = e.attr("value") {
+            if ty == DataType::Filename {
+                self.texture(&doc, el, v, &origin)?
+            } else {
+                self.constant(&ty, v, &pos, &origin)?
+            }
+        } else {
+            self.zero(&ty, &pos, &origin)?
+        };
+        let got = self.graph.values[h].ty.clone();
+        if got != ty && !(ty == DataType::Filename && got == DataType::Filename) {
+            return Err(self.error(&pos, format!("type mismatch: `{}` is declared {ty} but its source is {got}", e.name())));
+        }
+        Ok(h)
+    }
+
+    fn pick_output(&mut self, result: NodeResult, output: Option<&str>, node: &str, pos: &SourcePos) -> Result<H, Fail> {
+        match (result, output) {
+            (NodeResult::Single(h), None) => Ok(h),
+            (NodeResult::Single(h), Some("out")) => Ok(h),
+            (NodeResult::Single(_), Some(o)) => Err(self.error(pos, format!("node `{node}` has a single output; `{o}` does not exist"))),
+            (NodeResult::Multi(outs), Some(o)) => match outs.iter().find(|(n, _)| n == o) {
+                Some((_, h)) => Ok(*h),
+                None => Err(self.error(pos, format!("node `{node}` has no output named `{o}`"))),
+            },
+            (NodeResult::Multi(_), None) => Err(self.error(pos, format!("node `{node}` has several outputs: name one with `output=`"))),
+        }
+    }
+
+    fn resolve_interface(&mut self, s: usize, name: &str, pos: &SourcePos) -> Result<H, Fail> {
+        match self.scopes[s].interface.clone() {
+            Interface::Functional(map) => match map.get(name) {
+                Some(h) => Ok(*h),
+                None => Err(self.error(pos, format!("dangling reference: interface input `{name}` does not exist on the nodedef"))),
+            },
+            Interface::Compound { kernel } => {
+                let doc = self.scopes[s].doc.clone();
+                let g = self.scopes[s].graph;
+                let Some(inp) = doc.child(g, name).filter(|i| doc.get(*i).category == "input") else {
+                    return Err(self.error(pos, format!("dangling reference: nodegraph has no input named `{name}`")));
+                };
+                let e = doc.get(inp);
+                let ty = DataType::from_name(e.attr("type").unwrap_or(""));
+                let connected = mtlx::schema::CONNECTION_ATTRIBUTES.iter().any(|a| e.attr(a).is_some());
+                if kernel && ty.is_numeric() && !connected {
+                    return self.kernel_input(s, inp, ty);
+                }
+                let parent = self.scopes[s].parent.unwrap_or(0);
+                // A compound graph's inputs are resolved in the scope that holds the graph;
+                // their values are the graph's own.
+                let _ = parent;
+                self.resolve_in_parent(s, inp)
+            }
+            Interface::Root => Err(self.error(pos, format!("`interfacename=\"{name}\"` outside a nodegraph"))),
+        }
+    }
+
+    /// Resolves a compound graph's `<input>`: connections refer to the graph's parent scope.
+    fn resolve_in_parent(&mut self, s: usize, inp: ElementId) -> Result<H, Fail> {
+        let parent = self.scopes[s].parent.unwrap_or(0);
+        let doc = self.scopes[s].doc.clone();
+        let e = doc.get(inp);
+        if e.attr("nodename").is_some() || e.attr("nodegraph").is_some() || e.attr("interfacename").is_some() {
+            self.resolve_connection(parent, inp, None)
+        } else {
+            self.resolve_connection(s, inp, None)
+        }
+    }
+
+    fn kernel_input(&mut self, s: usize, inp: ElementId, ty: DataType) -> Result<H, Fail> {
+        let doc = self.scopes[s].doc.clone();
+        let e = doc.get(inp);
+        let key = (s, e.name().to_string());
+        if let Some(&h) = self.kernel_inputs.get(&key) {
+            return Ok(h);
+        }
+        let default = match e.attr("value") {
+            Some(v) => match Literal::parse(&ty, v) {
+                Ok(l) => l.components(),
+                Err(m) => return Err(self.error(&e.pos, m)),
+            },
+            None => vec![0.0; ty.components().unwrap()],
+        };
+        let name = e.name().to_string();
+        let index = self.graph.inputs.len();
+        self.graph.inputs.push(InterfaceInput { name: name.clone(), ty: ty.clone(), default, pos: e.pos.clone() });
+        let origin = format!("{}{}", self.scopes[s].path, name);
+        let h = self.add(ValueKind::Input(index), ty, origin, e.pos.clone());
+        self.kernel_inputs.insert(key, h);
+        Ok(h)
+    }
+
+    // ---- textures ------------------------------------------------------------------------
+
+    /// Nearest value of `attr` on `el` or its ancestors.
+    fn scoped_attr(doc: &Document, mut el: ElementId, attr: &str) -> Option<String> {
+        loop {
+            let e = doc.get(el);
+            if let Some(v) = e.attr(attr) {
+                return Some(v.to_string());
+            }
+            el = e.parent?;
+        }
+    }
+
+    /// A filename value: resolves it (fileprefix, the document's folder) and returns a texture
+    /// value, or an empty-string constant when the file cannot be found (texture nodes then
+    /// evaluate to their `default` input).
+    fn texture(&mut self, doc: &Document, el: ElementId, value: &str, origin: &str) -> Result<H, Fail> {
+        let pos = doc.get(el).pos.clone();
+        let prefix = Self::scoped_attr(doc, el, "fileprefix").unwrap_or_default();
+        let colorspace = Self::scoped_attr(doc, el, "colorspace");
+        let rel = format!("{prefix}{value}");
+        match resolve_file(&rel, Path::new(&*pos.file)) {
+            Some(path) if !value.is_empty() => {
+                let binding = TextureBinding { path, colorspace, pos: pos.clone() };
+                let index = match self.graph.textures.iter().position(|t| t.path == binding.path && t.colorspace == binding.colorspace) {
+                    Some(i) => i,
+                    None => {
+                        self.graph.textures.push(binding);
+                        self.graph.textures.len() - 1
+                    }
+                };
+                Ok(self.add(ValueKind::Texture(index), DataType::Filename, origin.to_string(), pos))
+            }
+            _ => {
+                if !value.is_empty() {
+                    self.diagnostics.push(Diagnostic::warning(pos.clone(), format!("file `{rel}` not found; texture nodes reading it return their `default`")));
+                }
+                Ok(self.add(ValueKind::Constant(Literal::String(String::new())), DataType::Filename, origin.to_string(), pos))
+            }
+        }
+    }
+
+    // ---- nodes ---------------------------------------------------------------------------
+
+    fn find_nodedef(&mut self, e: &mtlx::Element, ty: &DataType, authored: &[(String, DataType)]) -> Result<NodeDef, String> {
+        if let Some(name) = e.attr("nodedef") {
+            return self
+                .local
+                .nodedef(name)
+                .or_else(|| self.lib.defs.nodedef(name))
+                .cloned()
+                .ok_or_else(|| format!("missing nodedef `{name}`"));
+        }
+        let q = NodeQuery { category: &e.category, ty, version: e.attr("version"), inputs: authored };
+        match_nodedef(&[&self.local, &self.lib.defs], &q).cloned()
+    }
+
+    fn build_node(&mut self, s: usize, node: ElementId) -> Result<NodeResult, Fail> {
+        let key = (s, node);
+        if let Some(r) = self.memo.get(&key) {
+            return Ok(r.clone());
+        }
+        let doc = self.scopes[s].doc.clone();
+        let e = doc.get(node);
+        if !self.visiting.insert(key) {
+            return Err(self.error(&e.pos, format!("cycle: node `{}` depends on itself", e.name())));
+        }
+        let r = self.build_node_inner(s, node);
+        self.visiting.remove(&key);
+        if let Ok(r) = &r {
+            self.memo.insert(key, r.clone());
+        }
+        r
+    }
+
+    fn build_node_inner(&mut self, s: usize, node: ElementId) -> Result<NodeResult, Fail> {
+        let doc = self.scopes[s].doc.clone();
+        let e = doc.get(node);
+        let pos = e.pos.clone();
+        let origin = format!("{}{}", self.scopes[s].path, e.name());
+        let Some(ty) = e.attr("type").map(DataType::from_name) else {
+            return Err(self.error(&pos, format!("node `{}` has no type", e.name())));
+        };
+        let inputs: Vec<ElementId> = doc.children_of(node, "input").collect();
+        let authored: Vec<(String, DataType)> = inputs
+            .iter()
+            .map(|&i| {
+                let ie = doc.get(i);
+                (ie.name().to_string(), DataType::from_name(ie.attr("type").unwrap_or("")))
+            })
+            .collect();
+        let nd = match self.find_nodedef(e, &ty, &authored) {
+            Ok(nd) => nd,
+            Err(m) => return Err(self.error(&pos, m)),
+        };
+        for (&i, (name, t)) in inputs.iter().zip(&authored) {
+            match nd.input(name) {
+                None => return Err(self.error(&doc.get(i).pos, format!("input `{name}` is not declared by nodedef `{}`", nd.name))),
+                Some(p) if &p.ty != t => {
+                    return Err(self.error(&doc.get(i).pos, format!("type mismatch: input `{name}` is {t} but nodedef `{}` declares {}", nd.name, p.ty)))
+                }
+                _ => {}
+            }
+        }
+        if nd.node_type() != ty {
+            return Err(self.error(&pos, format!("type mismatch: node is {ty} but nodedef `{}` produces {}", nd.name, nd.node_type())));
+        }
+        if nd.outputs.iter().any(|o| !o.ty.is_numeric()) {
+            return Err(self.error(&pos, format!("node `{}` produces {}, a closure/shader type that a pattern kernel cannot evaluate", e.name(), nd.node_type())));
+        }
+        // Bind every nodedef input: authored connection/value, or default.
+        let mut bound: Vec<(PortDef, H)> = Vec::new();
+        for p in &nd.inputs {
+            let h = match inputs.iter().find(|&&i| doc.get(i).name() == p.name) {
+                Some(&i) => self.resolve_connection(s, i, Some(&p.ty))?,
+                None => self.port_default(p, &origin)?,
+            };
+            bound.push((p.clone(), h));
+        }
+        // Nodegraph implementation: inline.
+        let graph_ref = self.local.graphs.get(&nd.name).map(|g| (true, *g)).or_else(|| self.lib.defs.graphs.get(&nd.name).map(|g| (false, *g)));
+        if let Some((is_local, g)) = graph_ref {
+            let gdoc = if is_local { self.local.documents[g.doc].clone() } else { self.lib.defs.documents[g.doc].clone() };
+            let map: HashMap<String, H> = bound.iter().map(|(p, h)| (p.name.clone(), *h)).collect();
+            self.scopes.push(Scope { doc: gdoc.clone(), graph: g.element, interface: Interface::Functional(map), parent: Some(s), path: format!("{origin}/") });
+            let gs = self.scopes.len() - 1;
+            let mut outs = Vec::new();
+            for o in &nd.outputs {
+                let Some(oe) = gdoc.child(g.element, &o.name).filter(|x| gdoc.get(*x).category == "output") else {
+                    return Err(self.error(&gdoc.get(g.element).pos, format!("nodegraph implementing `{}` has no output `{}`", nd.name, o.name)));
+                };
+                outs.push((o.name.clone(), self.resolve_connection(gs, oe, Some(&o.ty))?));
+            }
+            return Ok(match outs.len() {
+                1 => NodeResult::Single(outs[0].1),
+                _ => NodeResult::Multi(outs),
+            });
+        }
+        self.call(&nd, bound, &origin, &pos)
+    }
+
+    fn port_default(&mut self, p: &PortDef, origin: &str) -> Result<H, Fail> {
+        if let Some(g) = &p.defaultgeomprop {
+            let Some(gp) = GeomProp::from_name(g) else {
+                return Err(self.error(&p.pos, format!("unknown defaultgeomprop `{g}`")));
+            };
+            let ty = crate::ir::GEOMPROPS.iter().find(|r| r.1 == gp).unwrap().3.clone();
+            let h = self.add(ValueKind::Geometry(gp), ty.clone(), gp.name().to_string(), p.pos.clone());
+            if ty != p.ty {
+                return Err(self.error(&p.pos, format!("defaultgeomprop `{g}` is {ty}, input `{}` is {}", p.name, p.ty)));
+            }
+            return Ok(h);
+        }
+        let o = format!("{origin}.{}", p.name);
+        match &p.value {
+            Some(v) if p.ty != DataType::Filename => self.constant(&p.ty, v, &p.pos, &o),
+            _ => self.zero(&p.ty, &p.pos, &o),
+        }
+    }
+
+    /// A call of the nodedef's WGSL function.
+    fn call(&mut self, nd: &NodeDef, bound: Vec<(PortDef, H)>, origin: &str, pos: &SourcePos) -> Result<NodeResult, Fail> {
+        let fname = NodeLibrary::function_name(&nd.name);
+        let check = match self.signature_checked.get(&nd.name) {
+            Some(c) => c.clone(),
+            None => {
+                let c = self.lib.check_signature(nd);
+                self.signature_checked.insert(nd.name.clone(), c.clone());
+                c
+            }
+        };
+        if let Err(m) = check {
+            return Err(self.error(pos, m));
+        }
+        let sig = self.lib.wgsl.items[&fname].signature.clone().unwrap();
+        let geometry = sig.params.first().is_some_and(|(_, t)| t == "mx_geometry");
+        let mut args = Vec::new();
+        for (p, h) in &bound {
+            let v = self.graph.values[*h].clone();
+            match (&p.ty, &p.enum_values) {
+                (DataType::String, None) => continue,
+                (DataType::String, Some(options)) => {
+                    let ValueKind::Constant(Literal::String(text)) = &v.kind else {
+                        return Err(self.error(pos, format!("input `{}` must be a constant string", p.name)));
+                    };
+                    let Some(index) = options.iter().position(|o| o == text) else {
+                        return Err(self.error(&v.pos, format!("value `{text}` of input `{}` is not one of {}", p.name, options.join(", "))));
+                    };
+                    args.push(self.add(ValueKind::Constant(Literal::Integer(index as i32)), DataType::Integer, format!("{origin}.{}", p.name), v.pos.clone()));
+                }
+                (DataType::Filename, _) => match v.kind {
+                    ValueKind::Texture(_) => args.push(*h),
+                    _ => {
+                        // Unresolved file: the node returns its `default` input, as MaterialX does.
+                        let fallback = bound.iter().find(|(q, _)| q.name == "default" && nd.outputs.len() == 1 && q.ty == nd.outputs[0].ty);
+                        return match fallback {
+                            Some((_, d)) => Ok(NodeResult::Single(*d)),
+                            None => Err(self.error(pos, format!("input `{}` names no readable file and `{}` has no `default` input", p.name, nd.name))),
+                        };
+                    }
+                },
+                _ => args.push(*h),
+            }
+        }
+        if let (Some(k), [out]) = (sig.identity_of, nd.outputs.as_slice()) {
+            let k = k - usize::from(geometry);
+            if let Some(&a) = args.get(k) {
+                if self.graph.values[a].ty == out.ty {
+                    return Ok(NodeResult::Single(a));
+                }
+            }
+        }
+        let ty = nd.node_type();
+        let h = self.add(ValueKind::Call { function: fname, args, geometry }, ty, origin.to_string(), pos.clone());
+        if nd.outputs.len() == 1 {
+            return Ok(NodeResult::Single(h));
+        }
+        let outs = nd
+            .outputs
+            .iter()
+            .map(|o| {
+                let f = self.add(ValueKind::Field { base: h, field: o.name.clone() }, o.ty.clone(), format!("{origin}.{}", o.name), pos.clone());
+                (o.name.clone(), f)
+            })
+            .collect();
+        Ok(NodeResult::Multi(outs))
+    }
+}
+
+/// Resolves a file named in a document at `doc_file`: relative to the document's folder; then,
+/// for MaterialX's own test documents that name files from the repository root
+/// (`resources/Images/…`), relative to each ancestor folder with `resources/` removed.
+pub fn resolve_file(name: &str, doc_file: &Path) -> Option<PathBuf> {
+    if name.is_empty() || name.contains('<') || name.contains('{') {
+        return None;
+    }
+    let p = Path::new(name);
+    if p.is_absolute() {
+        return p.is_file().then(|| p.to_path_buf());
+    }
+    let dir = doc_file.parent().unwrap_or(Path::new("."));
+    let direct = dir.join(p);
+    if direct.is_file() {
+        return Some(direct);
+    }
+    let stripped = name.strip_prefix("resources/")?;
+    dir.ancestors().map(|a| a.join(stripped)).find(|c| c.is_file())
+}

@@ -1,0 +1,17 @@
+//! uplift's compiler: MaterialX documents (through the `mtlx` crate) become a typed graph IR
+//! (`ir`, built by `graph_builder` against the indexed `node_library`), which is lowered
+//! (`lower`, askama templates in `templates/`) to WGSL text, parsed once by naga, validated,
+//! compacted and emitted. This crate never touches wgpu, reads textures or runs kernels.
+
+pub mod arena;
+pub mod compile;
+pub mod graph_builder;
+pub mod ir;
+pub mod kernel;
+pub mod lower;
+pub mod node_library;
+pub mod wgsl_items;
+pub mod wgsl_types;
+
+pub use compile::{Compilation, Compiler, OutputSelection};
+pub use kernel::PatternKernel;

@@ -1,0 +1,157 @@
+//! Reading `.mtlx` text into a [`Document`]: XML parsing (roxmltree) with a source position
+//! for every element, `xi:include` merging, then the version upgrades of `crate::upgrade`.
+//! Errors never stop the reader early: it returns the document it could build plus every
+//! diagnostic, so one bad element does not hide the rest.
+
+use crate::diagnostic::Diagnostic;
+use crate::document::{Document, ElementId};
+use crate::position::SourcePos;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+const XINCLUDE_NS: &str = "http://www.w3.org/2001/XInclude";
+
+/// Root attributes that MaterialX copies onto the children of an included document.
+const INHERITED_ROOT_ATTRIBUTES: [&str; 4] = ["fileprefix", "geomprefix", "colorspace", "namespace"];
+
+/// Reads a document from a file; the file's path names every position.
+pub fn read_file(path: &Path) -> (Document, Vec<Diagnostic>) {
+    let mut diags = Vec::new();
+    let mut stack = Vec::new();
+    let doc = read_file_inner(path, &mut diags, &mut stack, None);
+    (doc, diags)
+}
+
+/// Reads a document from text; `name` stands for the file in positions, and relative
+/// `xi:include` paths resolve against its folder.
+pub fn read_str(text: &str, name: &str) -> (Document, Vec<Diagnostic>) {
+    let mut diags = Vec::new();
+    let mut stack = vec![PathBuf::from(name)];
+    let doc = parse_text(text, Path::new(name), &mut diags, &mut stack);
+    (doc, diags)
+}
+
+fn read_file_inner(
+    path: &Path,
+    diags: &mut Vec<Diagnostic>,
+    stack: &mut Vec<PathBuf>,
+    included_from: Option<&SourcePos>,
+) -> Document {
+    let file: Arc<str> = Arc::from(path.display().to_string());
+    let text = match std::fs::read_to_string(path) {
+        Ok(t) => t,
+        Err(e) => {
+            let pos = included_from.cloned().unwrap_or_else(|| SourcePos::new(file.clone(), 0, 0));
+            diags.push(Diagnostic::error(pos, format!("cannot read `{}`: {e}", path.display())));
+            return Document::new(SourcePos::new(file, 1, 1));
+        }
+    };
+    stack.push(path.to_path_buf());
+    let doc = parse_text(&text, path, diags, stack);
+    stack.pop();
+    doc
+}
+
+fn parse_text(text: &str, path: &Path, diags: &mut Vec<Diagnostic>, stack: &mut Vec<PathBuf>) -> Document {
+    let file: Arc<str> = Arc::from(path.display().to_string());
+    let opts = roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
+    let xml = match roxmltree::Document::parse_with_options(text, opts) {
+        Ok(x) => x,
+        Err(e) => {
+            let p = e.pos();
+            diags.push(Diagnostic::error(SourcePos::new(file.clone(), p.row, p.col), format!("malformed XML: {e}")));
+            return Document::new(SourcePos::new(file, 1, 1));
+        }
+    };
+    let root = xml.root_element();
+    let root_pos = pos_of(&xml, root, &file);
+    let mut doc = Document::new(root_pos.clone());
+    if root.tag_name().name() != "materialx" {
+        diags.push(Diagnostic::error(
+            root_pos,
+            format!("root element is <{}>, expected <materialx>", root.tag_name().name()),
+        ));
+        return doc;
+    }
+    let doc_root = doc.root();
+    doc.get_mut(doc_root).attributes = attributes_of(root);
+    for child in root.children().filter(|c| c.is_element()) {
+        convert(&xml, child, &file, path, &mut doc, doc_root, diags, stack);
+    }
+    crate::upgrade::upgrade(&mut doc, diags);
+    doc
+}
+
+fn pos_of(xml: &roxmltree::Document, node: roxmltree::Node, file: &Arc<str>) -> SourcePos {
+    let p = xml.text_pos_at(node.range().start);
+    SourcePos::new(file.clone(), p.row, p.col)
+}
+
+fn attributes_of(node: roxmltree::Node) -> Vec<(String, String)> {
+    node.attributes().map(|a| (a.name().to_string(), a.value().to_string())).collect()
+}
+
+#[allow(clippy::too_many_arguments)]
+fn convert(
+    xml: &roxmltree::Document,
+    node: roxmltree::Node,
+    file: &Arc<str>,
+    path: &Path,
+    doc: &mut Document,
+    parent: ElementId,
+    diags: &mut Vec<Diagnostic>,
+    stack: &mut Vec<PathBuf>,
+) {
+    let pos = pos_of(xml, node, file);
+    let tag = node.tag_name();
+    if tag.name() == "include" && (tag.namespace() == Some(XINCLUDE_NS) || node.tag_name().namespace().is_none()) {
+        include(node, &pos, path, doc, parent, diags, stack);
+        return;
+    }
+    let id = doc.add_child(parent, tag.name(), attributes_of(node), pos);
+    for child in node.children().filter(|c| c.is_element()) {
+        convert(xml, child, file, path, doc, id, diags, stack);
+    }
+}
+
+/// Merges the top-level elements of an included document under `parent`, as MaterialX does:
+/// elements whose name already exists are skipped, and the included root's fileprefix,
+/// colorspace, geomprefix and namespace are copied onto its children that lack them.
+fn include(
+    node: roxmltree::Node,
+    pos: &SourcePos,
+    path: &Path,
+    doc: &mut Document,
+    parent: ElementId,
+    diags: &mut Vec<Diagnostic>,
+    stack: &mut Vec<PathBuf>,
+) {
+    let Some(href) = node.attribute("href") else {
+        diags.push(Diagnostic::error(pos.clone(), "xi:include without an `href` attribute"));
+        return;
+    };
+    let target = path.parent().unwrap_or(Path::new(".")).join(href);
+    let canonical = target.canonicalize().unwrap_or_else(|_| target.clone());
+    if stack.iter().any(|p| p.canonicalize().unwrap_or_else(|_| p.clone()) == canonical) {
+        diags.push(Diagnostic::error(pos.clone(), format!("xi:include cycle: `{href}` includes itself")));
+        return;
+    }
+    let included = read_file_inner(&target, diags, stack, Some(pos));
+    let inc_root = included.get(included.root());
+    let inherited: Vec<(String, String)> = INHERITED_ROOT_ATTRIBUTES
+        .iter()
+        .filter_map(|k| inc_root.attr(k).map(|v| (k.to_string(), v.to_string())))
+        .collect();
+    for &child in included.top_level() {
+        let name = included.get(child).name().to_string();
+        if !name.is_empty() && doc.child(parent, &name).is_some() {
+            continue;
+        }
+        let id = doc.import_subtree(parent, &included, child);
+        for (k, v) in &inherited {
+            if doc.get(id).attr(k).is_none() {
+                doc.get_mut(id).set_attr(k, v.clone());
+            }
+        }
+    }
+}

@@ -1,0 +1,38 @@
+//! The `uplift` command line: `check` and `compile` (the compiler spine); later stages add
+//! engines, data generation, training and rendering commands.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "uplift", version, about = "MaterialX → naga compiler and runtime for uplifted materials")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Read a document, resolve every node, and report all diagnostics (exit 1 on error).
+    Check(uplift::cli::check::CheckArgs),
+    /// Compile a document's outputs to a pattern kernel.
+    Compile(uplift::cli::compile::CompileArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Check(a) => uplift::cli::check::run(a),
+        Command::Compile(a) => uplift::cli::compile::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            if !message.is_empty() {
+                eprintln!("{message}");
+            }
+            ExitCode::from(1)
+        }
+    }
+}
+

@@ -1,0 +1,16 @@
+//! Subcommands of the `uplift` binary, one module each. Each `run` returns `Err(message)` for
+//! a failure to print (already positioned as `file:line:col: …`); the binary exits 1.
+
+pub mod check;
+pub mod compile;
+pub mod compile_bench;
+
+use mtlx::Diagnostic;
+
+/// Prints diagnostics to stderr; returns true when any is an error.
+pub fn report(diagnostics: &[Diagnostic]) -> bool {
+    for d in diagnostics {
+        eprintln!("{d}");
+    }
+    mtlx::has_errors(diagnostics)
+}
