@@ -3,3 +3,4 @@
 
 pub mod atomic_write;
 pub mod cli;
+pub mod wgpu_engine;
