@@ -81,7 +81,7 @@ impl Compiler {
         let skipped_closures: Vec<String> = all.iter().filter(|o| !o.ty.is_numeric()).map(|o| o.name.clone()).collect();
         if chosen.is_empty() {
             if !has_errors(&diagnostics) {
-                diagnostics.push(Diagnostic::error(doc.get(doc.root()).pos.clone(), "no numeric output to compile (closure and shader outputs are not pattern outputs)"));
+                diagnostics.push(Diagnostic::warning(doc.get(doc.root()).pos.clone(), "nothing to compile: the document has no pattern (non-closure) output"));
             }
             return Compilation { kernel: None, graph: None, diagnostics, skipped_closures };
         }

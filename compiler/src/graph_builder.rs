@@ -54,13 +54,16 @@ pub struct OutputRef {
     pub element: ElementId,
     pub ty: DataType,
     pub pos: SourcePos,
+    /// When `element` is a node rather than an `<input>`/`<output>`: which of its outputs
+    /// (empty for a single-output node).
+    pub node_output: Option<String>,
 }
 
 /// Every output of `doc` that a pattern kernel could evaluate (numeric types), and the
 /// others (closures, strings), in document order.
 pub fn document_outputs(doc: &Document) -> Vec<OutputRef> {
     let mut out = Vec::new();
-    let mut push = |graph: ElementId, prefix: &str| {
+    let push = |out: &mut Vec<OutputRef>, graph: ElementId, prefix: &str| {
         for o in doc.children_of(graph, "output") {
             let e = doc.get(o);
             out.push(OutputRef {
@@ -69,14 +72,61 @@ pub fn document_outputs(doc: &Document) -> Vec<OutputRef> {
                 element: o,
                 ty: DataType::from_name(e.attr("type").unwrap_or("")),
                 pos: e.pos.clone(),
+                node_output: None,
             });
         }
     };
-    push(doc.root(), "");
+    let mut graphs = vec![(doc.root(), String::new())];
     for g in doc.children_of(doc.root(), "nodegraph") {
         let e = doc.get(g);
         if e.attr("nodedef").is_none() {
-            push(g, &format!("{}/", e.name()));
+            graphs.push((g, format!("{}/", e.name())));
+        }
+    }
+    for (g, prefix) in &graphs {
+        push(&mut out, *g, prefix);
+    }
+    // Top-level numeric nodes that nothing consumes are renderable values too (MaterialX's
+    // test documents often hold bare nodes): named by the node.
+    let root = doc.root();
+    let consumed: std::collections::HashSet<&str> = doc
+        .descendants(root)
+        .into_iter()
+        .filter_map(|i| doc.get(i).attr("nodename"))
+        .collect();
+    for &n in doc.children(root) {
+        let ne = doc.get(n);
+        let ty = DataType::from_name(ne.attr("type").unwrap_or(""));
+        if mtlx::schema::is_node_category(&ne.category) && !consumed.contains(ne.name()) && (ty.is_numeric() || ty == DataType::Multioutput) {
+            let outs: Vec<ElementId> = doc.children_of(n, "output").collect();
+            if ty == DataType::Multioutput {
+                for o in outs {
+                    let oe = doc.get(o);
+                    let oty = DataType::from_name(oe.attr("type").unwrap_or(""));
+                    out.push(OutputRef { name: format!("{}/{}", ne.name(), oe.name()), graph: root, element: n, ty: oty, pos: ne.pos.clone(), node_output: Some(oe.name().to_string()) });
+                }
+            } else {
+                out.push(OutputRef { name: ne.name().to_string(), graph: root, element: n, ty, pos: ne.pos.clone(), node_output: Some(String::new()) });
+            }
+        }
+    }
+    // The connected numeric inputs of shader and closure nodes are pattern outputs too:
+    // `node/input` (what a renderer binds as per-texel parameters).
+    for (g, prefix) in &graphs {
+        for n in doc.children(*g) {
+            let ne = doc.get(*n);
+            let is_closure_node = ne.attr("type").is_some_and(|t| DataType::from_name(t).is_closure());
+            if !is_closure_node || !mtlx::schema::is_node_category(&ne.category) {
+                continue;
+            }
+            for i in doc.children_of(*n, "input") {
+                let ie = doc.get(i);
+                let ty = DataType::from_name(ie.attr("type").unwrap_or(""));
+                let connected = mtlx::schema::CONNECTION_ATTRIBUTES.iter().any(|a| ie.attr(a).is_some());
+                if ty.is_numeric() && connected {
+                    out.push(OutputRef { name: format!("{prefix}{}/{}", ne.name(), ie.name()), graph: *g, element: i, ty, pos: ie.pos.clone(), node_output: None });
+                }
+            }
         }
     }
     out
@@ -158,7 +208,15 @@ impl<'a> GraphBuilder<'a> {
             } else {
                 self.compound_scope(o.graph, true)
             };
-            if let Ok(h) = self.resolve_connection(scope, o.element, Some(&o.ty)) {
+            let value = match &o.node_output {
+                None => self.resolve_connection(scope, o.element, Some(&o.ty)),
+                Some(which) => {
+                    let name = self.doc().get(o.element).name().to_string();
+                    let which = (!which.is_empty()).then_some(which.as_str());
+                    self.build_node(scope, o.element).and_then(|r| self.pick_output(r, which, &name, &o.pos))
+                }
+            };
+            if let Ok(h) = value {
                 self.graph.outputs.push(GraphOutput { name: o.name.clone(), ty: o.ty.clone(), value: h, pos: o.pos.clone() });
             }
         }
@@ -225,14 +283,16 @@ impl<'a> GraphBuilder<'a> {
             }
         }
         let origin = format!("{}{}", self.scopes[s].path, e.name());
-        let h = if let Some(node_name) = e.attr("nodename") {
-            let graph = self.scopes[s].graph;
-            let Some(node) = doc.child(graph, node_name).filter(|n| mtlx::schema::is_node_category(&doc.get(*n).category)) else {
-                return Err(self.error(&pos, format!("dangling reference: no node named `{node_name}` in this scope")));
-            };
-            let result = self.build_node(s, node)?;
-            self.pick_output(result, e.attr("output"), node_name, &pos)?
-        } else if let Some(graph_name) = e.attr("nodegraph") {
+        if let Some(unit) = e.attr("unit") {
+            self.diagnostics.push(Diagnostic::warning(pos.clone(), format!("unit `{unit}` on `{}` is recorded but no unit conversion is applied", e.name())));
+        }
+        // At document level MaterialX also lets `nodename` name a nodegraph.
+        let graph_target = e.attr("nodegraph").or_else(|| {
+            let n = e.attr("nodename")?;
+            let g = doc.child(self.scopes[s].graph, n)?;
+            (doc.get(g).category == "nodegraph").then_some(n)
+        });
+        let h = if let Some(graph_name) = graph_target {
             let root = doc.root();
             let Some(g) = doc.child(root, graph_name).filter(|g| doc.get(*g).category == "nodegraph") else {
                 return Err(self.error(&pos, format!("dangling reference: no nodegraph named `{graph_name}`")));
@@ -248,6 +308,13 @@ impl<'a> GraphBuilder<'a> {
             };
             let gs = self.compound_scope(g, false);
             self.resolve_connection(gs, out, None)?
+        } else if let Some(node_name) = e.attr("nodename") {
+            let graph = self.scopes[s].graph;
+            let Some(node) = doc.child(graph, node_name).filter(|n| mtlx::schema::is_node_category(&doc.get(*n).category)) else {
+                return Err(self.error(&pos, format!("dangling reference: no node named `{node_name}` in this scope")));
+            };
+            let result = self.build_node(s, node)?;
+            self.pick_output(result, e.attr("output"), node_name, &pos)?
         } else if let Some(iname) = e.attr("interfacename") {
             self.resolve_interface(s, iname, &pos)?
         } else if let Some(v) = e.attr("value") {
@@ -297,13 +364,21 @@ impl<'a> GraphBuilder<'a> {
                 if kernel && ty.is_numeric() && !connected {
                     return self.kernel_input(s, inp, ty);
                 }
-                let parent = self.scopes[s].parent.unwrap_or(0);
-                // A compound graph's inputs are resolved in the scope that holds the graph;
-                // their values are the graph's own.
-                let _ = parent;
                 self.resolve_in_parent(s, inp)
             }
-            Interface::Root => Err(self.error(pos, format!("`interfacename=\"{name}\"` outside a nodegraph"))),
+            Interface::Root => {
+                // Document-level `<input>`s act as the document's interface.
+                let doc = self.scopes[s].doc.clone();
+                let Some(inp) = doc.child(doc.root(), name).filter(|i| doc.get(*i).category == "input") else {
+                    return Err(self.error(pos, format!("dangling reference: `interfacename=\"{name}\"` outside a nodegraph names no document-level input")));
+                };
+                let ty = DataType::from_name(doc.get(inp).attr("type").unwrap_or(""));
+                if ty.is_numeric() {
+                    self.kernel_input(s, inp, ty)
+                } else {
+                    self.resolve_connection(s, inp, None)
+                }
+            }
         }
     }
 
@@ -449,7 +524,7 @@ impl<'a> GraphBuilder<'a> {
         if nd.node_type() != ty {
             return Err(self.error(&pos, format!("type mismatch: node is {ty} but nodedef `{}` produces {}", nd.name, nd.node_type())));
         }
-        if nd.outputs.iter().any(|o| !o.ty.is_numeric()) {
+        if nd.outputs.iter().any(|o| !o.ty.is_numeric() && !matches!(o.ty, DataType::String | DataType::Filename)) {
             return Err(self.error(&pos, format!("node `{}` produces {}, a closure/shader type that a pattern kernel cannot evaluate", e.name(), nd.node_type())));
         }
         // Bind every nodedef input: authored connection/value, or default.
@@ -460,6 +535,17 @@ impl<'a> GraphBuilder<'a> {
                 None => self.port_default(p, &origin)?,
             };
             bound.push((p.clone(), h));
+        }
+        // String and filename nodes (`dot`, `constant` of a filename) pass their
+        // `defaultinput` through at compile time.
+        if let [out] = nd.outputs.as_slice() {
+            if !out.ty.is_numeric() {
+                let through = out.defaultinput.as_deref().and_then(|d| bound.iter().find(|(p, _)| p.name == d));
+                return match through {
+                    Some((_, h)) => Ok(NodeResult::Single(*h)),
+                    None => Err(self.error(&pos, format!("node `{}` produces a {} without a `defaultinput` to pass through", e.name(), out.ty))),
+                };
+            }
         }
         // Nodegraph implementation: inline.
         let graph_ref = self.local.graphs.get(&nd.name).map(|g| (true, *g)).or_else(|| self.lib.defs.graphs.get(&nd.name).map(|g| (false, *g)));

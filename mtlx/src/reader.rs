@@ -54,8 +54,23 @@ fn read_file_inner(
 
 fn parse_text(text: &str, path: &Path, diags: &mut Vec<Diagnostic>, stack: &mut Vec<PathBuf>) -> Document {
     let file: Arc<str> = Arc::from(path.display().to_string());
-    let opts = roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
-    let xml = match roxmltree::Document::parse_with_options(text, opts) {
+    let opts = || roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
+    // MaterialX's own reader (pugixml) accepts a raw `<` inside attribute values, as in
+    // `value="grid.<UDIM>.png"`; XML does not. When strict parsing fails, retry with such
+    // `<` escaped (columns on those lines then shift by 3 per escape).
+    let escaped: String;
+    let parsed = match roxmltree::Document::parse_with_options(text, opts()) {
+        Ok(x) => Ok(x),
+        Err(e) => {
+            escaped = escape_lt_in_attributes(text);
+            if escaped == text {
+                Err(e)
+            } else {
+                roxmltree::Document::parse_with_options(&escaped, opts()).map_err(|_| e)
+            }
+        }
+    };
+    let xml = match parsed {
         Ok(x) => x,
         Err(e) => {
             let p = e.pos();
@@ -154,4 +169,35 @@ fn include(
             }
         }
     }
+}
+
+/// Replaces `<` inside quoted attribute values of tags with `&lt;`.
+fn escape_lt_in_attributes(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut in_tag = false;
+    let mut quote: Option<char> = None;
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (in_tag, quote, c) {
+            (_, Some(q), '<') if in_tag && q != '\0' => out.push_str("&lt;"),
+            (true, Some(q), c) if c == q => {
+                quote = None;
+                out.push(c);
+            }
+            (true, None, '"' | '\'') => {
+                quote = Some(c);
+                out.push(c);
+            }
+            (true, None, '>') => {
+                in_tag = false;
+                out.push(c);
+            }
+            (false, _, '<') => {
+                in_tag = !matches!(chars.peek(), Some('!' | '?'));
+                out.push(c);
+            }
+            _ => out.push(c),
+        }
+    }
+    out
 }

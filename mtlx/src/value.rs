@@ -30,11 +30,12 @@ impl Value {
             DataType::String | DataType::Filename => Ok(Value::String(text.to_string())),
             t if t.is_numeric() => {
                 let n = t.components().unwrap();
-                let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+                // MaterialX separates components by commas and/or spaces ("1, 2", "1 2").
+                let parts: Vec<&str> = text.split([',', ' ', '\t', '\n']).filter(|p| !p.is_empty()).collect();
                 let parsed: Result<Vec<f32>, _> = parts.iter().map(|p| p.parse::<f32>()).collect();
                 match parsed {
                     Ok(v) if v.len() == n => Ok(Value::Floats(v)),
-                    Ok(v) if v.len() == 1 && text.is_empty() => Ok(Value::Floats(vec![0.0; n])),
+                    Ok(v) if v.is_empty() => Ok(Value::Floats(vec![0.0; n])),
                     Ok(v) => Err(format!("`{text}` has {} components; {t} needs {n}", v.len())),
                     Err(_) => Err(format!("`{text}` is not a {t} value")),
                 }
