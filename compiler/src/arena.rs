@@ -82,6 +82,10 @@ impl<T> Arena<T> {
         self.items.is_empty()
     }
 
+    pub fn iter_mut(&mut self) -> impl Iterator<Item = (Handle<T>, &mut T)> {
+        self.items.iter_mut().enumerate().map(|(i, v)| (Handle::from_index(i), v))
+    }
+
     pub fn iter(&self) -> impl Iterator<Item = (Handle<T>, &T)> {
         self.items.iter().enumerate().map(|(i, v)| (Handle::from_index(i), v))
     }

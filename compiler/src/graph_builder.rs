@@ -282,7 +282,10 @@ impl<'a> GraphBuilder<'a> {
                 return Err(self.error(&pos, format!("type mismatch: `{}` is declared {ty} but {exp} is expected", e.name())));
             }
         }
-        let origin = format!("{}{}", self.scopes[s].path, e.name());
+        let origin = match e.parent.map(|p| doc.get(p)).filter(|p| mtlx::schema::is_node_category(&p.category) && e.category == "input") {
+            Some(node) => format!("{}{}.{}", self.scopes[s].path, node.name(), e.name()),
+            None => format!("{}{}", self.scopes[s].path, e.name()),
+        };
         if let Some(unit) = e.attr("unit") {
             self.diagnostics.push(Diagnostic::warning(pos.clone(), format!("unit `{unit}` on `{}` is recorded but no unit conversion is applied", e.name())));
         }

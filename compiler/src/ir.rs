@@ -166,8 +166,20 @@ impl Graph {
         for o in &mut self.outputs {
             o.value = remap[o.value.index()].unwrap();
         }
+        // Interface inputs in document order, whatever order they were first used in.
+        let mut order: Vec<usize> = (0..inputs.len()).collect();
+        order.sort_by_key(|&i| (inputs[i].pos.file.clone(), inputs[i].pos.line, inputs[i].pos.column));
+        let mut rank = vec![0; inputs.len()];
+        for (r, &i) in order.iter().enumerate() {
+            rank[i] = r;
+        }
+        for (_, v) in values.iter_mut() {
+            if let ValueKind::Input(i) = &mut v.kind {
+                *i = rank[*i];
+            }
+        }
+        self.inputs = order.iter().map(|&i| inputs[i].clone()).collect();
         self.values = values;
-        self.inputs = inputs;
         self.textures = textures;
     }
 
