@@ -60,17 +60,17 @@ fn parse_text(text: &str, path: &Path, diags: &mut Vec<Diagnostic>, stack: &mut 
     // `<` escaped (columns on those lines then shift by 3 per escape).
     let escaped: String;
     let parsed = match roxmltree::Document::parse_with_options(text, opts()) {
-        Ok(x) => Ok(x),
+        Ok(x) => Ok((x, text)),
         Err(e) => {
             escaped = escape_lt_in_attributes(text);
             if escaped == text {
                 Err(e)
             } else {
-                roxmltree::Document::parse_with_options(&escaped, opts()).map_err(|_| e)
+                roxmltree::Document::parse_with_options(&escaped, opts()).map(|x| (x, escaped.as_str())).map_err(|_| e)
             }
         }
     };
-    let xml = match parsed {
+    let (xml, parsed_text) = match parsed {
         Ok(x) => x,
         Err(e) => {
             let p = e.pos();
@@ -78,8 +78,9 @@ fn parse_text(text: &str, path: &Path, diags: &mut Vec<Diagnostic>, stack: &mut 
             return Document::new(SourcePos::new(file, 1, 1));
         }
     };
+    let lines = Lines::new(parsed_text);
     let root = xml.root_element();
-    let root_pos = pos_of(&xml, root, &file);
+    let root_pos = lines.pos(root, &file);
     let mut doc = Document::new(root_pos.clone());
     if root.tag_name().name() != "materialx" {
         diags.push(Diagnostic::error(
@@ -90,16 +91,44 @@ fn parse_text(text: &str, path: &Path, diags: &mut Vec<Diagnostic>, stack: &mut 
     }
     let doc_root = doc.root();
     doc.get_mut(doc_root).attributes = attributes_of(root);
-    for child in root.children().filter(|c| c.is_element()) {
-        convert(&xml, child, &file, path, &mut doc, doc_root, diags, stack);
+    // As MaterialX does: included documents are merged first, and then the document's own
+    // top-level elements, skipping names an include already defined.
+    let (includes, own): (Vec<_>, Vec<_>) = root.children().filter(|c| c.is_element()).partition(|c| is_include(*c));
+    for child in includes.into_iter().chain(own) {
+        let name = child.attribute("name").unwrap_or("");
+        if !is_include(child) && !name.is_empty() && doc.child(doc_root, name).is_some() {
+            diags.push(Diagnostic::warning(lines.pos(child, &file), format!("`{name}` is already defined by an included document; this definition is skipped")));
+            continue;
+        }
+        convert(&lines, child, &file, path, &mut doc, doc_root, diags, stack);
     }
     crate::upgrade::upgrade(&mut doc, diags);
     doc
 }
 
-fn pos_of(xml: &roxmltree::Document, node: roxmltree::Node, file: &Arc<str>) -> SourcePos {
-    let p = xml.text_pos_at(node.range().start);
-    SourcePos::new(file.clone(), p.row, p.col)
+/// Byte offsets of line starts, for `line:column` of any offset in O(log n).
+struct Lines<'a> {
+    text: &'a str,
+    starts: Vec<usize>,
+}
+
+impl<'a> Lines<'a> {
+    fn new(text: &'a str) -> Self {
+        let starts = std::iter::once(0).chain(text.match_indices('\n').map(|(i, _)| i + 1)).collect();
+        Lines { text, starts }
+    }
+
+    fn pos(&self, node: roxmltree::Node, file: &Arc<str>) -> SourcePos {
+        let offset = node.range().start;
+        let line = self.starts.partition_point(|&s| s <= offset) - 1;
+        let column = self.text[self.starts[line]..offset].chars().count() + 1;
+        SourcePos::new(file.clone(), line as u32 + 1, column as u32)
+    }
+}
+
+fn is_include(node: roxmltree::Node) -> bool {
+    let tag = node.tag_name();
+    tag.name() == "include" && (tag.namespace() == Some(XINCLUDE_NS) || tag.namespace().is_none())
 }
 
 fn attributes_of(node: roxmltree::Node) -> Vec<(String, String)> {
@@ -108,7 +137,7 @@ fn attributes_of(node: roxmltree::Node) -> Vec<(String, String)> {
 
 #[allow(clippy::too_many_arguments)]
 fn convert(
-    xml: &roxmltree::Document,
+    lines: &Lines,
     node: roxmltree::Node,
     file: &Arc<str>,
     path: &Path,
@@ -117,15 +146,15 @@ fn convert(
     diags: &mut Vec<Diagnostic>,
     stack: &mut Vec<PathBuf>,
 ) {
-    let pos = pos_of(xml, node, file);
+    let pos = lines.pos(node, file);
     let tag = node.tag_name();
-    if tag.name() == "include" && (tag.namespace() == Some(XINCLUDE_NS) || node.tag_name().namespace().is_none()) {
+    if is_include(node) {
         include(node, &pos, path, doc, parent, diags, stack);
         return;
     }
     let id = doc.add_child(parent, tag.name(), attributes_of(node), pos);
     for child in node.children().filter(|c| c.is_element()) {
-        convert(xml, child, file, path, doc, id, diags, stack);
+        convert(lines, child, file, path, doc, id, diags, stack);
     }
 }
 

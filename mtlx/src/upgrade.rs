@@ -14,6 +14,10 @@
 //!   channels (`outr`… for colours, `outx`… for vectors) whatever letters the swizzle used;
 //! * a connection created by the upgrade replaces any value or other binding on that input;
 //! * `backdrop` parameters become backdrop attributes (MaterialX never reaches that branch);
+//! * a thin film without `thickness` passes its 1.38 default (550 nm) on, where MaterialX leaves
+//!   `thinfilm_thickness` at its 1.39 default of 0 (no film);
+//! * a `base` bound to an interface input or nodegraph output is layered like one bound to a
+//!   node (MaterialX drops it);
 //! * versions between steps (1.27–1.33) take the next step instead of stopping.
 
 use crate::diagnostic::Diagnostic;
@@ -359,7 +363,7 @@ impl Up<'_> {
                 }
             }
         }
-        if let Some(ng) = self.attr(port, "nodegraph") {
+        if let Some(ng) = self.attr(port, "nodegraph").filter(|_| self.cat(port) == "input") {
             let g = self.find_nodegraph(graph, &ng)?;
             let out = match self.attr(port, "output") {
                 Some(o) => self.doc.children_of(g, "output").find(|&c| self.doc.get(c).name() == o),
@@ -597,11 +601,9 @@ impl Up<'_> {
                             self.set(child, "node", p);
                         }
                     }
-                    "shaderref" => {
-                        if self.has(child, "shadertype") {
-                            self.set(child, "type", "surfaceshader");
-                            self.unset(child, "shadertype");
-                        }
+                    "shaderref" if self.has(child, "shadertype") => {
+                        self.set(child, "type", "surfaceshader");
+                        self.unset(child, "shadertype");
                     }
                     "parameter" if self.doc.get(child).attr("type") == Some("opgraphnode") => {
                         if self.is_node(elem) {
@@ -806,11 +808,31 @@ impl Up<'_> {
                 continue;
             }
             let name = self.name(nd);
+            let mut users = Vec::new();
             for mat in self.top_level("material") {
                 for sr in self.children_of(mat, "shaderref") {
                     if self.doc.get(sr).attr("nodedef") == Some(name.as_str()) {
                         self.unset(sr, "nodedef");
+                        users.push(sr);
                     }
+                }
+            }
+            // The legacy declaration's defaults die with it: the shader node made from each
+            // shaderref takes its defaults from the library's nodedef instead.
+            for input in self.children(nd) {
+                if !matches!(self.cat(input), "input" | "parameter") || !self.has(input, "value") {
+                    continue;
+                }
+                let input_name = self.name(input);
+                if users.iter().any(|&sr| self.child(sr, &input_name).is_none()) {
+                    let value = self.attr_or_empty(input, "value");
+                    self.warn(
+                        input,
+                        format!(
+                            "the default `{input_name}` = \"{value}\" of legacy shader `{name}` is dropped with its declaration; \
+                             the shader's library definition supplies the default instead"
+                        ),
+                    );
                 }
             }
             self.doc.remove(nd);
@@ -859,10 +881,10 @@ impl Up<'_> {
                         self.set(b, "name", "in1");
                     }
                 }
-                "transformpoint" | "transformvector" | "transformnormal" => {
-                    if self.child(id, "fromspace").is_none() && self.child(id, "tospace").is_none() {
-                        self.set_cat(id, "transformmatrix");
-                    }
+                "transformpoint" | "transformvector" | "transformnormal"
+                    if self.child(id, "fromspace").is_none() && self.child(id, "tospace").is_none() =>
+                {
+                    self.set_cat(id, "transformmatrix");
                 }
                 "combine" => {
                     let c = if self.child(id, "in4").is_some() {
@@ -959,11 +981,16 @@ impl Up<'_> {
             let mat_name = self.name(mat);
             let mut shader_inputs: Vec<(String, String)> = Vec::new(); // (shader type, node name)
             let mut new_nodes = Vec::new();
-            for sr in self.children_of(mat, "shaderref") {
+            let shaderrefs = self.children_of(mat, "shaderref");
+            let had_shaderrefs = !shaderrefs.is_empty();
+            for sr in shaderrefs {
                 let nd = self.shader_nodedef(sr);
                 let (ty, category) = match nd {
                     Some(nd) => (self.nodedef_type(nd), self.attr_or_empty(nd, "node")),
-                    None => ("surfaceshader".to_string(), self.attr_or_empty(sr, "node")),
+                    None => (
+                        self.attr(sr, "type").filter(|t| !t.is_empty()).unwrap_or_else(|| "surfaceshader".into()),
+                        self.attr_or_empty(sr, "node"),
+                    ),
                 };
                 if category.is_empty() {
                     self.error(
@@ -1014,6 +1041,10 @@ impl Up<'_> {
                 self.doc.get(mat).attributes.iter().filter(|(k, _)| k != "name").cloned().collect();
             self.doc.remove(mat);
             if shader_inputs.is_empty() {
+                if had_shaderrefs {
+                    // Each unusable shaderref was reported already.
+                    continue;
+                }
                 self.diags.push(Diagnostic::warning(
                     pos,
                     format!("material `{mat_name}` has no shaderref; removed (materials are nodes since 1.38)"),
@@ -1123,25 +1154,19 @@ impl Up<'_> {
     /// layer takes the BSDF's name so downstream connections need no change.
     fn layer_from_base(&mut self, node: ElementId) {
         let Some(base) = self.input(node, "base") else { return };
-        if let Some(base_node) = self.connected_node(base) {
+        // MaterialX layers only a base connected to a node; a base bound to an interface input
+        // or a nodegraph output is layered the same way here instead of being dropped.
+        if self.is_bound(base) {
             let Some(graph) = self.parent(node) else { return };
             let old = self.name(node);
-            let top_name = format!("{old}__layer_top");
-            if self.child(graph, &top_name).is_some() {
-                self.warn(node, format!("cannot rename `{old}` to `{top_name}` for its layer: the name is taken"));
-                return;
-            }
+            let top_name = self.valid_child_name(graph, &format!("{old}__layer_top"));
             self.set(node, "name", top_name.as_str());
-            let base_name = self.name(base_node);
             let pos = self.pos(node);
             let layer = self.add(graph, "layer", &[("name", &old), ("type", "BSDF")], pos.clone());
             self.add(layer, "input", &[("name", "top"), ("type", "BSDF"), ("nodename", &top_name)], pos.clone());
-            self.add(layer, "input", &[("name", "base"), ("type", "BSDF"), ("nodename", &base_name)], pos);
-        } else if self.is_bound(base) {
-            self.warn(
-                base,
-                format!("`base` of `{}` is connected to something other than a node; the layering is dropped", self.name(node)),
-            );
+            let layer_base = self.add(layer, "input", &[("name", "base"), ("type", "BSDF")], pos);
+            self.copy_content(layer_base, base);
+            self.unset(layer_base, "value");
         }
         self.doc.remove(base);
     }
@@ -1267,6 +1292,16 @@ impl Up<'_> {
                 continue;
             }
             let Some(channels) = self.attr(port, "channels").filter(|c| !c.is_empty()) else { continue };
+            let Some(parent) = self.parent(port) else { continue };
+            if !self.is_node(parent) && !self.is_graph(parent) {
+                let (port_name, parent_cat) = (self.name(port), self.cat(parent).to_owned());
+                self.warn(
+                    port,
+                    format!("`channels` on `{port_name}` of a <{parent_cat}> selects nothing (only node inputs and graph outputs connect); dropped"),
+                );
+                self.unset(port, "channels");
+                continue;
+            }
             let port_type = self.attr_or_empty(port, "type");
             let upstream = match self.upstream_type(port) {
                 Some(t) => t,
@@ -1292,7 +1327,6 @@ impl Up<'_> {
                 self.unset(port, "channels");
                 continue;
             }
-            let Some(parent) = self.parent(port) else { continue };
             let graph = self.graph_of(port);
             let anchor = if self.parent(parent) == Some(graph) { parent } else { port };
             let index = self.index_in_parent(anchor).unwrap_or(usize::MAX);
@@ -1302,6 +1336,10 @@ impl Up<'_> {
             let input = self.add(swizzle, "input", &[("name", "in")], pos.clone());
             self.copy_content(input, port);
             self.unset(input, "channels");
+            if self.cat(port) == "output" {
+                // An output connects by nodename in its own graph.
+                self.unset(input, "nodegraph");
+            }
             self.set(input, "type", upstream);
             self.add(swizzle, "input", &[("name", "channels"), ("type", "string"), ("value", &channels)], pos);
             self.unset(port, "channels");
@@ -1312,7 +1350,7 @@ impl Up<'_> {
     /// The type a port receives from its connection, when this document says.
     fn upstream_type(&self, port: ElementId) -> Option<String> {
         let non_empty = |t: Option<String>| t.filter(|t| !t.is_empty() && t != "multioutput");
-        if let Some(ng) = self.attr(port, "nodegraph") {
+        if let Some(ng) = self.attr(port, "nodegraph").filter(|_| self.cat(port) == "input") {
             let g = self.find_nodegraph(self.graph_of(port), &ng)?;
             let out = match self.attr(port, "output") {
                 Some(o) => self.doc.children_of(g, "output").find(|&c| self.doc.get(c).name() == o),
@@ -1324,6 +1362,9 @@ impl Up<'_> {
             let node = self.connected_node(port)?;
             if let Some(t) = non_empty(self.attr(node, "type")) {
                 return Some(t);
+            }
+            if matches!(self.cat(node), "separate2" | "separate3" | "separate4") {
+                return Some("float".into());
             }
             let o = self.attr(port, "output")?;
             let out = self.doc.children_of(node, "output").find(|&c| self.doc.get(c).name() == o)?;
@@ -1374,7 +1415,12 @@ impl Up<'_> {
                     ),
                 );
             }
-            self.copy_input(top, "thickness", up, "thinfilm_thickness");
+            if self.copy_input(top, "thickness", up, "thinfilm_thickness").is_none() {
+                // 1.38's thin_film_bsdf defaulted to 550 nm; 1.39's thinfilm_thickness defaults
+                // to 0 (no film), so the old default is written out.
+                let pos = self.pos(top);
+                self.set_input_value(up, "thinfilm_thickness", "float", "550", pos);
+            }
             self.copy_input(top, "ior", up, "thinfilm_ior");
         }
         let base_name = self.name(base);
@@ -1436,7 +1482,7 @@ impl Up<'_> {
     fn switch_which(&mut self, node: ElementId) {
         let Some(which) = self.input(node, "which") else { return };
         if self.is_bound(which) {
-            if self.cat(node) == "switch" && (6..=10).all(|k| self.input(node, &format!("in{k}")).is_none()) {
+            if (6..=10).all(|k| self.input(node, &format!("in{k}")).is_none()) {
                 self.warn(
                     which,
                     format!(
@@ -1486,23 +1532,38 @@ impl Up<'_> {
                 self.unset(i, "value");
             }
         }
-        // A channel that does not exist in the source type.
-        let valid = |c: char| channel_constant(c).is_some() || channel_index(c).is_some_and(|k| k < src_n);
-        let bad: Vec<char> = channels.iter().take(dst_n).copied().filter(|&c| !valid(c)).collect();
-        if !bad.is_empty() || channels.len() < dst_n {
-            self.warn(
-                node,
-                format!(
-                    "swizzle `{name}`: channels \"{}\" do not name {dst_n} channels of a {source_type}; missing or invalid ones take the first channel",
-                    channels.iter().collect::<String>()
-                ),
-            );
-        }
         let channel_at = |k: usize| channels.get(k).copied();
-
         let constant = in_input.is_none_or(|i| self.has(i, "value"))
             || (0..dst_n).all(|k| channel_at(k).is_some_and(|c| channel_constant(c).is_some()));
         let channel_string: String = channels.iter().collect();
+        const CONVERT_PATTERNS: [(&str, usize); 10] = [
+            ("rgb", 3),
+            ("rgb", 4),
+            ("rgba", 4),
+            ("xyz", 3),
+            ("xyz", 4),
+            ("xyzw", 4),
+            ("rr", 1),
+            ("rrr", 1),
+            ("xx", 1),
+            ("xxx", 1),
+        ];
+        let convert = !constant
+            && dst_n != 1
+            && source_type != dest_type
+            && CONVERT_PATTERNS.contains(&(channel_string.as_str(), src_n));
+        // Channels missing, or naming no channel of the source type, take the first channel
+        // (a convert needs none: it fills alpha itself).
+        let valid = |c: char| channel_constant(c).is_some() || channel_index(c).is_some_and(|k| k < src_n);
+        if !convert && (channels.len() < dst_n || channels.iter().take(dst_n).any(|&c| !valid(c))) {
+            self.warn(
+                node,
+                format!(
+                    "swizzle `{name}`: channels \"{channel_string}\" do not name {dst_n} channels of a {source_type}; \
+                     missing or invalid ones take the first channel"
+                ),
+            );
+        }
         let pos = self.pos(node);
         if constant {
             self.set_cat(node, "constant");
@@ -1531,10 +1592,7 @@ impl Up<'_> {
             if let Some(k) = channel_at(0).and_then(channel_index) {
                 self.set_input_value(node, "index", "integer", &k.to_string(), pos);
             }
-        } else if source_type != dest_type
-            && [("rgb", 3), ("rgb", 4), ("rgba", 4), ("xyz", 3), ("xyz", 4), ("xyzw", 4), ("rr", 1), ("rrr", 1), ("xx", 1), ("xxx", 1)]
-                .contains(&(channel_string.as_str(), src_n))
-        {
+        } else if convert {
             self.set_cat(node, "convert");
             if has_nodedef {
                 self.set(node, "nodedef", format!("ND_convert_{source_type}_{dest_type}"));

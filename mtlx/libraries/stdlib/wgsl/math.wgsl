@@ -640,13 +640,17 @@ fn mx_tan_float(in: f32) -> f32 {
 // ---- asin ----
 
 fn mx_asin_float(in: f32) -> f32 {
-    return asin(in);
+    // Written with atan2: Vulkan lets asin/acos inherit atan2's 4096-ULP bound from
+    // atan2(x, sqrt(1 - x*x)), and lavapipe's asin is off by up to 4e-4 (atan2 by ~3e-6).
+    // Same values as GLSL asin on [-1, 1]; NaN outside, as sqrt of a negative.
+    return atan2(in, sqrt((1.0 - in) * (1.0 + in)));
 }
 
 // ---- acos ----
 
 fn mx_acos_float(in: f32) -> f32 {
-    return acos(in);
+    // With atan2, for precision: see mx_asin_float.
+    return atan2(sqrt((1.0 - in) * (1.0 + in)), in);
 }
 
 // ---- atan2 ----
@@ -676,13 +680,17 @@ fn mx_tan_vector2(in: vec2<f32>) -> vec2<f32> {
 // ---- asin ----
 
 fn mx_asin_vector2(in: vec2<f32>) -> vec2<f32> {
-    return asin(in);
+    // Written with atan2: Vulkan lets asin/acos inherit atan2's 4096-ULP bound from
+    // atan2(x, sqrt(1 - x*x)), and lavapipe's asin is off by up to 4e-4 (atan2 by ~3e-6).
+    // Same values as GLSL asin on [-1, 1]; NaN outside, as sqrt of a negative.
+    return atan2(in, sqrt((1.0 - in) * (1.0 + in)));
 }
 
 // ---- acos ----
 
 fn mx_acos_vector2(in: vec2<f32>) -> vec2<f32> {
-    return acos(in);
+    // With atan2, for precision: see mx_asin_vector2.
+    return atan2(sqrt((1.0 - in) * (1.0 + in)), in);
 }
 
 // ---- atan2 ----
@@ -712,13 +720,17 @@ fn mx_tan_vector3(in: vec3<f32>) -> vec3<f32> {
 // ---- asin ----
 
 fn mx_asin_vector3(in: vec3<f32>) -> vec3<f32> {
-    return asin(in);
+    // Written with atan2: Vulkan lets asin/acos inherit atan2's 4096-ULP bound from
+    // atan2(x, sqrt(1 - x*x)), and lavapipe's asin is off by up to 4e-4 (atan2 by ~3e-6).
+    // Same values as GLSL asin on [-1, 1]; NaN outside, as sqrt of a negative.
+    return atan2(in, sqrt((1.0 - in) * (1.0 + in)));
 }
 
 // ---- acos ----
 
 fn mx_acos_vector3(in: vec3<f32>) -> vec3<f32> {
-    return acos(in);
+    // With atan2, for precision: see mx_asin_vector3.
+    return atan2(sqrt((1.0 - in) * (1.0 + in)), in);
 }
 
 // ---- atan2 ----
@@ -748,13 +760,17 @@ fn mx_tan_vector4(in: vec4<f32>) -> vec4<f32> {
 // ---- asin ----
 
 fn mx_asin_vector4(in: vec4<f32>) -> vec4<f32> {
-    return asin(in);
+    // Written with atan2: Vulkan lets asin/acos inherit atan2's 4096-ULP bound from
+    // atan2(x, sqrt(1 - x*x)), and lavapipe's asin is off by up to 4e-4 (atan2 by ~3e-6).
+    // Same values as GLSL asin on [-1, 1]; NaN outside, as sqrt of a negative.
+    return atan2(in, sqrt((1.0 - in) * (1.0 + in)));
 }
 
 // ---- acos ----
 
 fn mx_acos_vector4(in: vec4<f32>) -> vec4<f32> {
-    return acos(in);
+    // With atan2, for precision: see mx_asin_vector4.
+    return atan2(sqrt((1.0 - in) * (1.0 + in)), in);
 }
 
 // ---- atan2 ----
