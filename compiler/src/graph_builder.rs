@@ -142,7 +142,6 @@ pub struct GraphBuilder<'a> {
     visiting: HashSet<(usize, ElementId)>,
     consing: HashMap<String, H>,
     kernel_inputs: HashMap<(usize, String), H>,
-    signature_checked: HashMap<String, Result<(), String>>,
     pub diagnostics: Vec<Diagnostic>,
 }
 
@@ -163,7 +162,6 @@ impl<'a> GraphBuilder<'a> {
             visiting: HashSet::new(),
             consing: HashMap::new(),
             kernel_inputs: HashMap::new(),
-            signature_checked: HashMap::new(),
             diagnostics: Vec::new(),
         };
         b.check_names(&doc);
@@ -594,15 +592,7 @@ impl<'a> GraphBuilder<'a> {
     /// A call of the nodedef's WGSL function.
     fn call(&mut self, nd: &NodeDef, bound: Vec<(PortDef, H)>, origin: &str, pos: &SourcePos) -> Result<NodeResult, Fail> {
         let fname = NodeLibrary::function_name(&nd.name);
-        let check = match self.signature_checked.get(&nd.name) {
-            Some(c) => c.clone(),
-            None => {
-                let c = self.lib.check_signature(nd);
-                self.signature_checked.insert(nd.name.clone(), c.clone());
-                c
-            }
-        };
-        if let Err(m) = check {
+        if let Err(m) = self.lib.signature_fits(nd) {
             return Err(self.error(pos, m));
         }
         let sig = self.lib.wgsl.items[&fname].signature.clone().unwrap();

@@ -113,6 +113,8 @@ pub struct NodeLibrary {
     pub defs: Definitions,
     pub wgsl: WgslItems,
     pub diagnostics: Vec<Diagnostic>,
+    /// `check_signature` of every library nodedef that has a WGSL function, computed once.
+    signatures: HashMap<String, Result<(), String>>,
 }
 
 /// What a node's authored element says, for matching.
@@ -135,7 +137,24 @@ impl NodeLibrary {
             }
         }
         wgsl.link();
-        NodeLibrary { defs, wgsl, diagnostics }
+        let mut lib = NodeLibrary { defs, wgsl, diagnostics, signatures: HashMap::new() };
+        let checked: HashMap<String, Result<(), String>> = lib
+            .defs
+            .nodedefs
+            .iter()
+            .filter(|nd| lib.function(&nd.name).is_some())
+            .map(|nd| (nd.name.clone(), lib.check_signature(nd)))
+            .collect();
+        lib.signatures = checked;
+        lib
+    }
+
+    /// Whether `nd`'s WGSL function fits it (precomputed for library nodedefs).
+    pub fn signature_fits(&self, nd: &NodeDef) -> Result<(), String> {
+        match self.signatures.get(&nd.name) {
+            Some(r) => r.clone(),
+            None => self.check_signature(nd),
+        }
     }
 
     /// The WGSL function implementing an atomic nodedef: `ND_x` → `mx_x`.
