@@ -78,6 +78,12 @@ impl Compiler {
                 v
             }
         };
+        for o in &all {
+            let e = doc.get(o.element);
+            if e.category == "output" && e.attr("type").is_none() {
+                diagnostics.push(Diagnostic::error(o.pos.clone(), format!("<output> `{}` has no type", e.name())));
+            }
+        }
         let skipped_closures: Vec<String> = all.iter().filter(|o| !o.ty.is_numeric()).map(|o| o.name.clone()).collect();
         if chosen.is_empty() {
             if !has_errors(&diagnostics) {

@@ -10,7 +10,7 @@ use crate::ir::{GeomProp, Graph, GraphOutput, InterfaceInput, TextureBinding, Va
 use crate::node_library::{match_nodedef, Definitions, NodeLibrary, NodeQuery};
 use mtlx::schema::{NodeDef, PortDef};
 use mtlx::{DataType, Diagnostic, Document, ElementId, SourcePos, Value as Literal};
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -138,8 +138,11 @@ pub struct GraphBuilder<'a> {
     graph: Graph,
     scopes: Vec<Scope>,
     scope_of_graph: HashMap<(usize, ElementId), usize>,
-    memo: HashMap<(usize, ElementId), NodeResult>,
-    visiting: HashSet<(usize, ElementId)>,
+    memo: HashMap<(usize, ElementId), Option<NodeResult>>,
+    /// Nodes being built, outermost first (for cycle paths).
+    visiting: Vec<(usize, ElementId)>,
+    /// Nodedefs whose nodegraphs are being inlined (for recursion).
+    inlining: Vec<String>,
     consing: HashMap<String, H>,
     kernel_inputs: HashMap<(usize, String), H>,
     pub diagnostics: Vec<Diagnostic>,
@@ -159,7 +162,8 @@ impl<'a> GraphBuilder<'a> {
             scopes: vec![root],
             scope_of_graph: HashMap::new(),
             memo: HashMap::new(),
-            visiting: HashSet::new(),
+            visiting: Vec::new(),
+            inlining: Vec::new(),
             consing: HashMap::new(),
             kernel_inputs: HashMap::new(),
             diagnostics: Vec::new(),
@@ -204,7 +208,7 @@ impl<'a> GraphBuilder<'a> {
             let scope = if o.graph == self.doc().root() {
                 0
             } else {
-                self.compound_scope(o.graph, true)
+                self.compound_scope(0, o.graph, true)
             };
             let value = match &o.node_output {
                 None => self.resolve_connection(scope, o.element, Some(&o.ty)),
@@ -222,16 +226,16 @@ impl<'a> GraphBuilder<'a> {
         (self.graph, self.diagnostics)
     }
 
-    /// The scope of a compound nodegraph at the document's top level.
-    fn compound_scope(&mut self, graph: ElementId, kernel: bool) -> usize {
-        if let Some(&s) = self.scope_of_graph.get(&(0, graph)) {
+    /// The scope of a compound nodegraph held by scope `parent` (the document or a graph).
+    fn compound_scope(&mut self, parent: usize, graph: ElementId, kernel: bool) -> usize {
+        if let Some(&s) = self.scope_of_graph.get(&(parent, graph)) {
             return s;
         }
-        let doc = self.doc().clone();
-        let name = doc.get(graph).name().to_string();
-        self.scopes.push(Scope { doc, graph, interface: Interface::Compound { kernel }, parent: Some(0), path: format!("{name}/") });
+        let doc = self.scopes[parent].doc.clone();
+        let path = format!("{}{}/", self.scopes[parent].path, doc.get(graph).name());
+        self.scopes.push(Scope { doc, graph, interface: Interface::Compound { kernel }, parent: Some(parent), path });
         let s = self.scopes.len() - 1;
-        self.scope_of_graph.insert((0, graph), s);
+        self.scope_of_graph.insert((parent, graph), s);
         s
     }
 
@@ -294,8 +298,10 @@ impl<'a> GraphBuilder<'a> {
             (doc.get(g).category == "nodegraph").then_some(n)
         });
         let h = if let Some(graph_name) = graph_target {
-            let root = doc.root();
-            let Some(g) = doc.child(root, graph_name).filter(|g| doc.get(*g).category == "nodegraph") else {
+            // A nodegraph nested in this scope, else one at the document's top level.
+            let is_graph = |g: &ElementId| doc.get(*g).category == "nodegraph";
+            let nested = doc.child(self.scopes[s].graph, graph_name).filter(is_graph);
+            let Some(g) = nested.or_else(|| doc.child(doc.root(), graph_name).filter(is_graph)) else {
                 return Err(self.error(&pos, format!("dangling reference: no nodegraph named `{graph_name}`")));
             };
             let outs: Vec<ElementId> = doc.children_of(g, "output").collect();
@@ -307,7 +313,7 @@ impl<'a> GraphBuilder<'a> {
             let Some(out) = out else {
                 return Err(self.error(&pos, format!("nodegraph `{graph_name}` has no output named `{}`", e.attr("output").unwrap_or("(unnamed; it has several)"))));
             };
-            let gs = self.compound_scope(g, false);
+            let gs = self.compound_scope(s, g, false);
             self.resolve_connection(gs, out, None)?
         } else if let Some(node_name) = e.attr("nodename") {
             let graph = self.scopes[s].graph;
@@ -478,18 +484,24 @@ impl<'a> GraphBuilder<'a> {
     fn build_node(&mut self, s: usize, node: ElementId) -> Result<NodeResult, Fail> {
         let key = (s, node);
         if let Some(r) = self.memo.get(&key) {
-            return Ok(r.clone());
+            // A node that failed was reported once; its consumers fail silently.
+            return r.clone().ok_or(Fail);
         }
         let doc = self.scopes[s].doc.clone();
         let e = doc.get(node);
-        if !self.visiting.insert(key) {
-            return Err(self.error(&e.pos, format!("cycle: node `{}` depends on itself", e.name())));
+        if let Some(start) = self.visiting.iter().position(|k| *k == key) {
+            let path: Vec<String> = self.visiting[start..]
+                .iter()
+                .map(|(vs, vn)| format!("`{}`", self.scopes[*vs].doc.get(*vn).name()))
+                .chain(std::iter::once(format!("`{}`", e.name())))
+                .collect();
+            let msg = if path.len() == 2 { format!("cycle: node `{}` depends on itself", e.name()) } else { format!("cycle: {}", path.join(" -> ")) };
+            return Err(self.error(&e.pos, msg));
         }
+        self.visiting.push(key);
         let r = self.build_node_inner(s, node);
-        self.visiting.remove(&key);
-        if let Ok(r) = &r {
-            self.memo.insert(key, r.clone());
-        }
+        self.visiting.pop();
+        self.memo.insert(key, r.as_ref().ok().cloned());
         r
     }
 
@@ -511,7 +523,18 @@ impl<'a> GraphBuilder<'a> {
             .collect();
         let nd = match self.find_nodedef(e, &ty, &authored) {
             Ok(nd) => nd,
-            Err(m) => return Err(self.error(&pos, m)),
+            Err(m) => {
+                // Point at an input no nodedef of this category declares, when there is one.
+                let all: Vec<&NodeDef> = self.local.by_category(&e.category).chain(self.lib.defs.by_category(&e.category)).collect();
+                if !all.is_empty() {
+                    for (&i, (name, _)) in inputs.iter().zip(&authored) {
+                        if !all.iter().any(|nd| nd.input(name).is_some()) {
+                            return Err(self.error(&doc.get(i).pos, format!("input `{name}` is not declared by any nodedef of `{}`", e.category)));
+                        }
+                    }
+                }
+                return Err(self.error(&pos, m));
+            }
         };
         for (&i, (name, t)) in inputs.iter().zip(&authored) {
             match nd.input(name) {
@@ -551,6 +574,20 @@ impl<'a> GraphBuilder<'a> {
         // Nodegraph implementation: inline.
         let graph_ref = self.local.graphs.get(&nd.name).map(|g| (true, *g)).or_else(|| self.lib.defs.graphs.get(&nd.name).map(|g| (false, *g)));
         if let Some((is_local, g)) = graph_ref {
+            if self.inlining.contains(&nd.name) {
+                return Err(self.error(&pos, format!("recursive definition: node `{}` instantiates `{}` inside the nodegraph that implements `{}`", e.name(), nd.node, nd.name)));
+            }
+            self.inlining.push(nd.name.clone());
+            let r = self.inline_graph(s, &nd, is_local, g, &bound, &origin);
+            self.inlining.pop();
+            return r;
+        }
+        self.call(&nd, bound, &origin, &pos)
+    }
+
+    /// Inlines the nodegraph `g` implementing `nd` for a node of scope `s` whose inputs are `bound`.
+    fn inline_graph(&mut self, s: usize, nd: &NodeDef, is_local: bool, g: crate::node_library::GraphRef, bound: &[(PortDef, H)], origin: &str) -> Result<NodeResult, Fail> {
+        {
             let gdoc = if is_local { self.local.documents[g.doc].clone() } else { self.lib.defs.documents[g.doc].clone() };
             let map: HashMap<String, H> = bound.iter().map(|(p, h)| (p.name.clone(), *h)).collect();
             self.scopes.push(Scope { doc: gdoc.clone(), graph: g.element, interface: Interface::Functional(map), parent: Some(s), path: format!("{origin}/") });
@@ -562,12 +599,11 @@ impl<'a> GraphBuilder<'a> {
                 };
                 outs.push((o.name.clone(), self.resolve_connection(gs, oe, Some(&o.ty))?));
             }
-            return Ok(match outs.len() {
+            Ok(match outs.len() {
                 1 => NodeResult::Single(outs[0].1),
                 _ => NodeResult::Multi(outs),
-            });
+            })
         }
-        self.call(&nd, bound, &origin, &pos)
     }
 
     fn port_default(&mut self, p: &PortDef, origin: &str) -> Result<H, Fail> {
@@ -598,6 +634,7 @@ impl<'a> GraphBuilder<'a> {
         let sig = self.lib.wgsl.items[&fname].signature.clone().unwrap();
         let geometry = sig.params.first().is_some_and(|(_, t)| t == "mx_geometry");
         let mut args = Vec::new();
+        let mut missing_file = None;
         for (p, h) in &bound {
             let v = self.graph.values[*h].clone();
             match (&p.ty, &p.enum_values) {
@@ -613,17 +650,18 @@ impl<'a> GraphBuilder<'a> {
                 }
                 (DataType::Filename, _) => match v.kind {
                     ValueKind::Texture(_) => args.push(*h),
-                    _ => {
-                        // Unresolved file: the node returns its `default` input, as MaterialX does.
-                        let fallback = bound.iter().find(|(q, _)| q.name == "default" && nd.outputs.len() == 1 && q.ty == nd.outputs[0].ty);
-                        return match fallback {
-                            Some((_, d)) => Ok(NodeResult::Single(*d)),
-                            None => Err(self.error(pos, format!("input `{}` names no readable file and `{}` has no `default` input", p.name, nd.name))),
-                        };
-                    }
+                    _ => missing_file = Some(p.name.clone()),
                 },
                 _ => args.push(*h),
             }
+        }
+        if let Some(input) = missing_file {
+            // Unresolved file: the node returns its `default` input, as MaterialX does.
+            let fallback = bound.iter().find(|(q, _)| q.name == "default" && nd.outputs.len() == 1 && q.ty == nd.outputs[0].ty);
+            return match fallback {
+                Some((_, d)) => Ok(NodeResult::Single(*d)),
+                None => Err(self.error(pos, format!("input `{input}` names no readable file and `{}` has no `default` input", nd.name))),
+            };
         }
         if let (Some(k), [out]) = (sig.identity_of, nd.outputs.as_slice()) {
             let k = k - usize::from(geometry);

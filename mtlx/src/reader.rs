@@ -74,7 +74,16 @@ fn parse_text(text: &str, path: &Path, diags: &mut Vec<Diagnostic>, stack: &mut 
         Ok(x) => x,
         Err(e) => {
             let p = e.pos();
-            diags.push(Diagnostic::error(SourcePos::new(file.clone(), p.row, p.col), format!("malformed XML: {e}")));
+            let mut at = SourcePos::new(file.clone(), p.row, p.col);
+            let mut message = format!("malformed XML: {e}");
+            // A close tag that does not match: point at the element left open.
+            if let roxmltree::Error::UnexpectedCloseTag(expected, actual, _) = &e {
+                if let Some(open) = unclosed_tag(text, expected, p) {
+                    message = format!("malformed XML: <{expected}> is never closed (found </{actual}> at {}:{})", p.row, p.col);
+                    at = SourcePos::new(file.clone(), open.0, open.1);
+                }
+            }
+            diags.push(Diagnostic::error(at, message));
             return Document::new(SourcePos::new(file, 1, 1));
         }
     };
@@ -94,9 +103,13 @@ fn parse_text(text: &str, path: &Path, diags: &mut Vec<Diagnostic>, stack: &mut 
     // As MaterialX does: included documents are merged first, and then the document's own
     // top-level elements, skipping names an include already defined.
     let (includes, own): (Vec<_>, Vec<_>) = root.children().filter(|c| c.is_element()).partition(|c| is_include(*c));
-    for child in includes.into_iter().chain(own) {
+    for child in includes {
+        convert(&lines, child, &file, path, &mut doc, doc_root, diags, stack);
+    }
+    let included: std::collections::HashSet<String> = doc.top_level().iter().map(|&c| doc.get(c).name().to_string()).collect();
+    for child in own {
         let name = child.attribute("name").unwrap_or("");
-        if !is_include(child) && !name.is_empty() && doc.child(doc_root, name).is_some() {
+        if !name.is_empty() && included.contains(name) {
             diags.push(Diagnostic::warning(lines.pos(child, &file), format!("`{name}` is already defined by an included document; this definition is skipped")));
             continue;
         }
@@ -229,4 +242,18 @@ fn escape_lt_in_attributes(text: &str) -> String {
         }
     }
     out
+}
+
+/// Line and column of the last `<tag` opened before `before` (a roxmltree position).
+fn unclosed_tag(text: &str, tag: &str, before: roxmltree::TextPos) -> Option<(u32, u32)> {
+    let lines: Vec<&str> = text.split('\n').collect();
+    let mut offset = 0;
+    for l in lines.iter().take(before.row.saturating_sub(1) as usize) {
+        offset += l.len() + 1;
+    }
+    let needle = format!("<{tag}");
+    let start = text[..offset.min(text.len())].rfind(&needle)?;
+    let line = text[..start].matches('\n').count() as u32 + 1;
+    let column = text[..start].rsplit('\n').next().map_or(0, |l| l.chars().count()) as u32 + 1;
+    Some((line, column))
 }

@@ -1,0 +1,198 @@
+//! Snapshot tests, naga style: every `tests/in/*.mtlx` (sorted; sub-folders such as
+//! `tests/in/include/` and `tests/in/images/` hold support files, not inputs) is compiled and
+//! its graph IR and WGSL kernel are compared with `tests/out/ir/<stem>.ir` and
+//! `tests/out/wgsl/<stem>.wgsl`. Every emitted WGSL text is parsed and validated again by naga.
+//!
+//! To accept new output: `UPLIFT_BLESS=1 cargo test -p uplift_compiler --test snapshots`,
+//! then review the changes with `git diff tests/out`.
+//!
+//! Documents are compiled with their path relative to the repository root
+//! (`tests/in/x.mtlx`), which the WGSL header names; no output may contain an absolute path of
+//! the machine that ran the test.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use uplift_compiler::{Compiler, OutputSelection};
+
+/// Inputs that are valid MaterialX but that the compiler cannot compile yet. Each is skipped
+/// (with a note) while it keeps failing; once it compiles, the test fails until its entry is
+/// removed here and its outputs are blessed.
+const KNOWN_FAILURES: &[(&str, &str)] = &[];
+
+fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("compiler/ has a parent").to_path_buf()
+}
+
+fn blessing() -> bool {
+    std::env::var_os("UPLIFT_BLESS").is_some_and(|v| !v.is_empty() && v != "0")
+}
+
+/// The first line where `expected` and `actual` differ, as a message.
+fn first_difference(expected: &str, actual: &str) -> String {
+    let (mut e, mut a) = (expected.lines(), actual.lines());
+    let mut n = 1;
+    loop {
+        match (e.next(), a.next()) {
+            (Some(x), Some(y)) if x == y => n += 1,
+            (None, None) => {
+                return "the texts differ only in line endings or a final newline".into();
+            }
+            (x, y) => {
+                return format!(
+                    "first difference at line {n}:\n      expected: {}\n      actual:   {}",
+                    x.map_or("<end of file>".to_string(), |s| format!("{s:?}")),
+                    y.map_or("<end of file>".to_string(), |s| format!("{s:?}")),
+                );
+            }
+        }
+    }
+}
+
+/// Compares `actual` with the snapshot at `rel` (relative to the repository root), or writes
+/// it when blessing. Returns a failure message.
+fn check_snapshot(root: &Path, rel: &str, actual: &str, bless: bool) -> Option<String> {
+    let path = root.join(rel);
+    if bless {
+        let current = std::fs::read_to_string(&path).ok();
+        if current.as_deref() != Some(actual) {
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(&path, actual).unwrap_or_else(|e| panic!("cannot write {rel}: {e}"));
+            eprintln!("blessed {rel}");
+        }
+        return None;
+    }
+    match std::fs::read_to_string(&path) {
+        Err(_) => Some(format!("{rel} is missing (run with UPLIFT_BLESS=1 and review with git diff)")),
+        Ok(expected) if expected == actual => None,
+        Ok(expected) => Some(format!(
+            "{rel} differs from the compiler's output; {}\n    (run with UPLIFT_BLESS=1 and review with git diff)",
+            first_difference(&expected, actual)
+        )),
+    }
+}
+
+/// Absolute paths of this machine that must never appear in a snapshot.
+fn forbidden_paths(root: &Path) -> Vec<String> {
+    let mut v = vec![root.display().to_string()];
+    if let Ok(c) = root.canonicalize() {
+        v.push(c.display().to_string());
+    }
+    v.push(std::env::temp_dir().display().to_string());
+    if let Some(home) = std::env::var_os("HOME") {
+        let h = PathBuf::from(home).display().to_string();
+        if h.len() > 1 {
+            v.push(h);
+        }
+    }
+    v.retain(|p| p.len() > 1);
+    v
+}
+
+fn inputs(root: &Path) -> Vec<String> {
+    let dir = root.join("tests/in");
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("cannot list {}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file() && p.extension().is_some_and(|e| e == "mtlx"))
+        .map(|p| p.file_stem().unwrap().to_string_lossy().to_string())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn snapshots() {
+    let root = repo_root();
+    // Positions and the WGSL header name documents relative to the repository root.
+    std::env::set_current_dir(&root).unwrap();
+    let bless = blessing();
+    let compiler = Compiler::builtin();
+    let forbidden = forbidden_paths(&root);
+    let names = inputs(&root);
+    assert!(names.len() >= 45, "expected at least 45 snapshot inputs in tests/in, found {}", names.len());
+
+    let mut failures: Vec<String> = Vec::new();
+    let mut notes: Vec<String> = Vec::new();
+    for stem in &names {
+        let source = format!("tests/in/{stem}.mtlx");
+        let c = compiler.compile_file(Path::new(&source), &OutputSelection::AllNumeric);
+        let errors: Vec<String> = c.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.to_string()).collect();
+        let known = KNOWN_FAILURES.iter().find(|(n, _)| n == stem);
+        let (graph, kernel) = match (c.graph, c.kernel) {
+            (Some(g), Some(k)) if errors.is_empty() => (g, k),
+            (_, _) => {
+                match known {
+                    Some((_, why)) => notes.push(format!("{source}: known failure ({why}):\n    {}", errors.join("\n    "))),
+                    None => failures.push(format!("{source} does not compile:\n    {}", errors.join("\n    "))),
+                }
+                continue;
+            }
+        };
+        if known.is_some() {
+            failures.push(format!(
+                "{source} compiles now: remove it from KNOWN_FAILURES in compiler/tests/snapshots.rs and bless its outputs"
+            ));
+            continue;
+        }
+        let ir = graph.dump();
+        let wgsl = kernel.wgsl.clone();
+        for (what, text) in [("IR", &ir), ("WGSL", &wgsl)] {
+            for p in &forbidden {
+                if text.contains(p.as_str()) {
+                    failures.push(format!("{source}: the {what} output contains the absolute path `{p}`"));
+                }
+            }
+        }
+        if !wgsl.contains(&format!("from {source}.")) {
+            failures.push(format!("{source}: the WGSL header does not name the source as `{source}`"));
+        }
+        for (i, t) in kernel.textures.iter().enumerate() {
+            let file = t.path.file_name().unwrap().to_string_lossy().to_string();
+            let line = ir.lines().find(|l| l.starts_with(&format!("texture #{i} ")));
+            if line.is_none_or(|l| !l.starts_with(&format!("texture #{i} {file} "))) {
+                failures.push(format!("{source}: texture #{i} is not dumped by file name only ({file}): {line:?}"));
+            }
+        }
+        failures.extend(check_snapshot(&root, &format!("tests/out/ir/{stem}.ir"), &ir, bless));
+        failures.extend(check_snapshot(&root, &format!("tests/out/wgsl/{stem}.wgsl"), &wgsl, bless));
+        // The emitted text (as written to the snapshot) parses and validates on its own.
+        if let Err(e) = uplift_compiler::lower::to_naga(&wgsl) {
+            failures.push(format!("{source}: emitted WGSL does not re-validate with naga: {}", e.0));
+        }
+    }
+
+    // Snapshots whose input is gone.
+    for (sub, ext) in [("ir", "ir"), ("wgsl", "wgsl")] {
+        let dir = root.join("tests/out").join(sub);
+        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+        for e in entries {
+            let p = e.unwrap().path();
+            let stem = p.file_stem().unwrap().to_string_lossy().to_string();
+            if p.extension().is_some_and(|e| e == ext) && !names.contains(&stem) {
+                if bless {
+                    std::fs::remove_file(&p).unwrap();
+                    eprintln!("removed stale tests/out/{sub}/{stem}.{ext}");
+                } else {
+                    failures.push(format!("tests/out/{sub}/{stem}.{ext} has no input tests/in/{stem}.mtlx (run with UPLIFT_BLESS=1 to remove it)"));
+                }
+            }
+        }
+    }
+    // Known failures must still name existing inputs.
+    for (n, _) in KNOWN_FAILURES {
+        if !names.iter().any(|x| x == n) {
+            failures.push(format!("KNOWN_FAILURES names `{n}`, which is not in tests/in"));
+        }
+    }
+
+    for n in &notes {
+        eprintln!("note: {n}");
+    }
+    if !failures.is_empty() {
+        let mut msg = format!("{} snapshot failure(s) over {} inputs:\n", failures.len(), names.len());
+        for f in &failures {
+            let _ = writeln!(msg, "  - {f}");
+        }
+        panic!("{msg}");
+    }
+}
