@@ -70,3 +70,46 @@ fn errors_are_positioned_and_exit_1() {
     assert_eq!(code, 1);
     assert!(stderr.contains("absent.mtlx") && stderr.contains("cannot read"), "{stderr}");
 }
+
+/// A new node is a nodedef plus a WGSL function in a library folder: no Rust change. The folder
+/// is found through `--library` and through `MATERIALX_SEARCH_PATH`.
+#[test]
+fn a_library_folder_adds_a_node() {
+    let dir = temp_dir("library");
+    let lib = dir.join("mylib");
+    std::fs::create_dir_all(&lib).unwrap();
+    std::fs::write(
+        lib.join("mylib_defs.mtlx"),
+        r#"<materialx version="1.39">
+  <nodedef name="ND_checker3_float" node="checker3" nodegroup="procedural3d">
+    <input name="position" type="vector3" defaultgeomprop="Pobject" />
+    <input name="scale" type="float" value="1.0" />
+    <output name="out" type="float" />
+  </nodedef>
+</materialx>"#,
+    )
+    .unwrap();
+    std::fs::write(
+        lib.join("checker3.wgsl"),
+        "// A 3D checkerboard.\nfn mx_checker3_float(position: vec3<f32>, scale: f32) -> f32 {\n    let c = floor(position * scale);\n    return abs(c.x + c.y + c.z) % 2.0;\n}\n",
+    )
+    .unwrap();
+    let doc = dir.join("use.mtlx");
+    std::fs::write(
+        &doc,
+        r#"<materialx version="1.39"><nodegraph name="g"><checker3 name="c" type="float"><input name="scale" type="float" value="4" /></checker3><output name="out" type="float" nodename="c" /></nodegraph></materialx>"#,
+    )
+    .unwrap();
+    let (code, _, stderr) = uplift(&["check", doc.to_str().unwrap()]);
+    assert_eq!(code, 1, "without the library the node is unknown");
+    assert!(stderr.contains("unknown node category `checker3`"), "{stderr}");
+    let (code, _, stderr) = uplift(&["compile", doc.to_str().unwrap(), "--library", lib.to_str().unwrap(), "-o", dir.to_str().unwrap()]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(std::fs::read_to_string(dir.join("use.wgsl")).unwrap().contains("fn mx_checker3_float("));
+    let out = Command::new(env!("CARGO_BIN_EXE_uplift"))
+        .args(["check", doc.to_str().unwrap()])
+        .env("MATERIALX_SEARCH_PATH", format!("/nonexistent:{}", lib.display()))
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
