@@ -6,6 +6,7 @@
 //! numbering). Every error carries the source position of the element at fault.
 
 use crate::arena::Handle;
+use crate::const_eval::Const;
 use crate::ir::{GeomProp, Graph, GraphOutput, InterfaceInput, TextureBinding, Value, ValueKind};
 use crate::node_library::{match_nodedef, Definitions, NodeLibrary, NodeQuery};
 use mtlx::schema::{NodeDef, PortDef};
@@ -671,6 +672,11 @@ impl<'a> GraphBuilder<'a> {
                 }
             }
         }
+        if !geometry {
+            if let Some(folded) = self.fold(&fname, nd, &args, origin, pos) {
+                return Ok(folded);
+            }
+        }
         let ty = nd.node_type();
         let h = self.add(ValueKind::Call { function: fname, args, geometry }, ty, origin.to_string(), pos.clone());
         if nd.outputs.len() == 1 {
@@ -685,6 +691,38 @@ impl<'a> GraphBuilder<'a> {
             })
             .collect();
         Ok(NodeResult::Multi(outs))
+    }
+}
+
+impl GraphBuilder<'_> {
+    /// Constant folding: when every argument is a constant, runs the library's own WGSL
+    /// function through the naga IR interpreter and returns constants for its outputs.
+    /// Anything the interpreter declines (NaN/Inf results, unsupported operations) stays a call.
+    fn fold(&mut self, function: &str, nd: &NodeDef, args: &[H], origin: &str, pos: &SourcePos) -> Option<NodeResult> {
+        let evaluator = self.lib.evaluator.as_ref()?;
+        let mut consts = Vec::with_capacity(args.len());
+        for &a in args {
+            let v = &self.graph.values[a];
+            let ValueKind::Constant(lit) = &v.kind else { return None };
+            consts.push(Const::from_literal(&v.ty, lit)?);
+        }
+        let result = evaluator.eval(function, &consts)?;
+        let literals: Vec<(String, DataType, Literal)> = match nd.outputs.as_slice() {
+            [one] => vec![(one.name.clone(), one.ty.clone(), result.to_literal(&one.ty)?)],
+            outs => outs
+                .iter()
+                .enumerate()
+                .map(|(i, o)| Some((o.name.clone(), o.ty.clone(), result.field(i)?.to_literal(&o.ty)?)))
+                .collect::<Option<Vec<_>>>()?,
+        };
+        let mut values: Vec<(String, H)> = literals
+            .into_iter()
+            .map(|(name, ty, lit)| {
+                let h = self.add(ValueKind::Constant(lit), ty, origin.to_string(), pos.clone());
+                (name, h)
+            })
+            .collect();
+        Some(if values.len() == 1 { NodeResult::Single(values.pop().unwrap().1) } else { NodeResult::Multi(values) })
     }
 }
 

@@ -5,6 +5,7 @@
 
 pub mod arena;
 pub mod compile;
+pub mod const_eval;
 pub mod graph_builder;
 pub mod ir;
 pub mod kernel;

@@ -3,6 +3,7 @@
 //! MaterialX's `Node::getNodeDef` does it (category, output type, exact types of the authored
 //! inputs, version).
 
+use crate::const_eval::ConstEvaluator;
 use crate::wgsl_items::{normalize_type, WgslItem, WgslItems};
 use crate::wgsl_types::wgsl_type;
 use mtlx::schema::NodeDef;
@@ -115,6 +116,9 @@ pub struct NodeLibrary {
     pub diagnostics: Vec<Diagnostic>,
     /// `check_signature` of every library nodedef that has a WGSL function, computed once.
     signatures: HashMap<String, Result<(), String>>,
+    /// Interprets library functions on constant arguments (constant folding); `None` when the
+    /// library's WGSL does not parse as one module (reported in `diagnostics`).
+    pub evaluator: Option<ConstEvaluator>,
 }
 
 /// What a node's authored element says, for matching.
@@ -137,7 +141,15 @@ impl NodeLibrary {
             }
         }
         wgsl.link();
-        let mut lib = NodeLibrary { defs, wgsl, diagnostics, signatures: HashMap::new() };
+        let all_wgsl: String = library.wgsl.iter().map(|w| w.text.as_str()).collect::<Vec<_>>().join("\n");
+        let evaluator = match ConstEvaluator::new(&all_wgsl) {
+            Ok(e) => Some(e),
+            Err(m) => {
+                diagnostics.push(Diagnostic::error(SourcePos::synthetic("<library WGSL>"), format!("the library's WGSL does not parse as one module: {m}")));
+                None
+            }
+        };
+        let mut lib = NodeLibrary { defs, wgsl, diagnostics, signatures: HashMap::new(), evaluator };
         let checked: HashMap<String, Result<(), String>> = lib
             .defs
             .nodedefs

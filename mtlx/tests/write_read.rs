@@ -308,8 +308,9 @@ fn malformed_xml_is_an_error_with_line_and_column() {
     let d = &diags[0];
     assert!(d.is_error());
     assert_eq!(&*d.pos.file, "broken.mtlx");
-    assert_eq!((d.pos.line, d.pos.column), (4, 1));
-    assert!(d.to_string().starts_with("broken.mtlx:4:1: error: malformed XML"), "{d}");
+    // Reported at the element left open, naming where the mismatching close tag was found.
+    assert_eq!((d.pos.line, d.pos.column), (3, 3));
+    assert!(d.to_string().starts_with("broken.mtlx:3:3: error: malformed XML: <add> is never closed (found </materialx> at 4:1)"), "{d}");
     assert!(doc.top_level().is_empty());
 
     // The same for a file, and for a root that is not <materialx>.

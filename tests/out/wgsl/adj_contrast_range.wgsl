@@ -23,10 +23,6 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_combine3_vector3_(in1_: f32, in2_: f32, in3_: f32) -> vec3<f32> {
-    return vec3<f32>(in1_, in2_, in3_);
-}
-
 fn mx_noise_floor(x: f32) -> i32 {
     return i32(floor(x));
 }
@@ -157,20 +153,20 @@ fn mx_extract_vector3_(in: vec3<f32>, index: i32) -> f32 {
     return in[clamp(index, 0i, 2i)];
 }
 
-fn mx_combine3_color3_(in1_1: f32, in2_1: f32, in3_1: f32) -> vec3<f32> {
-    return vec3<f32>(in1_1, in2_1, in3_1);
+fn mx_combine3_color3_(in1_: f32, in2_: f32, in3_: f32) -> vec3<f32> {
+    return vec3<f32>(in1_, in2_, in3_);
 }
 
-fn mx_subtract_color3FA(in1_2: vec3<f32>, in2_2: f32) -> vec3<f32> {
-    return (in1_2 - vec3(in2_2));
+fn mx_subtract_color3FA(in1_1: vec3<f32>, in2_1: f32) -> vec3<f32> {
+    return (in1_1 - vec3(in2_1));
 }
 
-fn mx_multiply_color3FA(in1_3: vec3<f32>, in2_3: f32) -> vec3<f32> {
-    return (in1_3 * in2_3);
+fn mx_multiply_color3FA(in1_2: vec3<f32>, in2_2: f32) -> vec3<f32> {
+    return (in1_2 * in2_2);
 }
 
-fn mx_add_color3FA(in1_4: vec3<f32>, in2_4: f32) -> vec3<f32> {
-    return (in1_4 + vec3(in2_4));
+fn mx_add_color3FA(in1_3: vec3<f32>, in2_3: f32) -> vec3<f32> {
+    return (in1_3 + vec3(in2_3));
 }
 
 fn mx_remap_color3_(in_1: vec3<f32>, inlow: vec3<f32>, inhigh: vec3<f32>, outlow: vec3<f32>, outhigh: vec3<f32>) -> vec3<f32> {
@@ -181,74 +177,54 @@ fn mx_absval_color3_(in_2: vec3<f32>) -> vec3<f32> {
     return abs(in_2);
 }
 
-fn mx_divide_color3_(in1_5: vec3<f32>, in2_5: vec3<f32>) -> vec3<f32> {
-    return (in1_5 / in2_5);
-}
-
-fn mx_power_color3_(in1_6: vec3<f32>, in2_6: vec3<f32>) -> vec3<f32> {
-    return pow(in1_6, in2_6);
+fn mx_power_color3_(in1_4: vec3<f32>, in2_4: vec3<f32>) -> vec3<f32> {
+    return pow(in1_4, in2_4);
 }
 
 fn mx_sign_color3_(in_3: vec3<f32>) -> vec3<f32> {
     return sign(in_3);
 }
 
-fn mx_multiply_color3_(in1_7: vec3<f32>, in2_7: vec3<f32>) -> vec3<f32> {
-    return (in1_7 * in2_7);
+fn mx_multiply_color3_(in1_5: vec3<f32>, in2_5: vec3<f32>) -> vec3<f32> {
+    return (in1_5 * in2_5);
 }
 
 fn mx_clamp_color3_(in_4: vec3<f32>, low: vec3<f32>, high: vec3<f32>) -> vec3<f32> {
     return clamp(in_4, low, high);
 }
 
-fn mx_ifequal_color3B(value1_: bool, value2_: bool, in1_8: vec3<f32>, in2_8: vec3<f32>) -> vec3<f32> {
+fn mx_ifequal_color3B(value1_: bool, value2_: bool, in1_6: vec3<f32>, in2_6: vec3<f32>) -> vec3<f32> {
     if (value1_ == value2_) {
-        return in1_8;
+        return in1_6;
     }
-    return in2_8;
-}
-
-fn mx_subtract_float(in1_9: f32, in2_9: f32) -> f32 {
-    return (in1_9 - in2_9);
-}
-
-fn mx_multiply_float(in1_10: f32, in2_10: f32) -> f32 {
-    return (in1_10 * in2_10);
-}
-
-fn mx_add_float(in1_11: f32, in2_11: f32) -> f32 {
-    return (in1_11 + in2_11);
+    return in2_6;
 }
 
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
     let v1_1 = geom_1.texcoord;
-    let _e3 = mx_combine3_vector3_(0.5f, 0.5f, 0.5f);
-    let _e4 = mx_noise2d_vector3_(_e3, 0.5f, v1_1);
-    let _e6 = mx_extract_vector3_(_e4, 0i);
-    let _e8 = mx_extract_vector3_(_e4, 1i);
-    let _e10 = mx_extract_vector3_(_e4, 2i);
-    let _e11 = mx_combine3_color3_(_e6, _e8, _e10);
-    let _e13 = mx_subtract_color3FA(_e11, 0.5f);
-    let _e14 = mx_multiply_color3FA(_e13, 1.5f);
-    let _e15 = mx_add_color3FA(_e14, 0.5f);
+    let v2_1 = vec3<f32>(0.5f, 0.5f, 0.5f);
+    let _e7 = mx_noise2d_vector3_(v2_1, 0.5f, v1_1);
+    let _e9 = mx_extract_vector3_(_e7, 0i);
+    let _e11 = mx_extract_vector3_(_e7, 1i);
+    let _e13 = mx_extract_vector3_(_e7, 2i);
+    let _e14 = mx_combine3_color3_(_e9, _e11, _e13);
+    let _e16 = mx_subtract_color3FA(_e14, 0.5f);
+    let _e17 = mx_multiply_color3FA(_e16, 1.5f);
+    let _e18 = mx_add_color3FA(_e17, 0.5f);
     let v15_ = vec3<f32>(0.1f, 0.1f, 0.1f);
     let v16_ = vec3<f32>(0.9f, 0.9f, 0.9f);
-    let v17_ = vec3<f32>(2.2f, 2.2f, 2.2f);
-    let v18_ = vec3<f32>(0f, 0f, 0f);
-    let v19_ = vec3<f32>(1f, 1f, 1f);
-    let _e37 = mx_remap_color3_(_e15, v15_, v16_, v18_, v19_);
-    let _e38 = mx_absval_color3_(_e37);
-    let _e39 = mx_divide_color3_(v19_, v17_);
-    let _e40 = mx_power_color3_(_e38, _e39);
-    let _e41 = mx_sign_color3_(_e37);
-    let _e42 = mx_multiply_color3_(_e40, _e41);
-    let _e43 = mx_remap_color3_(_e42, v18_, v19_, v18_, v19_);
-    let _e44 = mx_clamp_color3_(_e43, v18_, v19_);
-    let _e45 = mx_ifequal_color3B(true, true, _e44, _e43);
-    let _e48 = mx_subtract_float(0.7f, 0.5f);
-    let _e49 = mx_multiply_float(_e48, 2f);
-    let _e50 = mx_add_float(_e49, 0.5f);
-    return MxOutputs(_e45, _e50);
+    let v17_ = vec3<f32>(0f, 0f, 0f);
+    let v18_ = vec3<f32>(1f, 1f, 1f);
+    let _e36 = mx_remap_color3_(_e18, v15_, v16_, v17_, v18_);
+    let _e37 = mx_absval_color3_(_e36);
+    let v22_ = vec3<f32>(0.45454544f, 0.45454544f, 0.45454544f);
+    let _e42 = mx_power_color3_(_e37, v22_);
+    let _e43 = mx_sign_color3_(_e36);
+    let _e44 = mx_multiply_color3_(_e42, _e43);
+    let _e45 = mx_remap_color3_(_e44, v17_, v18_, v17_, v18_);
+    let _e46 = mx_clamp_color3_(_e45, v17_, v18_);
+    let _e47 = mx_ifequal_color3B(true, true, _e46, _e45);
+    return MxOutputs(_e47, 0.9f);
 }
 
 @compute @workgroup_size(64, 1, 1) 

@@ -32,10 +32,6 @@ fn mx_luminance_color3_(in: vec3<f32>, lumacoeffs: vec3<f32>) -> vec3<f32> {
     return vec3(dot(in, lumacoeffs));
 }
 
-fn mx_luminance_color4_(in_1: vec4<f32>, lumacoeffs_1: vec3<f32>) -> vec4<f32> {
-    return vec4<f32>(vec3(dot(in_1.xyz, lumacoeffs_1)), in_1.w);
-}
-
 fn mx_adjustment_rgbtohsv(c: vec3<f32>) -> vec3<f32> {
     var s: f32 = 0f;
     var h: f32 = 0f;
@@ -73,8 +69,8 @@ fn mx_adjustment_rgbtohsv(c: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(_e40, _e41, v);
 }
 
-fn mx_rgbtohsv_color3_(in_2: vec3<f32>) -> vec3<f32> {
-    let _e1 = mx_adjustment_rgbtohsv(in_2);
+fn mx_rgbtohsv_color3_(in_1: vec3<f32>) -> vec3<f32> {
+    let _e1 = mx_adjustment_rgbtohsv(in_1);
     return _e1;
 }
 
@@ -123,8 +119,8 @@ fn mx_adjustment_hsvtorgb(hsv: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(v_1, p, q);
 }
 
-fn mx_hsvtorgb_color3_(in_3: vec3<f32>) -> vec3<f32> {
-    let _e1 = mx_adjustment_hsvtorgb(in_3);
+fn mx_hsvtorgb_color3_(in_2: vec3<f32>) -> vec3<f32> {
+    let _e1 = mx_adjustment_hsvtorgb(in_2);
     return _e1;
 }
 
@@ -135,14 +131,12 @@ fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
     let _e10 = mx_ramplr_color3_(v0_, v1_, v2_);
     let v4_ = vec3<f32>(0.2722287f, 0.6740818f, 0.0536895f);
     let _e15 = mx_luminance_color3_(_e10, v4_);
-    let v6_ = vec4<f32>(0.5f, 0.25f, 0.125f, 1f);
-    let v7_ = vec3<f32>(0.2126f, 0.7152f, 0.0722f);
-    let _e25 = mx_luminance_color4_(v6_, v7_);
-    let _e26 = mx_rgbtohsv_color3_(_e10);
-    let v10_ = vec3<f32>(0.5f, 0f, 0f);
-    let _e31 = mx_add_color3_(_e26, v10_);
-    let _e32 = mx_hsvtorgb_color3_(_e31);
-    return MxOutputs(_e15, _e25, _e32);
+    let v6_ = vec4<f32>(0.294125f, 0.294125f, 0.294125f, 1f);
+    let _e21 = mx_rgbtohsv_color3_(_e10);
+    let v8_ = vec3<f32>(0.5f, 0f, 0f);
+    let _e26 = mx_add_color3_(_e21, v8_);
+    let _e27 = mx_hsvtorgb_color3_(_e26);
+    return MxOutputs(_e15, v6_, _e27);
 }
 
 @compute @workgroup_size(64, 1, 1) 

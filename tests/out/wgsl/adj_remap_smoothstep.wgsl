@@ -50,37 +50,14 @@ fn mx_remap_vector2FA(in_3: vec2<f32>, inlow_1: f32, inhigh_1: f32, outlow_1: f3
     return (vec2(outlow_1) + (((in_3 - vec2(inlow_1)) * (outhigh_1 - outlow_1)) / vec2((inhigh_1 - inlow_1))));
 }
 
-fn mx_extract_color3_(in_4: vec3<f32>, index_2: i32) -> f32 {
-    return in_4[clamp(index_2, 0i, 2i)];
-}
-
-fn mx_combine3_color3_(in1_: f32, in2_: f32, in3_: f32) -> vec3<f32> {
-    return vec3<f32>(in1_, in2_, in3_);
-}
-
 fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
     let _e2 = mx_texcoord_vector2_(geom_2, 0i);
     let _e3 = mx_extract_vector2_(_e2, 0i);
     let _e8 = mx_remap_float(_e3, 0.2f, 0.8f, -1f, 1f);
     let _e11 = mx_smoothstep_float(_e8, -0.5f, 0.5f);
     let _e14 = mx_remap_vector2FA(_e2, 0f, 1f, 0.5f, 1.5f);
-    let v14_ = vec3<f32>(0.3f, 0.5f, 0.7f);
-    let v15_ = vec3<f32>(0.4f, 0.4f, 0.4f);
-    let v16_ = vec3<f32>(0.6f, 0.6f, 0.6f);
-    let _e27 = mx_extract_color3_(v14_, 0i);
-    let _e29 = mx_extract_color3_(v14_, 1i);
-    let _e31 = mx_extract_color3_(v14_, 2i);
-    let _e32 = mx_extract_color3_(v15_, 0i);
-    let _e33 = mx_extract_color3_(v15_, 1i);
-    let _e34 = mx_extract_color3_(v15_, 2i);
-    let _e35 = mx_extract_color3_(v16_, 0i);
-    let _e36 = mx_extract_color3_(v16_, 1i);
-    let _e37 = mx_extract_color3_(v16_, 2i);
-    let _e38 = mx_smoothstep_float(_e27, _e32, _e35);
-    let _e39 = mx_smoothstep_float(_e29, _e33, _e36);
-    let _e40 = mx_smoothstep_float(_e31, _e34, _e37);
-    let _e41 = mx_combine3_color3_(_e38, _e39, _e40);
-    return MxOutputs(_e11, _e14, _e41);
+    let v14_ = vec3<f32>(0f, 0.49999988f, 1f);
+    return MxOutputs(_e11, _e14, v14_);
 }
 
 @compute @workgroup_size(64, 1, 1) 

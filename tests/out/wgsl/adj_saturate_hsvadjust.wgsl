@@ -23,184 +23,10 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_luminance_color3_(in: vec3<f32>, lumacoeffs: vec3<f32>) -> vec3<f32> {
-    return vec3(dot(in, lumacoeffs));
-}
-
-fn mx_mix_color3_(fg: vec3<f32>, bg: vec3<f32>, mix_: f32) -> vec3<f32> {
-    return ((bg * (1f - mix_)) + (fg * mix_));
-}
-
-fn mx_adjustment_rgbtohsv(c: vec3<f32>) -> vec3<f32> {
-    var s: f32 = 0f;
-    var h: f32 = 0f;
-
-    let r = c.x;
-    let g = c.y;
-    let b = c.z;
-    let mincomp = min(r, min(g, b));
-    let v = max(r, max(g, b));
-    let delta = (v - mincomp);
-    if (v > 0f) {
-        s = (delta / v);
-    }
-    let _e16 = s;
-    if (_e16 > 0f) {
-        if (r >= v) {
-            h = ((g - b) / delta);
-        } else {
-            if (g >= v) {
-                h = (2f + ((b - r) / delta));
-            } else {
-                h = (4f + ((r - g) / delta));
-            }
-        }
-        let _e31 = h;
-        h = (_e31 * 0.16666667f);
-        let _e34 = h;
-        if (_e34 < 0f) {
-            let _e37 = h;
-            h = (_e37 + 1f);
-        }
-    }
-    let _e40 = h;
-    let _e41 = s;
-    return vec3<f32>(_e40, _e41, v);
-}
-
-fn mx_rgbtohsv_color3_(in_1: vec3<f32>) -> vec3<f32> {
-    let _e1 = mx_adjustment_rgbtohsv(in_1);
-    return _e1;
-}
-
-fn mx_extract_vector3_(in_2: vec3<f32>, index: i32) -> f32 {
-    return in_2[clamp(index, 0i, 2i)];
-}
-
-fn mx_combine3_color3_(in1_: f32, in2_: f32, in3_: f32) -> vec3<f32> {
-    return vec3<f32>(in1_, in2_, in3_);
-}
-
-fn mx_multiply_color3_(in1_1: vec3<f32>, in2_1: vec3<f32>) -> vec3<f32> {
-    return (in1_1 * in2_1);
-}
-
-fn mx_add_color3_(in1_2: vec3<f32>, in2_2: vec3<f32>) -> vec3<f32> {
-    return (in1_2 + in2_2);
-}
-
-fn mx_adjustment_hsvtorgb(hsv: vec3<f32>) -> vec3<f32> {
-    var h_1: f32;
-
-    h_1 = hsv.x;
-    let s_1 = hsv.y;
-    let v_1 = hsv.z;
-    if (s_1 < 0.0001f) {
-        return vec3<f32>(v_1, v_1, v_1);
-    }
-    let _e8 = h_1;
-    let _e9 = h_1;
-    h_1 = (6f * (_e8 - floor(_e9)));
-    let _e14 = h_1;
-    let hi = i32(trunc(_e14));
-    let _e17 = h_1;
-    let f = (_e17 - f32(hi));
-    let p = (v_1 * (1f - s_1));
-    let q = (v_1 * (1f - (s_1 * f)));
-    let t = (v_1 * (1f - (s_1 * (1f - f))));
-    if (hi == 0i) {
-        return vec3<f32>(v_1, t, p);
-    } else {
-        if (hi == 1i) {
-            return vec3<f32>(q, v_1, p);
-        } else {
-            if (hi == 2i) {
-                return vec3<f32>(p, v_1, t);
-            } else {
-                if (hi == 3i) {
-                    return vec3<f32>(p, q, v_1);
-                } else {
-                    if (hi == 4i) {
-                        return vec3<f32>(t, p, v_1);
-                    }
-                }
-            }
-        }
-    }
-    return vec3<f32>(v_1, p, q);
-}
-
-fn mx_hsvtorgb_color3_(in_3: vec3<f32>) -> vec3<f32> {
-    let _e1 = mx_adjustment_hsvtorgb(in_3);
-    return _e1;
-}
-
-fn mx_rgbtohsv_color4_(in_4: vec4<f32>) -> vec4<f32> {
-    let _e2 = mx_adjustment_rgbtohsv(in_4.xyz);
-    return vec4<f32>(_e2, in_4.w);
-}
-
-fn mx_extract_color3_(in_5: vec3<f32>, index_1: i32) -> f32 {
-    return in_5[clamp(index_1, 0i, 2i)];
-}
-
-fn mx_combine4_color4_(in1_3: f32, in2_3: f32, in3_1: f32, in4_: f32) -> vec4<f32> {
-    return vec4<f32>(in1_3, in2_3, in3_1, in4_);
-}
-
-fn mx_multiply_color4_(in1_4: vec4<f32>, in2_4: vec4<f32>) -> vec4<f32> {
-    return (in1_4 * in2_4);
-}
-
-fn mx_add_color4_(in1_5: vec4<f32>, in2_5: vec4<f32>) -> vec4<f32> {
-    return (in1_5 + in2_5);
-}
-
-fn mx_hsvtorgb_color4_(in_6: vec4<f32>) -> vec4<f32> {
-    let _e2 = mx_adjustment_hsvtorgb(in_6.xyz);
-    return vec4<f32>(_e2, in_6.w);
-}
-
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let v0_ = vec3<f32>(0.8f, 0.3f, 0.1f);
-    let v2_ = vec3<f32>(0.2722287f, 0.6740818f, 0.0536895f);
-    let _e10 = mx_luminance_color3_(v0_, v2_);
-    let _e11 = mx_mix_color3_(v0_, _e10, 0.5f);
-    let v5_ = vec3<f32>(0.1f, 1.2f, 0.9f);
-    let _e16 = mx_rgbtohsv_color3_(_e11);
-    let _e18 = mx_extract_vector3_(v5_, 0i);
-    let _e20 = mx_extract_vector3_(v5_, 1i);
-    let _e22 = mx_extract_vector3_(v5_, 2i);
-    let _e23 = mx_combine3_color3_(_e18, _e20, _e22);
-    let v14_ = vec3<f32>(1f, 0f, 0f);
-    let _e28 = mx_multiply_color3_(_e23, v14_);
-    let _e29 = mx_add_color3_(_e16, _e28);
-    let v17_ = vec3<f32>(0f, 1f, 1f);
-    let _e34 = mx_multiply_color3_(_e23, v17_);
-    let _e35 = mx_add_color3_(_e34, v14_);
-    let _e36 = mx_multiply_color3_(_e29, _e35);
-    let _e37 = mx_hsvtorgb_color3_(_e36);
-    let v22_ = vec4<f32>(0.2f, 0.4f, 0.6f, 0.5f);
-    let v23_ = vec3<f32>(0.5f, 1f, 1f);
-    let _e47 = mx_rgbtohsv_color4_(v22_);
-    let _e48 = mx_extract_vector3_(v23_, 0i);
-    let _e49 = mx_extract_vector3_(v23_, 1i);
-    let _e50 = mx_extract_vector3_(v23_, 2i);
-    let _e51 = mx_combine3_color3_(_e48, _e49, _e50);
-    let _e52 = mx_extract_color3_(_e51, 0i);
-    let _e53 = mx_extract_color3_(_e51, 1i);
-    let _e54 = mx_extract_color3_(_e51, 2i);
-    let _e56 = mx_combine4_color4_(_e52, _e53, _e54, 1f);
-    let v34_ = vec4<f32>(1f, 0f, 0f, 0f);
-    let _e62 = mx_multiply_color4_(_e56, v34_);
-    let _e63 = mx_add_color4_(_e47, _e62);
-    let v37_ = vec4<f32>(0f, 1f, 1f, 0f);
-    let _e69 = mx_multiply_color4_(_e56, v37_);
-    let v39_ = vec4<f32>(1f, 0f, 0f, 1f);
-    let _e75 = mx_add_color4_(_e69, v39_);
-    let _e76 = mx_multiply_color4_(_e63, _e75);
-    let _e77 = mx_hsvtorgb_color4_(_e76);
-    return MxOutputs(_e37, _e77);
+    let v0_ = vec3<f32>(0.5514194f, 0.50821936f, 0.1734194f);
+    let v1_ = vec4<f32>(0.6f, 0.4000001f, 0.2f, 0.5f);
+    return MxOutputs(v0_, v1_);
 }
 
 @compute @workgroup_size(64, 1, 1) 
@@ -212,33 +38,33 @@ fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (i >= _e4) {
         return;
     }
-    let g_1 = (i * 20u);
-    let _e12 = mx_geometry_buffer[g_1];
-    let _e17 = mx_geometry_buffer[(g_1 + 1u)];
+    let g = (i * 20u);
+    let _e12 = mx_geometry_buffer[g];
+    let _e17 = mx_geometry_buffer[(g + 1u)];
     geom.texcoord = vec2<f32>(_e12, _e17);
-    let _e24 = mx_geometry_buffer[(g_1 + 2u)];
-    let _e29 = mx_geometry_buffer[(g_1 + 3u)];
-    let _e34 = mx_geometry_buffer[(g_1 + 4u)];
+    let _e24 = mx_geometry_buffer[(g + 2u)];
+    let _e29 = mx_geometry_buffer[(g + 3u)];
+    let _e34 = mx_geometry_buffer[(g + 4u)];
     geom.position_object = vec3<f32>(_e24, _e29, _e34);
-    let _e41 = mx_geometry_buffer[(g_1 + 5u)];
-    let _e46 = mx_geometry_buffer[(g_1 + 6u)];
-    let _e51 = mx_geometry_buffer[(g_1 + 7u)];
+    let _e41 = mx_geometry_buffer[(g + 5u)];
+    let _e46 = mx_geometry_buffer[(g + 6u)];
+    let _e51 = mx_geometry_buffer[(g + 7u)];
     geom.position_world = vec3<f32>(_e41, _e46, _e51);
-    let _e58 = mx_geometry_buffer[(g_1 + 8u)];
-    let _e63 = mx_geometry_buffer[(g_1 + 9u)];
-    let _e68 = mx_geometry_buffer[(g_1 + 10u)];
+    let _e58 = mx_geometry_buffer[(g + 8u)];
+    let _e63 = mx_geometry_buffer[(g + 9u)];
+    let _e68 = mx_geometry_buffer[(g + 10u)];
     geom.normal_object = vec3<f32>(_e58, _e63, _e68);
-    let _e75 = mx_geometry_buffer[(g_1 + 11u)];
-    let _e80 = mx_geometry_buffer[(g_1 + 12u)];
-    let _e85 = mx_geometry_buffer[(g_1 + 13u)];
+    let _e75 = mx_geometry_buffer[(g + 11u)];
+    let _e80 = mx_geometry_buffer[(g + 12u)];
+    let _e85 = mx_geometry_buffer[(g + 13u)];
     geom.normal_world = vec3<f32>(_e75, _e80, _e85);
-    let _e92 = mx_geometry_buffer[(g_1 + 14u)];
-    let _e97 = mx_geometry_buffer[(g_1 + 15u)];
-    let _e102 = mx_geometry_buffer[(g_1 + 16u)];
+    let _e92 = mx_geometry_buffer[(g + 14u)];
+    let _e97 = mx_geometry_buffer[(g + 15u)];
+    let _e102 = mx_geometry_buffer[(g + 16u)];
     geom.tangent_object = vec3<f32>(_e92, _e97, _e102);
-    let _e109 = mx_geometry_buffer[(g_1 + 17u)];
-    let _e114 = mx_geometry_buffer[(g_1 + 18u)];
-    let _e119 = mx_geometry_buffer[(g_1 + 19u)];
+    let _e109 = mx_geometry_buffer[(g + 17u)];
+    let _e114 = mx_geometry_buffer[(g + 18u)];
+    let _e119 = mx_geometry_buffer[(g + 19u)];
     geom.tangent_world = vec3<f32>(_e109, _e114, _e119);
     let _e123 = geom.normal_object;
     let _e125 = geom.tangent_object;

@@ -28,78 +28,27 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_combine3_color3_(in1_: f32, in2_: f32, in3_: f32) -> vec3<f32> {
-    return vec3<f32>(in1_, in2_, in3_);
-}
-
-fn mx_extract_color3_(in: vec3<f32>, index: i32) -> f32 {
-    return in[clamp(index, 0i, 2i)];
-}
-
-fn mx_combine3_vector3_(in1_1: f32, in2_1: f32, in3_1: f32) -> vec3<f32> {
-    return vec3<f32>(in1_1, in2_1, in3_1);
-}
-
-fn mx_combine4_color4_(in1_2: f32, in2_2: f32, in3_2: f32, in4_: f32) -> vec4<f32> {
-    return vec4<f32>(in1_2, in2_2, in3_2, in4_);
-}
-
-fn mx_texcoord_vector2_(geom_1: mx_geometry, index_1: i32) -> vec2<f32> {
+fn mx_texcoord_vector2_(geom_1: mx_geometry, index: i32) -> vec2<f32> {
     return geom_1.texcoord;
 }
 
-fn mx_extract_vector2_(in_1: vec2<f32>, index_2: i32) -> f32 {
-    return in_1[clamp(index_2, 0i, 1i)];
+fn mx_extract_vector2_(in: vec2<f32>, index_1: i32) -> f32 {
+    return in[clamp(index_1, 0i, 1i)];
 }
 
-fn mx_extract_vector4_(in_2: vec4<f32>, index_3: i32) -> f32 {
-    return in_2[clamp(index_3, 0i, 3i)];
-}
-
-fn mx_combine2_vector2_(in1_3: f32, in2_3: f32) -> vec2<f32> {
-    return vec2<f32>(in1_3, in2_3);
-}
-
-fn mx_convert_integer_float(in_3: i32) -> f32 {
-    return f32(in_3);
-}
-
-fn mx_convert_boolean_float(in_4: bool) -> f32 {
-    return select(0f, 1f, in_4);
-}
-
-fn mx_ifequal_booleanI(value1_: i32, value2_: i32) -> bool {
-    return (value1_ == value2_);
-}
-
-fn mx_logical_not(in_5: bool) -> bool {
-    return !(in_5);
+fn mx_combine3_vector3_(in1_: f32, in2_: f32, in3_: f32) -> vec3<f32> {
+    return vec3<f32>(in1_, in2_, in3_);
 }
 
 fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
-    let _e2 = mx_combine3_color3_(0.5f, 0.5f, 0.5f);
-    let _e4 = mx_extract_color3_(_e2, 0i);
-    let _e6 = mx_extract_color3_(_e2, 1i);
-    let _e8 = mx_extract_color3_(_e2, 2i);
-    let _e9 = mx_combine3_vector3_(_e4, _e6, _e8);
-    let v9_ = vec3<f32>(0.1f, 0.2f, 0.3f);
-    let _e14 = mx_extract_color3_(v9_, 0i);
-    let _e15 = mx_extract_color3_(v9_, 1i);
-    let _e16 = mx_extract_color3_(v9_, 2i);
-    let _e18 = mx_combine4_color4_(_e14, _e15, _e16, 1f);
-    let _e19 = mx_texcoord_vector2_(geom_2, 0i);
-    let _e20 = mx_extract_vector2_(_e19, 0i);
-    let _e21 = mx_extract_vector2_(_e19, 1i);
-    let _e23 = mx_combine3_vector3_(_e20, _e21, 0f);
-    let v20_ = vec4<f32>(1f, 2f, 3f, 4f);
-    let _e29 = mx_extract_vector4_(v20_, 0i);
-    let _e30 = mx_extract_vector4_(v20_, 1i);
-    let _e31 = mx_combine2_vector2_(_e29, _e30);
-    let _e33 = mx_convert_integer_float(7i);
-    let _e35 = mx_convert_boolean_float(true);
-    let _e36 = mx_ifequal_booleanI(0i, 0i);
-    let _e37 = mx_logical_not(_e36);
-    return MxOutputs(_e9, _e18, _e23, _e31, _e33, _e35, _e37);
+    let v2_ = vec3<f32>(0.5f, 0.5f, 0.5f);
+    let v4_ = vec4<f32>(0.1f, 0.2f, 0.3f, 1f);
+    let _e13 = mx_texcoord_vector2_(geom_2, 0i);
+    let _e14 = mx_extract_vector2_(_e13, 0i);
+    let _e15 = mx_extract_vector2_(_e13, 1i);
+    let _e17 = mx_combine3_vector3_(_e14, _e15, 0f);
+    let v10_ = vec2<f32>(1f, 2f);
+    return MxOutputs(v2_, v4_, _e17, v10_, 7f, 1f, false);
 }
 
 @compute @workgroup_size(64, 1, 1) 

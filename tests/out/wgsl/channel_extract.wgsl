@@ -24,14 +24,6 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_extract_color3_(in: vec3<f32>, index: i32) -> f32 {
-    return in[clamp(index, 0i, 2i)];
-}
-
-fn mx_extract_color4_(in_1: vec4<f32>, index_1: i32) -> f32 {
-    return in_1[clamp(index_1, 0i, 3i)];
-}
-
 fn mx_position_vector3_(geom_1: mx_geometry, space: i32) -> vec3<f32> {
     if (space == 2i) {
         return geom_1.position_world;
@@ -39,18 +31,14 @@ fn mx_position_vector3_(geom_1: mx_geometry, space: i32) -> vec3<f32> {
     return geom_1.position_object;
 }
 
-fn mx_extract_vector3_(in_2: vec3<f32>, index_2: i32) -> f32 {
-    return in_2[clamp(index_2, 0i, 2i)];
+fn mx_extract_vector3_(in: vec3<f32>, index: i32) -> f32 {
+    return in[clamp(index, 0i, 2i)];
 }
 
 fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
-    let v0_ = vec3<f32>(0.2f, 0.4f, 0.6f);
-    let _e6 = mx_extract_color3_(v0_, 1i);
-    let v3_ = vec4<f32>(0.1f, 0.2f, 0.3f, 0.4f);
-    let _e13 = mx_extract_color4_(v3_, 3i);
-    let _e14 = mx_position_vector3_(geom_2, 1i);
-    let _e16 = mx_extract_vector3_(_e14, 2i);
-    return MxOutputs(_e6, _e13, _e16);
+    let _e3 = mx_position_vector3_(geom_2, 1i);
+    let _e5 = mx_extract_vector3_(_e3, 2i);
+    return MxOutputs(0.4f, 0.4f, _e5);
 }
 
 @compute @workgroup_size(64, 1, 1) 

@@ -25,27 +25,8 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_extract_color3_(in: vec3<f32>, index: i32) -> f32 {
-    return in[clamp(index, 0i, 2i)];
-}
-
-fn mx_add_float(in1_: f32, in2_: f32) -> f32 {
-    return (in1_ + in2_);
-}
-
-fn mx_extract_vector4_(in_1: vec4<f32>, index_1: i32) -> f32 {
-    return in_1[clamp(index_1, 0i, 3i)];
-}
-
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let v0_ = vec3<f32>(0.9f, 0.5f, 0.1f);
-    let _e6 = mx_extract_color3_(v0_, 0i);
-    let _e8 = mx_extract_color3_(v0_, 1i);
-    let _e10 = mx_extract_color3_(v0_, 2i);
-    let _e11 = mx_add_float(_e6, _e10);
-    let v8_ = vec4<f32>(1f, 2f, 3f, 4f);
-    let _e18 = mx_extract_vector4_(v8_, 3i);
-    return MxOutputs(_e6, _e8, _e11, _e18);
+    return MxOutputs(0.9f, 0.5f, 1f, 4f);
 }
 
 @compute @workgroup_size(64, 1, 1) 

@@ -39,10 +39,6 @@ fn mx_mix_color3_color3_(fg_1: vec3<f32>, bg_1: vec3<f32>, mix_1: vec3<f32>) -> 
     return ((bg_1 * (vec3(1f) - mix_1)) + (fg_1 * mix_1));
 }
 
-fn mx_mix_float(fg_2: f32, bg_2: f32, mix_2: f32) -> f32 {
-    return ((bg_2 * (1f - mix_2)) + (fg_2 * mix_2));
-}
-
 fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
     let v0_ = vec3<f32>(1f, 0f, 0f);
     let v1_ = vec3<f32>(0f, 1f, 0f);
@@ -52,8 +48,7 @@ fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
     let v6_ = vec3<f32>(0f, 0f, 1f);
     let v7_ = vec3<f32>(0.2f, 0.5f, 0.8f);
     let _e21 = mx_mix_color3_color3_(_e12, v6_, v7_);
-    let _e25 = mx_mix_float(1f, 0f, 0.25f);
-    return MxOutputs(_e21, _e25);
+    return MxOutputs(_e21, 0.25f);
 }
 
 @compute @workgroup_size(64, 1, 1) 

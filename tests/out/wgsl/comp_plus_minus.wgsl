@@ -32,14 +32,6 @@ fn mx_plus_color4_(fg: vec4<f32>, bg: vec4<f32>, mix_: f32) -> vec4<f32> {
     return ((mix_ * (bg + fg)) + ((1f - mix_) * bg));
 }
 
-fn mx_minus_color3_(fg_1: vec3<f32>, bg_1: vec3<f32>, mix_1: f32) -> vec3<f32> {
-    return ((mix_1 * (bg_1 - fg_1)) + ((1f - mix_1) * bg_1));
-}
-
-fn mx_minus_float(fg_2: f32, bg_2: f32, mix_2: f32) -> f32 {
-    return ((mix_2 * (bg_2 - fg_2)) + ((1f - mix_2) * bg_2));
-}
-
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
     let v0_ = vec4<f32>(1f, 0f, 0f, 1f);
     let v1_ = vec4<f32>(0f, 0f, 1f, 0.5f);
@@ -47,11 +39,8 @@ fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
     let _e12 = mx_ramplr_color4_(v0_, v1_, v2_);
     let v4_ = vec4<f32>(0.1f, 0.1f, 0.1f, 1f);
     let _e19 = mx_plus_color4_(_e12, v4_, 0.5f);
-    let v7_ = vec3<f32>(0.2f, 0.2f, 0.2f);
-    let v8_ = vec3<f32>(1f, 1f, 1f);
-    let _e29 = mx_minus_color3_(v7_, v8_, 1f);
-    let _e32 = mx_minus_float(0.25f, 1f, 0.75f);
-    return MxOutputs(_e19, _e29, _e32);
+    let v7_ = vec3<f32>(0.8f, 0.8f, 0.8f);
+    return MxOutputs(_e19, v7_, 0.8125f);
 }
 
 @compute @workgroup_size(64, 1, 1) 

@@ -23,19 +23,10 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_premult_color4_(in: vec4<f32>) -> vec4<f32> {
-    return vec4<f32>((in.xyz * in.w), in.w);
-}
-
-fn mx_unpremult_color4_(in_1: vec4<f32>) -> vec4<f32> {
-    return vec4<f32>((in_1.xyz / vec3(in_1.w)), in_1.w);
-}
-
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
     let v0_ = vec4<f32>(0.8f, 0.6f, 0.4f, 0.5f);
-    let _e6 = mx_premult_color4_(v0_);
-    let _e7 = mx_unpremult_color4_(_e6);
-    return MxOutputs(_e6, _e7);
+    let v1_ = vec4<f32>(0.4f, 0.3f, 0.2f, 0.5f);
+    return MxOutputs(v1_, v0_);
 }
 
 @compute @workgroup_size(64, 1, 1) 

@@ -43,39 +43,14 @@ fn mx_ifgreatereq_vector3_(value1_: f32, value2_: f32, in1_: vec3<f32>, in2_: ve
     return in2_;
 }
 
-fn mx_ifequal_floatI(value1_1: i32, value2_1: i32, in1_1: f32, in2_1: f32) -> f32 {
-    if (value1_1 == value2_1) {
-        return in1_1;
-    }
-    return in2_1;
-}
-
-fn mx_ifequal_color4B(value1_2: bool, value2_2: bool, in1_2: vec4<f32>, in2_2: vec4<f32>) -> vec4<f32> {
-    if (value1_2 == value2_2) {
-        return in1_2;
-    }
-    return in2_2;
-}
-
-fn mx_ifgreatereq_integerI(value1_3: i32, value2_3: i32, in1_3: i32, in2_3: i32) -> i32 {
-    if (value1_3 >= value2_3) {
-        return in1_3;
-    }
-    return in2_3;
-}
-
 fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
     let _e2 = mx_position_vector3_(geom_2, 1i);
     let _e3 = mx_extract_vector3_(_e2, 1i);
     let v4_ = vec3<f32>(0f, 1f, 0f);
     let v5_ = vec3<f32>(0f, -1f, 0f);
     let _e13 = mx_ifgreatereq_vector3_(_e3, 0f, v4_, v5_);
-    let _e16 = mx_ifequal_floatI(3i, 3i, 1f, 0f);
-    let v12_ = vec4<f32>(1f, 1f, 1f, 1f);
-    let v13_ = vec4<f32>(0f, 0f, 0f, 1f);
-    let _e29 = mx_ifequal_color4B(true, false, v12_, v13_);
-    let _e34 = mx_ifgreatereq_integerI(2i, 5i, 10i, 20i);
-    return MxOutputs(_e13, _e16, _e29, _e34);
+    let v8_ = vec4<f32>(0f, 0f, 0f, 1f);
+    return MxOutputs(_e13, 1f, v8_, 20i);
 }
 
 @compute @workgroup_size(64, 1, 1) 

@@ -23,46 +23,9 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_ifgreater_float(value1_: f32, value2_: f32, in1_: f32, in2_: f32) -> f32 {
-    if (value1_ > value2_) {
-        return in1_;
-    }
-    return in2_;
-}
-
-fn mx_ifgreater_color3I(value1_1: i32, value2_1: i32, in1_1: vec3<f32>, in2_1: vec3<f32>) -> vec3<f32> {
-    if (value1_1 > value2_1) {
-        return in1_1;
-    }
-    return in2_1;
-}
-
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let _e15 = mx_ifgreater_float(10f, 1f, 0f, 0f);
-    let _e16 = mx_ifgreater_float(9f, 1f, 0f, _e15);
-    let _e17 = mx_ifgreater_float(8f, 1f, 0f, _e16);
-    let _e18 = mx_ifgreater_float(7f, 1f, 0f, _e17);
-    let _e19 = mx_ifgreater_float(6f, 1f, 0f, _e18);
-    let _e20 = mx_ifgreater_float(5f, 1f, 0f, _e19);
-    let _e21 = mx_ifgreater_float(4f, 1f, 0f, _e20);
-    let _e22 = mx_ifgreater_float(3f, 1f, 0.3f, _e21);
-    let _e23 = mx_ifgreater_float(2f, 1f, 0.2f, _e22);
-    let _e24 = mx_ifgreater_float(1f, 1f, 0.1f, _e23);
-    let v24_ = vec3<f32>(1f, 0f, 0f);
-    let v25_ = vec3<f32>(0f, 1f, 0f);
-    let v26_ = vec3<f32>(0f, 0f, 1f);
-    let v27_ = vec3<f32>(0f, 0f, 0f);
-    let _e51 = mx_ifgreater_color3I(10i, 2i, v27_, v27_);
-    let _e52 = mx_ifgreater_color3I(9i, 2i, v27_, _e51);
-    let _e53 = mx_ifgreater_color3I(8i, 2i, v27_, _e52);
-    let _e54 = mx_ifgreater_color3I(7i, 2i, v27_, _e53);
-    let _e55 = mx_ifgreater_color3I(6i, 2i, v27_, _e54);
-    let _e56 = mx_ifgreater_color3I(5i, 2i, v27_, _e55);
-    let _e57 = mx_ifgreater_color3I(4i, 2i, v27_, _e56);
-    let _e58 = mx_ifgreater_color3I(3i, 2i, v26_, _e57);
-    let _e59 = mx_ifgreater_color3I(2i, 2i, v25_, _e58);
-    let _e60 = mx_ifgreater_color3I(1i, 2i, v24_, _e59);
-    return MxOutputs(_e24, _e60);
+    let v1_ = vec3<f32>(0f, 0f, 1f);
+    return MxOutputs(0.2f, v1_);
 }
 
 @compute @workgroup_size(64, 1, 1) 

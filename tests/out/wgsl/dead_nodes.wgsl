@@ -28,20 +28,14 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_extract_color3_(in: vec3<f32>, index: i32) -> f32 {
-    return in[clamp(index, 0i, 2i)];
-}
-
 fn mx_multiply_float(in1_: f32, in2_: f32) -> f32 {
     return (in1_ * in2_);
 }
 
 fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let v0_ = inputs.used;
-    let v1_ = vec3<f32>(0.1f, 0.2f, 0.3f);
-    let _e8 = mx_extract_color3_(v1_, 1i);
-    let _e9 = mx_multiply_float(v0_, _e8);
-    return MxOutputs(_e9);
+    let _e4 = mx_multiply_float(v0_, 0.2f);
+    return MxOutputs(_e4);
 }
 
 @compute @workgroup_size(64, 1, 1) 

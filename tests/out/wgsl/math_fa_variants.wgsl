@@ -43,29 +43,14 @@ fn mx_clamp_vector3FA(in: vec3<f32>, low: f32, high: f32) -> vec3<f32> {
     return clamp(in, vec3(low), vec3(high));
 }
 
-fn mx_divide_color3FA(in1_2: vec3<f32>, in2_2: f32) -> vec3<f32> {
-    return (in1_2 / vec3(in2_2));
-}
-
-fn mx_power_color3FA(in1_3: vec3<f32>, in2_3: f32) -> vec3<f32> {
-    return pow(in1_3, vec3(in2_3));
-}
-
-fn mx_max_vector2FA(in1_4: vec2<f32>, in2_4: f32) -> vec2<f32> {
-    return max(in1_4, vec2(in2_4));
-}
-
 fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
     let _e2 = mx_position_vector3_(geom_2, 1i);
     let _e4 = mx_multiply_vector3FA(_e2, 4f);
     let _e6 = mx_add_vector3FA(_e4, 0.5f);
     let _e9 = mx_clamp_vector3FA(_e6, 0f, 1f);
-    let v9_ = vec3<f32>(0.8f, 0.4f, 0.2f);
-    let _e15 = mx_divide_color3FA(v9_, 2f);
-    let _e17 = mx_power_color3FA(_e15, 0.4545f);
-    let v14_ = vec2<f32>(0.3f, 0.7f);
-    let _e21 = mx_max_vector2FA(v14_, 0.5f);
-    return MxOutputs(_e9, _e17, _e21);
+    let v9_ = vec3<f32>(0.65938073f, 0.48119172f, 0.35115594f);
+    let v10_ = vec2<f32>(0.5f, 0.7f);
+    return MxOutputs(_e9, v9_, v10_);
 }
 
 @compute @workgroup_size(64, 1, 1) 

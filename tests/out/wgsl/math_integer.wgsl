@@ -23,29 +23,8 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_add_integer(in1_: i32, in2_: i32) -> i32 {
-    return (in1_ + in2_);
-}
-
-fn mx_subtract_integer(in1_1: i32, in2_1: i32) -> i32 {
-    return (in1_1 - in2_1);
-}
-
-fn mx_floor_integer(in: f32) -> i32 {
-    return i32(floor(in));
-}
-
-fn mx_convert_integer_float(in_1: i32) -> f32 {
-    return f32(in_1);
-}
-
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let _e3 = mx_add_integer(7i, 5i);
-    let _e5 = mx_subtract_integer(_e3, 20i);
-    let _e7 = mx_floor_integer(-2.5f);
-    let _e8 = mx_add_integer(_e5, _e7);
-    let _e9 = mx_convert_integer_float(_e8);
-    return MxOutputs(_e8, _e9);
+    return MxOutputs(-11i, -11f);
 }
 
 @compute @workgroup_size(64, 1, 1) 

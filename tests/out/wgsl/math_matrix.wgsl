@@ -32,53 +32,21 @@ fn mx_position_vector3_(geom_1: mx_geometry, space: i32) -> vec3<f32> {
     return geom_1.position_object;
 }
 
-fn mx_transpose_matrix44_(in: mat4x4<f32>) -> mat4x4<f32> {
-    return transpose(in);
+fn mx_transformmatrix_vector3M4_(in: vec3<f32>, mat: mat4x4<f32>) -> vec3<f32> {
+    return (mat * vec4<f32>(in, 1f)).xyz;
 }
 
-fn mx_multiply_matrix44_(in1_: mat4x4<f32>, in2_: mat4x4<f32>) -> mat4x4<f32> {
-    return (in1_ * in2_);
-}
-
-fn mx_transformmatrix_vector3M4_(in_1: vec3<f32>, mat: mat4x4<f32>) -> vec3<f32> {
-    return (mat * vec4<f32>(in_1, 1f)).xyz;
-}
-
-fn mx_math_inverse3_(m: mat3x3<f32>) -> mat3x3<f32> {
-    let a = m[0];
-    let b = m[1];
-    let c = m[2];
-    let r0_ = cross(b, c);
-    let r1_ = cross(c, a);
-    let r2_ = cross(a, b);
-    let inv_det = (1f / dot(a, r0_));
-    return (transpose(mat3x3<f32>(r0_, r1_, r2_)) * inv_det);
-}
-
-fn mx_invertmatrix_matrix33_(in_2: mat3x3<f32>) -> mat3x3<f32> {
-    let _e1 = mx_math_inverse3_(in_2);
-    return _e1;
-}
-
-fn mx_transformmatrix_vector3_(in_3: vec3<f32>, mat_1: mat3x3<f32>) -> vec3<f32> {
-    return (mat_1 * in_3);
-}
-
-fn mx_determinant_matrix33_(in_4: mat3x3<f32>) -> f32 {
-    return determinant(in_4);
+fn mx_transformmatrix_vector3_(in_1: vec3<f32>, mat_1: mat3x3<f32>) -> vec3<f32> {
+    return (mat_1 * in_1);
 }
 
 fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
     let _e2 = mx_position_vector3_(geom_2, 1i);
-    let v2_ = mat4x4<f32>(vec4<f32>(2f, 0f, 0f, 0f), vec4<f32>(0f, 2f, 0f, 0f), vec4<f32>(0f, 0f, 2f, 0f), vec4<f32>(1f, 2f, 3f, 1f));
-    let _e24 = mx_transpose_matrix44_(v2_);
-    let _e25 = mx_multiply_matrix44_(v2_, _e24);
-    let _e26 = mx_transformmatrix_vector3M4_(_e2, _e25);
-    let v6_ = mat3x3<f32>(vec3<f32>(1f, 2f, 0f), vec3<f32>(0f, 1f, 0f), vec3<f32>(0f, 0f, 4f));
-    let _e40 = mx_invertmatrix_matrix33_(v6_);
-    let _e41 = mx_transformmatrix_vector3_(_e2, _e40);
-    let _e42 = mx_determinant_matrix33_(_e40);
-    return MxOutputs(_e26, _e41, _e42, _e25);
+    let v2_ = mat4x4<f32>(vec4<f32>(5f, 2f, 3f, 1f), vec4<f32>(2f, 8f, 6f, 2f), vec4<f32>(3f, 6f, 13f, 3f), vec4<f32>(1f, 2f, 3f, 1f));
+    let _e24 = mx_transformmatrix_vector3M4_(_e2, v2_);
+    let v4_ = mat3x3<f32>(vec3<f32>(1f, -2f, 0f), vec3<f32>(0f, 1f, 0f), vec3<f32>(0f, 0f, 0.25f));
+    let _e38 = mx_transformmatrix_vector3_(_e2, v4_);
+    return MxOutputs(_e24, _e38, 0.25f, v2_);
 }
 
 @compute @workgroup_size(64, 1, 1) 

@@ -25,36 +25,12 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_min_vector4FA(in1_: vec4<f32>, in2_: f32) -> vec4<f32> {
-    return min(in1_, vec4(in2_));
-}
-
-fn mx_max_vector4_(in1_1: vec4<f32>, in2_1: vec4<f32>) -> vec4<f32> {
-    return max(in1_1, in2_1);
-}
-
-fn mx_sign_vector4_(in: vec4<f32>) -> vec4<f32> {
-    return sign(in);
-}
-
-fn mx_ceil_vector4_(in_1: vec4<f32>) -> vec4<f32> {
-    return ceil(in_1);
-}
-
-fn mx_round_color4_(in_2: vec4<f32>) -> vec4<f32> {
-    return round(in_2);
-}
-
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let v0_ = vec4<f32>(-1.5f, 0.25f, 2.75f, -0.5f);
-    let _e7 = mx_min_vector4FA(v0_, 1f);
-    let v3_ = vec4<f32>(-1f, -1f, -1f, -1f);
-    let _e13 = mx_max_vector4_(_e7, v3_);
-    let _e14 = mx_sign_vector4_(v0_);
-    let _e15 = mx_ceil_vector4_(v0_);
-    let v7_ = vec4<f32>(0.4f, 0.6f, 1.5f, 1f);
-    let _e21 = mx_round_color4_(v7_);
-    return MxOutputs(_e13, _e14, _e15, _e21);
+    let v0_ = vec4<f32>(-1f, 0.25f, 1f, -0.5f);
+    let v1_ = vec4<f32>(-1f, 1f, 1f, -1f);
+    let v2_ = vec4<f32>(-1f, 1f, 3f, -0f);
+    let v3_ = vec4<f32>(0f, 1f, 2f, 1f);
+    return MxOutputs(v0_, v1_, v2_, v3_);
 }
 
 @compute @workgroup_size(64, 1, 1) 

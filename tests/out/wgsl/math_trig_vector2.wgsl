@@ -43,23 +43,13 @@ fn mx_atan2_vector2_(iny: vec2<f32>, inx: vec2<f32>) -> vec2<f32> {
     return atan2(iny, inx);
 }
 
-fn mx_exp_float(in_2: f32) -> f32 {
-    return exp(in_2);
-}
-
-fn mx_ln_float(in_3: f32) -> f32 {
-    return log(in_3);
-}
-
 fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
     let _e2 = mx_texcoord_vector2_(geom_2, 0i);
     let _e4 = mx_multiply_vector2FA(_e2, 6.2831855f);
     let _e5 = mx_sin_vector2_(_e4);
     let _e6 = mx_cos_vector2_(_e4);
     let _e7 = mx_atan2_vector2_(_e5, _e6);
-    let _e9 = mx_exp_float(0.5f);
-    let _e10 = mx_ln_float(_e9);
-    return MxOutputs(_e7, _e10);
+    return MxOutputs(_e7, 0.49999997f);
 }
 
 @compute @workgroup_size(64, 1, 1) 

@@ -146,10 +146,6 @@ fn mx_noise2d_float(amplitude: f32, pivot: f32, texcoord: vec2<f32>) -> f32 {
     return ((_e3 * amplitude) + pivot);
 }
 
-fn mx_combine3_vector3_(in1_1: f32, in2_1: f32, in3_: f32) -> vec3<f32> {
-    return vec3<f32>(in1_1, in2_1, in3_);
-}
-
 fn mx_noise_bilerp_vec3_(v0_1: vec3<f32>, v1_1: vec3<f32>, v2_1: vec3<f32>, v3_1: vec3<f32>, s_1: f32, t_2: f32) -> vec3<f32> {
     let s1_1 = (1f - s_1);
     return (((1f - t_2) * ((v0_1 * s1_1) + (v1_1 * s_1))) + (t_2 * ((v2_1 * s1_1) + (v3_1 * s_1))));
@@ -195,24 +191,24 @@ fn mx_extract_vector3_(in: vec3<f32>, index_1: i32) -> f32 {
     return in[clamp(index_1, 0i, 2i)];
 }
 
-fn mx_combine3_color3_(in1_2: f32, in2_2: f32, in3_1: f32) -> vec3<f32> {
-    return vec3<f32>(in1_2, in2_2, in3_1);
+fn mx_combine3_color3_(in1_1: f32, in2_1: f32, in3_: f32) -> vec3<f32> {
+    return vec3<f32>(in1_1, in2_1, in3_);
 }
 
 fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
     let _e3 = mx_texcoord_vector2_(geom_2, 0i);
     let _e5 = mx_multiply_vector2FA(_e3, 8f);
     let _e6 = mx_noise2d_float(0.5f, 0.5f, _e5);
-    let _e9 = mx_combine3_vector3_(2f, 2f, 2f);
-    let _e10 = mx_noise2d_vector3_(_e9, 0f, _e5);
-    let v10_ = vec3<f32>(1f, 0.5f, 0.25f);
-    let v11_ = geom_2.texcoord;
-    let _e16 = mx_noise2d_vector3_(v10_, 0f, v11_);
-    let _e17 = mx_extract_vector3_(_e16, 0i);
-    let _e19 = mx_extract_vector3_(_e16, 1i);
-    let _e21 = mx_extract_vector3_(_e16, 2i);
-    let _e22 = mx_combine3_color3_(_e17, _e19, _e21);
-    return MxOutputs(_e6, _e10, _e22);
+    let v7_ = vec3<f32>(2f, 2f, 2f);
+    let _e12 = mx_noise2d_vector3_(v7_, 0f, _e5);
+    let v9_ = vec3<f32>(1f, 0.5f, 0.25f);
+    let v10_ = geom_2.texcoord;
+    let _e18 = mx_noise2d_vector3_(v9_, 0f, v10_);
+    let _e19 = mx_extract_vector3_(_e18, 0i);
+    let _e21 = mx_extract_vector3_(_e18, 1i);
+    let _e23 = mx_extract_vector3_(_e18, 2i);
+    let _e24 = mx_combine3_color3_(_e19, _e21, _e23);
+    return MxOutputs(_e6, _e12, _e24);
 }
 
 @compute @workgroup_size(64, 1, 1) 

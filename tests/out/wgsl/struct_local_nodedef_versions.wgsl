@@ -24,15 +24,8 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_multiply_float(in1_: f32, in2_: f32) -> f32 {
-    return (in1_ * in2_);
-}
-
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let _e3 = mx_multiply_float(1f, 20f);
-    let _e5 = mx_multiply_float(1f, 10f);
-    let _e7 = mx_multiply_float(2f, 10f);
-    return MxOutputs(_e3, _e5, _e7);
+    return MxOutputs(20f, 10f, 20f);
 }
 
 @compute @workgroup_size(64, 1, 1) 

@@ -23,14 +23,9 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_multiply_color3FA(in1_: vec3<f32>, in2_: f32) -> vec3<f32> {
-    return (in1_ * in2_);
-}
-
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let v0_ = vec3<f32>(0.25f, 0.5f, 0.75f);
-    let _e6 = mx_multiply_color3FA(v0_, 2f);
-    return MxOutputs(_e6, 0.125f);
+    let v0_ = vec3<f32>(0.5f, 1f, 1.5f);
+    return MxOutputs(v0_, 0.125f);
 }
 
 @compute @workgroup_size(64, 1, 1) 

@@ -161,83 +161,66 @@ fn mx_divide_vector3FA(in1_3: vec3<f32>, in2_3: f32) -> vec3<f32> {
     return (in1_3 / vec3(in2_3));
 }
 
-fn mx_clamp_float(in_3: f32, low: f32, high: f32) -> f32 {
-    return clamp(in_3, low, high);
+fn mx_power_vector3FA(in1_4: vec3<f32>, in2_4: f32) -> vec3<f32> {
+    return pow(in1_4, vec3(in2_4));
 }
 
-fn mx_divide_float(in1_4: f32, in2_4: f32) -> f32 {
-    return (in1_4 / in2_4);
+fn mx_multiply_color3FA(in1_5: vec3<f32>, in2_5: f32) -> vec3<f32> {
+    return (in1_5 * in2_5);
 }
 
-fn mx_power_vector3FA(in1_5: vec3<f32>, in2_5: f32) -> vec3<f32> {
-    return pow(in1_5, vec3(in2_5));
+fn mx_add_color3_(in1_6: vec3<f32>, in2_6: vec3<f32>) -> vec3<f32> {
+    return (in1_6 + in2_6);
 }
 
-fn mx_multiply_color3FA(in1_6: vec3<f32>, in2_6: f32) -> vec3<f32> {
-    return (in1_6 * in2_6);
-}
-
-fn mx_add_color3_(in1_7: vec3<f32>, in2_7: vec3<f32>) -> vec3<f32> {
-    return (in1_7 + in2_7);
-}
-
-fn mx_multiply_float(in1_8: f32, in2_8: f32) -> f32 {
-    return (in1_8 * in2_8);
+fn mx_multiply_float(in1_7: f32, in2_7: f32) -> f32 {
+    return (in1_7 * in2_7);
 }
 
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
     let v2_ = vec3<f32>(0f, 0f, 0f);
     let v3_ = geom_1.position_object;
     let v4_ = geom_1.normal_object;
-    let _e10 = mx_extract_vector3_(v3_, 2i);
-    let _e12 = mx_extract_vector3_(v3_, 1i);
-    let _e13 = mx_combine2_vector2_(_e10, _e12);
-    let _e14 = mx_combine2_vector2_(_e12, _e10);
-    let v13_ = vec2<f32>(0f, 0f);
-    let _e26 = mx_ifgreater_vector2I(10i, 2i, v13_, v13_);
-    let _e27 = mx_ifgreater_vector2I(9i, 2i, v13_, _e26);
-    let _e28 = mx_ifgreater_vector2I(8i, 2i, v13_, _e27);
-    let _e29 = mx_ifgreater_vector2I(7i, 2i, v13_, _e28);
-    let _e30 = mx_ifgreater_vector2I(6i, 2i, v13_, _e29);
-    let _e31 = mx_ifgreater_vector2I(5i, 2i, v13_, _e30);
-    let _e32 = mx_ifgreater_vector2I(4i, 2i, v13_, _e31);
-    let _e33 = mx_ifgreater_vector2I(3i, 2i, _e14, _e32);
-    let _e34 = mx_ifgreater_vector2I(2i, 2i, _e13, _e33);
-    let _e35 = mx_ifgreater_vector2I(1i, 2i, _e13, _e34);
-    let _e37 = mx_image_color3_(mx_texture_0_, v2_, _e35, 2i, 2i, 1i, 0i, 0i);
-    let _e38 = mx_normalize_vector3_(v4_);
-    let _e39 = mx_absval_vector3_(_e38);
-    let v35_ = vec3<f32>(1f, 1f, 1f);
-    let _e44 = mx_dotproduct_vector3_(_e39, v35_);
-    let _e45 = mx_divide_vector3FA(_e39, _e44);
-    let _e48 = mx_clamp_float(0.5f, 0.03f, 1f);
-    let _e49 = mx_divide_float(1f, _e48);
-    let _e50 = mx_power_vector3FA(_e45, _e49);
-    let _e51 = mx_dotproduct_vector3_(_e50, v35_);
-    let _e52 = mx_divide_vector3FA(_e50, _e51);
-    let _e53 = mx_extract_vector3_(_e52, 0i);
-    let _e54 = mx_extract_vector3_(_e52, 1i);
-    let _e55 = mx_extract_vector3_(_e52, 2i);
-    let _e56 = mx_multiply_color3FA(_e37, _e53);
-    let _e57 = mx_extract_vector3_(v3_, 0i);
-    let _e58 = mx_combine2_vector2_(_e10, _e57);
-    let _e59 = mx_combine2_vector2_(_e57, _e10);
-    let _e60 = mx_ifgreater_vector2I(3i, 2i, _e59, _e32);
-    let _e61 = mx_ifgreater_vector2I(2i, 2i, _e59, _e60);
-    let _e62 = mx_ifgreater_vector2I(1i, 2i, _e58, _e61);
-    let _e64 = mx_image_color3_(mx_texture_1_, v2_, _e62, 2i, 2i, 1i, 0i, 0i);
-    let _e65 = mx_multiply_color3FA(_e64, _e54);
-    let _e66 = mx_add_color3_(_e56, _e65);
-    let _e68 = mx_multiply_float(_e12, -1f);
-    let _e69 = mx_combine2_vector2_(_e68, _e57);
-    let _e70 = mx_combine2_vector2_(_e57, _e12);
-    let _e71 = mx_ifgreater_vector2I(3i, 2i, _e70, _e32);
-    let _e72 = mx_ifgreater_vector2I(2i, 2i, _e70, _e71);
-    let _e73 = mx_ifgreater_vector2I(1i, 2i, _e69, _e72);
-    let _e75 = mx_image_color3_(mx_texture_0_, v2_, _e73, 2i, 2i, 1i, 0i, 0i);
-    let _e76 = mx_multiply_color3FA(_e75, _e55);
-    let _e77 = mx_add_color3_(_e66, _e76);
-    return MxOutputs(_e77);
+    let _e9 = mx_extract_vector3_(v3_, 2i);
+    let _e11 = mx_extract_vector3_(v3_, 1i);
+    let _e12 = mx_combine2_vector2_(_e9, _e11);
+    let _e13 = mx_combine2_vector2_(_e11, _e9);
+    let v12_ = vec2<f32>(0f, 0f);
+    let _e18 = mx_ifgreater_vector2I(3i, 2i, _e13, v12_);
+    let _e19 = mx_ifgreater_vector2I(2i, 2i, _e12, _e18);
+    let _e20 = mx_ifgreater_vector2I(1i, 2i, _e12, _e19);
+    let _e22 = mx_image_color3_(mx_texture_0_, v2_, _e20, 2i, 2i, 1i, 0i, 0i);
+    let _e23 = mx_normalize_vector3_(v4_);
+    let _e24 = mx_absval_vector3_(_e23);
+    let v20_ = vec3<f32>(1f, 1f, 1f);
+    let _e29 = mx_dotproduct_vector3_(_e24, v20_);
+    let _e30 = mx_divide_vector3FA(_e24, _e29);
+    let _e32 = mx_power_vector3FA(_e30, 2f);
+    let _e33 = mx_dotproduct_vector3_(_e32, v20_);
+    let _e34 = mx_divide_vector3FA(_e32, _e33);
+    let _e35 = mx_extract_vector3_(_e34, 0i);
+    let _e36 = mx_extract_vector3_(_e34, 1i);
+    let _e37 = mx_extract_vector3_(_e34, 2i);
+    let _e38 = mx_multiply_color3FA(_e22, _e35);
+    let _e39 = mx_extract_vector3_(v3_, 0i);
+    let _e40 = mx_combine2_vector2_(_e9, _e39);
+    let _e41 = mx_combine2_vector2_(_e39, _e9);
+    let _e42 = mx_ifgreater_vector2I(3i, 2i, _e41, v12_);
+    let _e43 = mx_ifgreater_vector2I(2i, 2i, _e41, _e42);
+    let _e44 = mx_ifgreater_vector2I(1i, 2i, _e40, _e43);
+    let _e46 = mx_image_color3_(mx_texture_1_, v2_, _e44, 2i, 2i, 1i, 0i, 0i);
+    let _e47 = mx_multiply_color3FA(_e46, _e36);
+    let _e48 = mx_add_color3_(_e38, _e47);
+    let _e50 = mx_multiply_float(_e11, -1f);
+    let _e51 = mx_combine2_vector2_(_e50, _e39);
+    let _e52 = mx_combine2_vector2_(_e39, _e11);
+    let _e53 = mx_ifgreater_vector2I(3i, 2i, _e52, v12_);
+    let _e54 = mx_ifgreater_vector2I(2i, 2i, _e52, _e53);
+    let _e55 = mx_ifgreater_vector2I(1i, 2i, _e51, _e54);
+    let _e57 = mx_image_color3_(mx_texture_0_, v2_, _e55, 2i, 2i, 1i, 0i, 0i);
+    let _e58 = mx_multiply_color3FA(_e57, _e37);
+    let _e59 = mx_add_color3_(_e48, _e58);
+    return MxOutputs(_e59);
 }
 
 @compute @workgroup_size(64, 1, 1) 

@@ -22,31 +22,9 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_extract_color3_(in: vec3<f32>, index: i32) -> f32 {
-    return in[clamp(index, 0i, 2i)];
-}
-
-fn mx_combine3_color3_(in1_: f32, in2_: f32, in3_: f32) -> vec3<f32> {
-    return vec3<f32>(in1_, in2_, in3_);
-}
-
-fn mx_multiply_float(in1_1: f32, in2_1: f32) -> f32 {
-    return (in1_1 * in2_1);
-}
-
-fn mx_add_color3FA(in1_2: vec3<f32>, in2_2: f32) -> vec3<f32> {
-    return (in1_2 + vec3(in2_2));
-}
-
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let v0_ = vec3<f32>(0.1f, 0.5f, 0.9f);
-    let _e6 = mx_extract_color3_(v0_, 0i);
-    let _e8 = mx_extract_color3_(v0_, 1i);
-    let _e10 = mx_extract_color3_(v0_, 2i);
-    let _e11 = mx_combine3_color3_(_e10, _e8, _e6);
-    let _e13 = mx_multiply_float(_e8, 2f);
-    let _e14 = mx_add_color3FA(_e11, _e13);
-    return MxOutputs(_e14);
+    let v0_ = vec3<f32>(1.9f, 1.5f, 1.1f);
+    return MxOutputs(v0_);
 }
 
 @compute @workgroup_size(64, 1, 1) 
