@@ -8,6 +8,13 @@ use mtlx::DataType;
 /// each in object and world space (3 each).
 pub const GEOMETRY_STRIDE: usize = 20;
 
+/// Where each geometric property sits in a geometry row (bitangents are computed as
+/// normal × tangent in the kernel).
+pub const GEOMETRY_LAYOUT: [(crate::ir::GeomProp, usize); 7] = {
+    use crate::ir::GeomProp::*;
+    [(Texcoord, 0), (PositionObject, 2), (PositionWorld, 5), (NormalObject, 8), (NormalWorld, 11), (TangentObject, 14), (TangentWorld, 17)]
+};
+
 /// Binding numbers of the kernel's resources (group 0).
 pub const BINDING_GEOMETRY: u32 = 0;
 pub const BINDING_INPUTS: u32 = 1;

@@ -2,7 +2,7 @@
 //! concatenated with exactly the library items it calls; parsed once by naga, validated,
 //! compacted, validated again, and written by naga's WGSL writer.
 
-use crate::ir::{Graph, ValueKind};
+use crate::ir::{GeomProp, Graph, ValueKind};
 use crate::kernel::*;
 use crate::node_library::NodeLibrary;
 use crate::wgsl_types::{constant_expr, wgsl_type};
@@ -137,50 +137,68 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str) -> Result<PatternKer
     // Body.
     let mut body = Vec::new();
     let mut roots: Vec<&str> = vec!["mx_geometry"];
-    let var = |h: crate::arena::Handle<crate::ir::Value>| format!("v{}", h.index());
+    // Leaves (constants, geometry, inputs, textures) are written inline where they are used;
+    // every call gets one `let` (naga's parse time grows with the statements it reads).
+    let mut operand: Vec<String> = Vec::with_capacity(graph.values.len());
     for (h, v) in graph.values.iter() {
+        let inline = match &v.kind {
+            // Strings and filenames exist only at compile time (enum strings are already
+            // integers, filenames texture bindings): they have no WGSL expression.
+            ValueKind::Constant(lit) => Some(constant_expr(&v.ty, lit).unwrap_or_default()),
+            ValueKind::Geometry(g) => Some(format!("geom.{}", g.field())),
+            ValueKind::Input(i) => Some(format!("inputs.{}", input_fields[*i].field)),
+            ValueKind::Texture(t) => Some(textures[*t].name.clone()),
+            ValueKind::Call { .. } | ValueKind::Field { .. } => None,
+        };
+        if let Some(e) = inline {
+            operand.push(e);
+            continue;
+        }
         let rhs = match &v.kind {
-            ValueKind::Constant(lit) => match constant_expr(&v.ty, lit) {
-                Some(e) => e,
-                None => continue, // strings and filenames exist only at compile time
-            },
-            ValueKind::Geometry(g) => format!("geom.{}", g.field()),
-            ValueKind::Input(i) => format!("inputs.{}", input_fields[*i].field),
-            ValueKind::Texture(_) => continue,
             ValueKind::Call { function, args, geometry } => {
                 roots.push(function);
-                let mut a: Vec<String> = args
-                    .iter()
-                    .map(|&x| match graph.values[x].kind {
-                        ValueKind::Texture(t) => textures[t].name.clone(),
-                        _ => var(x),
-                    })
-                    .collect();
+                let mut a: Vec<String> = args.iter().map(|&x| operand[x.index()].clone()).collect();
                 if *geometry {
                     a.insert(0, "geom".into());
                 }
                 format!("{function}({})", a.join(", "))
             }
-            ValueKind::Field { base, field } => format!("{}.{field}", var(*base)),
+            ValueKind::Field { base, field } => format!("{}.{field}", operand[base.index()]),
+            _ => unreachable!("leaves are inline"),
         };
-        body.push(format!("let {} = {rhs};", var(h)));
+        let name = format!("v{}", h.index());
+        body.push(format!("let {name} = {rhs};"));
+        operand.push(name);
     }
-    let result: Vec<String> = graph.outputs.iter().map(|o| var(o.value)).collect();
+    let result: Vec<String> = graph.outputs.iter().map(|o| operand[o.value.index()].clone()).collect();
     let items: Vec<&str> = lib.wgsl.closure(&roots).into_iter().map(|i| i.text.as_str()).collect();
     if !lib.wgsl.items.contains_key("mx_geometry") {
         return Err(LowerError("the library defines no `mx_geometry` struct (stdlib/wgsl/geometric.wgsl)".into()));
     }
-    let geometry_loads = vec![
-        "geom.texcoord = vec2<f32>(mx_geometry_buffer[g], mx_geometry_buffer[g + 1u]);".to_string(),
-        format!("geom.position_object = {};", load_expr(&DataType::Vector3, "mx_geometry_buffer", "g", 2)),
-        format!("geom.position_world = {};", load_expr(&DataType::Vector3, "mx_geometry_buffer", "g", 5)),
-        format!("geom.normal_object = {};", load_expr(&DataType::Vector3, "mx_geometry_buffer", "g", 8)),
-        format!("geom.normal_world = {};", load_expr(&DataType::Vector3, "mx_geometry_buffer", "g", 11)),
-        format!("geom.tangent_object = {};", load_expr(&DataType::Vector3, "mx_geometry_buffer", "g", 14)),
-        format!("geom.tangent_world = {};", load_expr(&DataType::Vector3, "mx_geometry_buffer", "g", 17)),
-        "geom.bitangent_object = cross(geom.normal_object, geom.tangent_object);".to_string(),
-        "geom.bitangent_world = cross(geom.normal_world, geom.tangent_world);".to_string(),
-    ];
+    // Load only the geometric properties the graph reads (all of them when a library function
+    // receives the whole `mx_geometry`); the others stay zero.
+    let whole = graph.values.iter().any(|(_, v)| matches!(v.kind, ValueKind::Call { geometry: true, .. }));
+    let used: HashSet<GeomProp> = graph.values.iter().filter_map(|(_, v)| match v.kind { ValueKind::Geometry(g) => Some(g), _ => None }).collect();
+    let mut geometry_loads = Vec::new();
+    for (prop, offset) in GEOMETRY_LAYOUT {
+        if whole || used.contains(&prop) {
+            let ty = if prop == GeomProp::Texcoord { DataType::Vector2 } else { DataType::Vector3 };
+            geometry_loads.push(format!("geom.{} = {};", prop.field(), load_expr(&ty, "mx_geometry_buffer", "g", offset)));
+        }
+    }
+    for (b, n, t) in [(GeomProp::BitangentObject, "normal_object", "tangent_object"), (GeomProp::BitangentWorld, "normal_world", "tangent_world")] {
+        if whole || used.contains(&b) {
+            if !whole {
+                // The bitangent needs its normal and tangent even when the graph reads neither.
+                for (prop, offset) in GEOMETRY_LAYOUT.iter().filter(|(p, _)| p.field() == n || p.field() == t) {
+                    if !used.contains(prop) {
+                        geometry_loads.push(format!("geom.{} = {};", prop.field(), load_expr(&DataType::Vector3, "mx_geometry_buffer", "g", *offset)));
+                    }
+                }
+            }
+            geometry_loads.push(format!("geom.{} = cross(geom.{n}, geom.{t});", b.field()));
+        }
+    }
     let template = PatternKernelTemplate {
         source,
         items,

@@ -11,6 +11,7 @@ use std::collections::{HashMap, HashSet};
 pub struct WgslItem {
     pub name: String,
     pub kind: ItemKind,
+    /// Its code with comments removed and whitespace collapsed (what kernels include).
     pub text: String,
     /// The file the item came from and the line it starts on.
     pub file: String,
@@ -148,6 +149,28 @@ fn strip_comments(text: &str) -> String {
     String::from_utf8(out).unwrap_or_default()
 }
 
+/// Collapses whitespace (comments are already blanked): one space for a run within a line, one
+/// newline for a run that spans lines. The kernel's parse time in naga grows with its length.
+fn compact_whitespace(code: &str) -> String {
+    let mut out = String::with_capacity(code.len() / 2);
+    let mut pending: Option<char> = None;
+    for c in code.chars() {
+        if c.is_whitespace() {
+            if c == '\n' || pending.is_none() {
+                pending = Some(if c == '\n' { '\n' } else { ' ' });
+            }
+        } else {
+            if let Some(p) = pending.take() {
+                if !out.is_empty() {
+                    out.push(p);
+                }
+            }
+            out.push(c);
+        }
+    }
+    out
+}
+
 fn is_ident_start(c: u8) -> bool {
     c.is_ascii_alphabetic() || c == b'_'
 }
@@ -178,7 +201,8 @@ fn identifiers(text: &str) -> Vec<&str> {
 fn scan(file: &str, text: &str, errors: &mut Vec<ItemError>) -> Vec<WgslItem> {
     let clean = strip_comments(text);
     let b = clean.as_bytes();
-    let line_of = |pos: usize| clean[..pos].bytes().filter(|&c| c == b'\n').count() as u32 + 1;
+    let line_starts: Vec<usize> = std::iter::once(0).chain(clean.match_indices('\n').map(|(i, _)| i + 1)).collect();
+    let line_of = |pos: usize| line_starts.partition_point(|&s| s <= pos) as u32;
     let mut items = Vec::new();
     let mut i = 0;
     while i < b.len() {
@@ -248,7 +272,7 @@ fn scan(file: &str, text: &str, errors: &mut Vec<ItemError>) -> Vec<WgslItem> {
         items.push(WgslItem {
             name,
             kind,
-            text: text[start..stop].to_string(),
+            text: compact_whitespace(item_clean),
             file: file.to_string(),
             line: line_of(start),
             deps,

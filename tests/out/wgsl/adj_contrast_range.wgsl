@@ -201,30 +201,23 @@ fn mx_ifequal_color3B(value1_: bool, value2_: bool, in1_6: vec3<f32>, in2_6: vec
 }
 
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let v1_1 = geom_1.texcoord;
-    let v2_1 = vec3<f32>(0.5f, 0.5f, 0.5f);
-    let _e7 = mx_noise2d_vector3_(v2_1, 0.5f, v1_1);
+    let _e7 = mx_noise2d_vector3_(vec3<f32>(0.5f, 0.5f, 0.5f), 0.5f, geom_1.texcoord);
     let _e9 = mx_extract_vector3_(_e7, 0i);
     let _e11 = mx_extract_vector3_(_e7, 1i);
     let _e13 = mx_extract_vector3_(_e7, 2i);
     let _e14 = mx_combine3_color3_(_e9, _e11, _e13);
     let _e16 = mx_subtract_color3FA(_e14, 0.5f);
-    let _e17 = mx_multiply_color3FA(_e16, 1.5f);
-    let _e18 = mx_add_color3FA(_e17, 0.5f);
-    let v15_ = vec3<f32>(0.1f, 0.1f, 0.1f);
-    let v16_ = vec3<f32>(0.9f, 0.9f, 0.9f);
-    let v17_ = vec3<f32>(0f, 0f, 0f);
-    let v18_ = vec3<f32>(1f, 1f, 1f);
-    let _e36 = mx_remap_color3_(_e18, v15_, v16_, v17_, v18_);
-    let _e37 = mx_absval_color3_(_e36);
-    let v22_ = vec3<f32>(0.45454544f, 0.45454544f, 0.45454544f);
-    let _e42 = mx_power_color3_(_e37, v22_);
-    let _e43 = mx_sign_color3_(_e36);
-    let _e44 = mx_multiply_color3_(_e42, _e43);
-    let _e45 = mx_remap_color3_(_e44, v17_, v18_, v17_, v18_);
-    let _e46 = mx_clamp_color3_(_e45, v17_, v18_);
-    let _e47 = mx_ifequal_color3B(true, true, _e46, _e45);
-    return MxOutputs(_e47, 0.9f);
+    let _e18 = mx_multiply_color3FA(_e16, 1.5f);
+    let _e20 = mx_add_color3FA(_e18, 0.5f);
+    let _e37 = mx_remap_color3_(_e20, vec3<f32>(0.1f, 0.1f, 0.1f), vec3<f32>(0.9f, 0.9f, 0.9f), vec3<f32>(0f, 0f, 0f), vec3<f32>(1f, 1f, 1f));
+    let _e38 = mx_absval_color3_(_e37);
+    let _e43 = mx_power_color3_(_e38, vec3<f32>(0.45454544f, 0.45454544f, 0.45454544f));
+    let _e44 = mx_sign_color3_(_e37);
+    let _e45 = mx_multiply_color3_(_e43, _e44);
+    let _e62 = mx_remap_color3_(_e45, vec3<f32>(0f, 0f, 0f), vec3<f32>(1f, 1f, 1f), vec3<f32>(0f, 0f, 0f), vec3<f32>(1f, 1f, 1f));
+    let _e71 = mx_clamp_color3_(_e62, vec3<f32>(0f, 0f, 0f), vec3<f32>(1f, 1f, 1f));
+    let _e74 = mx_ifequal_color3B(true, true, _e71, _e62);
+    return MxOutputs(_e74, 0.9f);
 }
 
 @compute @workgroup_size(64, 1, 1) 
@@ -237,45 +230,15 @@ fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let g = (i * 20u);
-    let _e12 = mx_geometry_buffer[g];
-    let _e17 = mx_geometry_buffer[(g + 1u)];
-    geom.texcoord = vec2<f32>(_e12, _e17);
-    let _e24 = mx_geometry_buffer[(g + 2u)];
-    let _e29 = mx_geometry_buffer[(g + 3u)];
-    let _e34 = mx_geometry_buffer[(g + 4u)];
-    geom.position_object = vec3<f32>(_e24, _e29, _e34);
-    let _e41 = mx_geometry_buffer[(g + 5u)];
-    let _e46 = mx_geometry_buffer[(g + 6u)];
-    let _e51 = mx_geometry_buffer[(g + 7u)];
-    geom.position_world = vec3<f32>(_e41, _e46, _e51);
-    let _e58 = mx_geometry_buffer[(g + 8u)];
-    let _e63 = mx_geometry_buffer[(g + 9u)];
-    let _e68 = mx_geometry_buffer[(g + 10u)];
-    geom.normal_object = vec3<f32>(_e58, _e63, _e68);
-    let _e75 = mx_geometry_buffer[(g + 11u)];
-    let _e80 = mx_geometry_buffer[(g + 12u)];
-    let _e85 = mx_geometry_buffer[(g + 13u)];
-    geom.normal_world = vec3<f32>(_e75, _e80, _e85);
-    let _e92 = mx_geometry_buffer[(g + 14u)];
-    let _e97 = mx_geometry_buffer[(g + 15u)];
-    let _e102 = mx_geometry_buffer[(g + 16u)];
-    geom.tangent_object = vec3<f32>(_e92, _e97, _e102);
-    let _e109 = mx_geometry_buffer[(g + 17u)];
-    let _e114 = mx_geometry_buffer[(g + 18u)];
-    let _e119 = mx_geometry_buffer[(g + 19u)];
-    geom.tangent_world = vec3<f32>(_e109, _e114, _e119);
-    let _e123 = geom.normal_object;
-    let _e125 = geom.tangent_object;
-    geom.bitangent_object = cross(_e123, _e125);
-    let _e129 = geom.normal_world;
-    let _e131 = geom.tangent_world;
-    geom.bitangent_world = cross(_e129, _e131);
-    let _e133 = geom;
-    let _e134 = mx_pattern(_e133);
+    let _e14 = mx_geometry_buffer[(g + 0u)];
+    let _e19 = mx_geometry_buffer[(g + 1u)];
+    geom.texcoord = vec2<f32>(_e14, _e19);
+    let _e21 = geom;
+    let _e22 = mx_pattern(_e21);
     let o = (i * 4u);
-    mx_output_buffer[(o + 0u)] = _e134.out.x;
-    mx_output_buffer[(o + 1u)] = _e134.out.y;
-    mx_output_buffer[(o + 2u)] = _e134.out.z;
-    mx_output_buffer[(o + 3u)] = _e134.out_f;
+    mx_output_buffer[(o + 0u)] = _e22.out.x;
+    mx_output_buffer[(o + 1u)] = _e22.out.y;
+    mx_output_buffer[(o + 2u)] = _e22.out.z;
+    mx_output_buffer[(o + 3u)] = _e22.out_f;
     return;
 }

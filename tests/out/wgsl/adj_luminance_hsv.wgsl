@@ -125,18 +125,12 @@ fn mx_hsvtorgb_color3_(in_2: vec3<f32>) -> vec3<f32> {
 }
 
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let v0_ = vec3<f32>(1f, 0.2f, 0f);
-    let v1_ = vec3<f32>(0f, 0.4f, 1f);
-    let v2_ = geom_1.texcoord;
-    let _e10 = mx_ramplr_color3_(v0_, v1_, v2_);
-    let v4_ = vec3<f32>(0.2722287f, 0.6740818f, 0.0536895f);
-    let _e15 = mx_luminance_color3_(_e10, v4_);
-    let v6_ = vec4<f32>(0.294125f, 0.294125f, 0.294125f, 1f);
-    let _e21 = mx_rgbtohsv_color3_(_e10);
-    let v8_ = vec3<f32>(0.5f, 0f, 0f);
-    let _e26 = mx_add_color3_(_e21, v8_);
-    let _e27 = mx_hsvtorgb_color3_(_e26);
-    return MxOutputs(_e15, v6_, _e27);
+    let _e10 = mx_ramplr_color3_(vec3<f32>(1f, 0.2f, 0f), vec3<f32>(0f, 0.4f, 1f), geom_1.texcoord);
+    let _e15 = mx_luminance_color3_(_e10, vec3<f32>(0.2722287f, 0.6740818f, 0.0536895f));
+    let _e16 = mx_rgbtohsv_color3_(_e10);
+    let _e21 = mx_add_color3_(_e16, vec3<f32>(0.5f, 0f, 0f));
+    let _e22 = mx_hsvtorgb_color3_(_e21);
+    return MxOutputs(_e15, vec4<f32>(0.294125f, 0.294125f, 0.294125f, 1f), _e22);
 }
 
 @compute @workgroup_size(64, 1, 1) 
@@ -149,51 +143,21 @@ fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let g_1 = (i * 20u);
-    let _e12 = mx_geometry_buffer[g_1];
-    let _e17 = mx_geometry_buffer[(g_1 + 1u)];
-    geom.texcoord = vec2<f32>(_e12, _e17);
-    let _e24 = mx_geometry_buffer[(g_1 + 2u)];
-    let _e29 = mx_geometry_buffer[(g_1 + 3u)];
-    let _e34 = mx_geometry_buffer[(g_1 + 4u)];
-    geom.position_object = vec3<f32>(_e24, _e29, _e34);
-    let _e41 = mx_geometry_buffer[(g_1 + 5u)];
-    let _e46 = mx_geometry_buffer[(g_1 + 6u)];
-    let _e51 = mx_geometry_buffer[(g_1 + 7u)];
-    geom.position_world = vec3<f32>(_e41, _e46, _e51);
-    let _e58 = mx_geometry_buffer[(g_1 + 8u)];
-    let _e63 = mx_geometry_buffer[(g_1 + 9u)];
-    let _e68 = mx_geometry_buffer[(g_1 + 10u)];
-    geom.normal_object = vec3<f32>(_e58, _e63, _e68);
-    let _e75 = mx_geometry_buffer[(g_1 + 11u)];
-    let _e80 = mx_geometry_buffer[(g_1 + 12u)];
-    let _e85 = mx_geometry_buffer[(g_1 + 13u)];
-    geom.normal_world = vec3<f32>(_e75, _e80, _e85);
-    let _e92 = mx_geometry_buffer[(g_1 + 14u)];
-    let _e97 = mx_geometry_buffer[(g_1 + 15u)];
-    let _e102 = mx_geometry_buffer[(g_1 + 16u)];
-    geom.tangent_object = vec3<f32>(_e92, _e97, _e102);
-    let _e109 = mx_geometry_buffer[(g_1 + 17u)];
-    let _e114 = mx_geometry_buffer[(g_1 + 18u)];
-    let _e119 = mx_geometry_buffer[(g_1 + 19u)];
-    geom.tangent_world = vec3<f32>(_e109, _e114, _e119);
-    let _e123 = geom.normal_object;
-    let _e125 = geom.tangent_object;
-    geom.bitangent_object = cross(_e123, _e125);
-    let _e129 = geom.normal_world;
-    let _e131 = geom.tangent_world;
-    geom.bitangent_world = cross(_e129, _e131);
-    let _e133 = geom;
-    let _e134 = mx_pattern(_e133);
+    let _e14 = mx_geometry_buffer[(g_1 + 0u)];
+    let _e19 = mx_geometry_buffer[(g_1 + 1u)];
+    geom.texcoord = vec2<f32>(_e14, _e19);
+    let _e21 = geom;
+    let _e22 = mx_pattern(_e21);
     let o = (i * 10u);
-    mx_output_buffer[(o + 0u)] = _e134.lum_out.x;
-    mx_output_buffer[(o + 1u)] = _e134.lum_out.y;
-    mx_output_buffer[(o + 2u)] = _e134.lum_out.z;
-    mx_output_buffer[(o + 3u)] = _e134.lum709_out.x;
-    mx_output_buffer[(o + 4u)] = _e134.lum709_out.y;
-    mx_output_buffer[(o + 5u)] = _e134.lum709_out.z;
-    mx_output_buffer[(o + 6u)] = _e134.lum709_out.w;
-    mx_output_buffer[(o + 7u)] = _e134.rgb_out.x;
-    mx_output_buffer[(o + 8u)] = _e134.rgb_out.y;
-    mx_output_buffer[(o + 9u)] = _e134.rgb_out.z;
+    mx_output_buffer[(o + 0u)] = _e22.lum_out.x;
+    mx_output_buffer[(o + 1u)] = _e22.lum_out.y;
+    mx_output_buffer[(o + 2u)] = _e22.lum_out.z;
+    mx_output_buffer[(o + 3u)] = _e22.lum709_out.x;
+    mx_output_buffer[(o + 4u)] = _e22.lum709_out.y;
+    mx_output_buffer[(o + 5u)] = _e22.lum709_out.z;
+    mx_output_buffer[(o + 6u)] = _e22.lum709_out.w;
+    mx_output_buffer[(o + 7u)] = _e22.rgb_out.x;
+    mx_output_buffer[(o + 8u)] = _e22.rgb_out.y;
+    mx_output_buffer[(o + 9u)] = _e22.rgb_out.z;
     return;
 }

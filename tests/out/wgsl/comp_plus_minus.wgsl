@@ -33,14 +33,9 @@ fn mx_plus_color4_(fg: vec4<f32>, bg: vec4<f32>, mix_: f32) -> vec4<f32> {
 }
 
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let v0_ = vec4<f32>(1f, 0f, 0f, 1f);
-    let v1_ = vec4<f32>(0f, 0f, 1f, 0.5f);
-    let v2_ = geom_1.texcoord;
-    let _e12 = mx_ramplr_color4_(v0_, v1_, v2_);
-    let v4_ = vec4<f32>(0.1f, 0.1f, 0.1f, 1f);
-    let _e19 = mx_plus_color4_(_e12, v4_, 0.5f);
-    let v7_ = vec3<f32>(0.8f, 0.8f, 0.8f);
-    return MxOutputs(_e19, v7_, 0.8125f);
+    let _e12 = mx_ramplr_color4_(vec4<f32>(1f, 0f, 0f, 1f), vec4<f32>(0f, 0f, 1f, 0.5f), geom_1.texcoord);
+    let _e19 = mx_plus_color4_(_e12, vec4<f32>(0.1f, 0.1f, 0.1f, 1f), 0.5f);
+    return MxOutputs(_e19, vec3<f32>(0.8f, 0.8f, 0.8f), 0.8125f);
 }
 
 @compute @workgroup_size(64, 1, 1) 
@@ -53,49 +48,19 @@ fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let g = (i * 20u);
-    let _e12 = mx_geometry_buffer[g];
-    let _e17 = mx_geometry_buffer[(g + 1u)];
-    geom.texcoord = vec2<f32>(_e12, _e17);
-    let _e24 = mx_geometry_buffer[(g + 2u)];
-    let _e29 = mx_geometry_buffer[(g + 3u)];
-    let _e34 = mx_geometry_buffer[(g + 4u)];
-    geom.position_object = vec3<f32>(_e24, _e29, _e34);
-    let _e41 = mx_geometry_buffer[(g + 5u)];
-    let _e46 = mx_geometry_buffer[(g + 6u)];
-    let _e51 = mx_geometry_buffer[(g + 7u)];
-    geom.position_world = vec3<f32>(_e41, _e46, _e51);
-    let _e58 = mx_geometry_buffer[(g + 8u)];
-    let _e63 = mx_geometry_buffer[(g + 9u)];
-    let _e68 = mx_geometry_buffer[(g + 10u)];
-    geom.normal_object = vec3<f32>(_e58, _e63, _e68);
-    let _e75 = mx_geometry_buffer[(g + 11u)];
-    let _e80 = mx_geometry_buffer[(g + 12u)];
-    let _e85 = mx_geometry_buffer[(g + 13u)];
-    geom.normal_world = vec3<f32>(_e75, _e80, _e85);
-    let _e92 = mx_geometry_buffer[(g + 14u)];
-    let _e97 = mx_geometry_buffer[(g + 15u)];
-    let _e102 = mx_geometry_buffer[(g + 16u)];
-    geom.tangent_object = vec3<f32>(_e92, _e97, _e102);
-    let _e109 = mx_geometry_buffer[(g + 17u)];
-    let _e114 = mx_geometry_buffer[(g + 18u)];
-    let _e119 = mx_geometry_buffer[(g + 19u)];
-    geom.tangent_world = vec3<f32>(_e109, _e114, _e119);
-    let _e123 = geom.normal_object;
-    let _e125 = geom.tangent_object;
-    geom.bitangent_object = cross(_e123, _e125);
-    let _e129 = geom.normal_world;
-    let _e131 = geom.tangent_world;
-    geom.bitangent_world = cross(_e129, _e131);
-    let _e133 = geom;
-    let _e134 = mx_pattern(_e133);
+    let _e14 = mx_geometry_buffer[(g + 0u)];
+    let _e19 = mx_geometry_buffer[(g + 1u)];
+    geom.texcoord = vec2<f32>(_e14, _e19);
+    let _e21 = geom;
+    let _e22 = mx_pattern(_e21);
     let o = (i * 8u);
-    mx_output_buffer[(o + 0u)] = _e134.plus_out.x;
-    mx_output_buffer[(o + 1u)] = _e134.plus_out.y;
-    mx_output_buffer[(o + 2u)] = _e134.plus_out.z;
-    mx_output_buffer[(o + 3u)] = _e134.plus_out.w;
-    mx_output_buffer[(o + 4u)] = _e134.minus_out.x;
-    mx_output_buffer[(o + 5u)] = _e134.minus_out.y;
-    mx_output_buffer[(o + 6u)] = _e134.minus_out.z;
-    mx_output_buffer[(o + 7u)] = _e134.minus_f;
+    mx_output_buffer[(o + 0u)] = _e22.plus_out.x;
+    mx_output_buffer[(o + 1u)] = _e22.plus_out.y;
+    mx_output_buffer[(o + 2u)] = _e22.plus_out.z;
+    mx_output_buffer[(o + 3u)] = _e22.plus_out.w;
+    mx_output_buffer[(o + 4u)] = _e22.minus_out.x;
+    mx_output_buffer[(o + 5u)] = _e22.minus_out.y;
+    mx_output_buffer[(o + 6u)] = _e22.minus_out.z;
+    mx_output_buffer[(o + 7u)] = _e22.minus_f;
     return;
 }

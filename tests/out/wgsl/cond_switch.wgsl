@@ -16,16 +16,13 @@ struct MxOutputs {
     c: vec3<f32>,
 }
 
-@group(0) @binding(0) 
-var<storage> mx_geometry_buffer: array<f32>;
 @group(0) @binding(2) 
 var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let v1_ = vec3<f32>(0f, 0f, 1f);
-    return MxOutputs(0.2f, v1_);
+    return MxOutputs(0.2f, vec3<f32>(0f, 0f, 1f));
 }
 
 @compute @workgroup_size(64, 1, 1) 
@@ -38,45 +35,12 @@ fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let g = (i * 20u);
-    let _e12 = mx_geometry_buffer[g];
-    let _e17 = mx_geometry_buffer[(g + 1u)];
-    geom.texcoord = vec2<f32>(_e12, _e17);
-    let _e24 = mx_geometry_buffer[(g + 2u)];
-    let _e29 = mx_geometry_buffer[(g + 3u)];
-    let _e34 = mx_geometry_buffer[(g + 4u)];
-    geom.position_object = vec3<f32>(_e24, _e29, _e34);
-    let _e41 = mx_geometry_buffer[(g + 5u)];
-    let _e46 = mx_geometry_buffer[(g + 6u)];
-    let _e51 = mx_geometry_buffer[(g + 7u)];
-    geom.position_world = vec3<f32>(_e41, _e46, _e51);
-    let _e58 = mx_geometry_buffer[(g + 8u)];
-    let _e63 = mx_geometry_buffer[(g + 9u)];
-    let _e68 = mx_geometry_buffer[(g + 10u)];
-    geom.normal_object = vec3<f32>(_e58, _e63, _e68);
-    let _e75 = mx_geometry_buffer[(g + 11u)];
-    let _e80 = mx_geometry_buffer[(g + 12u)];
-    let _e85 = mx_geometry_buffer[(g + 13u)];
-    geom.normal_world = vec3<f32>(_e75, _e80, _e85);
-    let _e92 = mx_geometry_buffer[(g + 14u)];
-    let _e97 = mx_geometry_buffer[(g + 15u)];
-    let _e102 = mx_geometry_buffer[(g + 16u)];
-    geom.tangent_object = vec3<f32>(_e92, _e97, _e102);
-    let _e109 = mx_geometry_buffer[(g + 17u)];
-    let _e114 = mx_geometry_buffer[(g + 18u)];
-    let _e119 = mx_geometry_buffer[(g + 19u)];
-    geom.tangent_world = vec3<f32>(_e109, _e114, _e119);
-    let _e123 = geom.normal_object;
-    let _e125 = geom.tangent_object;
-    geom.bitangent_object = cross(_e123, _e125);
-    let _e129 = geom.normal_world;
-    let _e131 = geom.tangent_world;
-    geom.bitangent_world = cross(_e129, _e131);
-    let _e133 = geom;
-    let _e134 = mx_pattern(_e133);
+    let _e9 = geom;
+    let _e10 = mx_pattern(_e9);
     let o = (i * 4u);
-    mx_output_buffer[(o + 0u)] = _e134.f;
-    mx_output_buffer[(o + 1u)] = _e134.c.x;
-    mx_output_buffer[(o + 2u)] = _e134.c.y;
-    mx_output_buffer[(o + 3u)] = _e134.c.z;
+    mx_output_buffer[(o + 0u)] = _e10.f;
+    mx_output_buffer[(o + 1u)] = _e10.c.x;
+    mx_output_buffer[(o + 2u)] = _e10.c.y;
+    mx_output_buffer[(o + 3u)] = _e10.c.z;
     return;
 }

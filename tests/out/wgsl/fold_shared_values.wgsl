@@ -149,12 +149,12 @@ fn mx_add_float(in1_1: f32, in2_1: f32) -> f32 {
 }
 
 fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
-    let _e4 = mx_texcoord_vector2_(geom_2, 0i);
-    let _e6 = mx_multiply_vector2FA(_e4, 3f);
-    let _e7 = mx_noise2d_float(1f, 0f, _e6);
+    let _e2 = mx_texcoord_vector2_(geom_2, 0i);
+    let _e4 = mx_multiply_vector2FA(_e2, 3f);
+    let _e7 = mx_noise2d_float(1f, 0f, _e4);
     let _e8 = mx_add_float(_e7, _e7);
-    let _e9 = mx_add_float(_e8, 3f);
-    return MxOutputs(_e9);
+    let _e10 = mx_add_float(_e8, 3f);
+    return MxOutputs(_e10);
 }
 
 @compute @workgroup_size(64, 1, 1) 
@@ -167,42 +167,42 @@ fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let g = (i * 20u);
-    let _e12 = mx_geometry_buffer[g];
-    let _e17 = mx_geometry_buffer[(g + 1u)];
-    geom.texcoord = vec2<f32>(_e12, _e17);
-    let _e24 = mx_geometry_buffer[(g + 2u)];
-    let _e29 = mx_geometry_buffer[(g + 3u)];
-    let _e34 = mx_geometry_buffer[(g + 4u)];
-    geom.position_object = vec3<f32>(_e24, _e29, _e34);
-    let _e41 = mx_geometry_buffer[(g + 5u)];
-    let _e46 = mx_geometry_buffer[(g + 6u)];
-    let _e51 = mx_geometry_buffer[(g + 7u)];
-    geom.position_world = vec3<f32>(_e41, _e46, _e51);
-    let _e58 = mx_geometry_buffer[(g + 8u)];
-    let _e63 = mx_geometry_buffer[(g + 9u)];
-    let _e68 = mx_geometry_buffer[(g + 10u)];
-    geom.normal_object = vec3<f32>(_e58, _e63, _e68);
-    let _e75 = mx_geometry_buffer[(g + 11u)];
-    let _e80 = mx_geometry_buffer[(g + 12u)];
-    let _e85 = mx_geometry_buffer[(g + 13u)];
-    geom.normal_world = vec3<f32>(_e75, _e80, _e85);
-    let _e92 = mx_geometry_buffer[(g + 14u)];
-    let _e97 = mx_geometry_buffer[(g + 15u)];
-    let _e102 = mx_geometry_buffer[(g + 16u)];
-    geom.tangent_object = vec3<f32>(_e92, _e97, _e102);
-    let _e109 = mx_geometry_buffer[(g + 17u)];
-    let _e114 = mx_geometry_buffer[(g + 18u)];
-    let _e119 = mx_geometry_buffer[(g + 19u)];
-    geom.tangent_world = vec3<f32>(_e109, _e114, _e119);
-    let _e123 = geom.normal_object;
-    let _e125 = geom.tangent_object;
-    geom.bitangent_object = cross(_e123, _e125);
-    let _e129 = geom.normal_world;
-    let _e131 = geom.tangent_world;
-    geom.bitangent_world = cross(_e129, _e131);
-    let _e133 = geom;
-    let _e134 = mx_pattern(_e133);
+    let _e14 = mx_geometry_buffer[(g + 0u)];
+    let _e19 = mx_geometry_buffer[(g + 1u)];
+    geom.texcoord = vec2<f32>(_e14, _e19);
+    let _e26 = mx_geometry_buffer[(g + 2u)];
+    let _e31 = mx_geometry_buffer[(g + 3u)];
+    let _e36 = mx_geometry_buffer[(g + 4u)];
+    geom.position_object = vec3<f32>(_e26, _e31, _e36);
+    let _e43 = mx_geometry_buffer[(g + 5u)];
+    let _e48 = mx_geometry_buffer[(g + 6u)];
+    let _e53 = mx_geometry_buffer[(g + 7u)];
+    geom.position_world = vec3<f32>(_e43, _e48, _e53);
+    let _e60 = mx_geometry_buffer[(g + 8u)];
+    let _e65 = mx_geometry_buffer[(g + 9u)];
+    let _e70 = mx_geometry_buffer[(g + 10u)];
+    geom.normal_object = vec3<f32>(_e60, _e65, _e70);
+    let _e77 = mx_geometry_buffer[(g + 11u)];
+    let _e82 = mx_geometry_buffer[(g + 12u)];
+    let _e87 = mx_geometry_buffer[(g + 13u)];
+    geom.normal_world = vec3<f32>(_e77, _e82, _e87);
+    let _e94 = mx_geometry_buffer[(g + 14u)];
+    let _e99 = mx_geometry_buffer[(g + 15u)];
+    let _e104 = mx_geometry_buffer[(g + 16u)];
+    geom.tangent_object = vec3<f32>(_e94, _e99, _e104);
+    let _e111 = mx_geometry_buffer[(g + 17u)];
+    let _e116 = mx_geometry_buffer[(g + 18u)];
+    let _e121 = mx_geometry_buffer[(g + 19u)];
+    geom.tangent_world = vec3<f32>(_e111, _e116, _e121);
+    let _e125 = geom.normal_object;
+    let _e127 = geom.tangent_object;
+    geom.bitangent_object = cross(_e125, _e127);
+    let _e131 = geom.normal_world;
+    let _e133 = geom.tangent_world;
+    geom.bitangent_world = cross(_e131, _e133);
+    let _e135 = geom;
+    let _e136 = mx_pattern(_e135);
     let o = (i * 1u);
-    mx_output_buffer[(o + 0u)] = _e134.out;
+    mx_output_buffer[(o + 0u)] = _e136.out;
     return;
 }

@@ -25,22 +25,13 @@ struct MxOutputs {
     o_value: f32,
 }
 
-@group(0) @binding(0) 
-var<storage> mx_geometry_buffer: array<f32>;
 @group(0) @binding(2) 
 var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let v3_ = vec2<f32>(1f, 2f);
-    let v4_ = vec3<f32>(1f, 2f, 3f);
-    let v5_ = vec4<f32>(1f, 2f, 3f, 4f);
-    let v6_ = vec3<f32>(0.1f, 0.2f, 0.3f);
-    let v7_ = vec4<f32>(0.1f, 0.2f, 0.3f, 1f);
-    let v8_ = mat3x3<f32>(vec3<f32>(1f, 2f, 3f), vec3<f32>(4f, 5f, 6f), vec3<f32>(7f, 8f, 9f));
-    let v9_ = vec3<f32>(0f, 0f, 0f);
-    return MxOutputs(0.5f, -3i, true, v3_, v4_, v5_, v6_, v7_, v8_, v9_, 0.75f);
+    return MxOutputs(0.5f, -3i, true, vec2<f32>(1f, 2f), vec3<f32>(1f, 2f, 3f), vec4<f32>(1f, 2f, 3f, 4f), vec3<f32>(0.1f, 0.2f, 0.3f), vec4<f32>(0.1f, 0.2f, 0.3f, 1f), mat3x3<f32>(vec3<f32>(1f, 2f, 3f), vec3<f32>(4f, 5f, 6f), vec3<f32>(7f, 8f, 9f)), vec3<f32>(0f, 0f, 0f), 0.75f);
 }
 
 @compute @workgroup_size(64, 1, 1) 
@@ -53,73 +44,40 @@ fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let g = (i * 20u);
-    let _e12 = mx_geometry_buffer[g];
-    let _e17 = mx_geometry_buffer[(g + 1u)];
-    geom.texcoord = vec2<f32>(_e12, _e17);
-    let _e24 = mx_geometry_buffer[(g + 2u)];
-    let _e29 = mx_geometry_buffer[(g + 3u)];
-    let _e34 = mx_geometry_buffer[(g + 4u)];
-    geom.position_object = vec3<f32>(_e24, _e29, _e34);
-    let _e41 = mx_geometry_buffer[(g + 5u)];
-    let _e46 = mx_geometry_buffer[(g + 6u)];
-    let _e51 = mx_geometry_buffer[(g + 7u)];
-    geom.position_world = vec3<f32>(_e41, _e46, _e51);
-    let _e58 = mx_geometry_buffer[(g + 8u)];
-    let _e63 = mx_geometry_buffer[(g + 9u)];
-    let _e68 = mx_geometry_buffer[(g + 10u)];
-    geom.normal_object = vec3<f32>(_e58, _e63, _e68);
-    let _e75 = mx_geometry_buffer[(g + 11u)];
-    let _e80 = mx_geometry_buffer[(g + 12u)];
-    let _e85 = mx_geometry_buffer[(g + 13u)];
-    geom.normal_world = vec3<f32>(_e75, _e80, _e85);
-    let _e92 = mx_geometry_buffer[(g + 14u)];
-    let _e97 = mx_geometry_buffer[(g + 15u)];
-    let _e102 = mx_geometry_buffer[(g + 16u)];
-    geom.tangent_object = vec3<f32>(_e92, _e97, _e102);
-    let _e109 = mx_geometry_buffer[(g + 17u)];
-    let _e114 = mx_geometry_buffer[(g + 18u)];
-    let _e119 = mx_geometry_buffer[(g + 19u)];
-    geom.tangent_world = vec3<f32>(_e109, _e114, _e119);
-    let _e123 = geom.normal_object;
-    let _e125 = geom.tangent_object;
-    geom.bitangent_object = cross(_e123, _e125);
-    let _e129 = geom.normal_world;
-    let _e131 = geom.tangent_world;
-    geom.bitangent_world = cross(_e129, _e131);
-    let _e133 = geom;
-    let _e134 = mx_pattern(_e133);
+    let _e9 = geom;
+    let _e10 = mx_pattern(_e9);
     let o = (i * 32u);
-    mx_output_buffer[(o + 0u)] = _e134.o_float;
-    mx_output_buffer[(o + 1u)] = f32(_e134.o_int);
-    mx_output_buffer[(o + 2u)] = select(0f, 1f, _e134.o_bool);
-    mx_output_buffer[(o + 3u)] = _e134.o_v2_.x;
-    mx_output_buffer[(o + 4u)] = _e134.o_v2_.y;
-    mx_output_buffer[(o + 5u)] = _e134.o_v3_.x;
-    mx_output_buffer[(o + 6u)] = _e134.o_v3_.y;
-    mx_output_buffer[(o + 7u)] = _e134.o_v3_.z;
-    mx_output_buffer[(o + 8u)] = _e134.o_v4_.x;
-    mx_output_buffer[(o + 9u)] = _e134.o_v4_.y;
-    mx_output_buffer[(o + 10u)] = _e134.o_v4_.z;
-    mx_output_buffer[(o + 11u)] = _e134.o_v4_.w;
-    mx_output_buffer[(o + 12u)] = _e134.o_c3_.x;
-    mx_output_buffer[(o + 13u)] = _e134.o_c3_.y;
-    mx_output_buffer[(o + 14u)] = _e134.o_c3_.z;
-    mx_output_buffer[(o + 15u)] = _e134.o_c4_.x;
-    mx_output_buffer[(o + 16u)] = _e134.o_c4_.y;
-    mx_output_buffer[(o + 17u)] = _e134.o_c4_.z;
-    mx_output_buffer[(o + 18u)] = _e134.o_c4_.w;
-    mx_output_buffer[(o + 19u)] = _e134.o_m33_[0].x;
-    mx_output_buffer[(o + 20u)] = _e134.o_m33_[0].y;
-    mx_output_buffer[(o + 21u)] = _e134.o_m33_[0].z;
-    mx_output_buffer[(o + 22u)] = _e134.o_m33_[1].x;
-    mx_output_buffer[(o + 23u)] = _e134.o_m33_[1].y;
-    mx_output_buffer[(o + 24u)] = _e134.o_m33_[1].z;
-    mx_output_buffer[(o + 25u)] = _e134.o_m33_[2].x;
-    mx_output_buffer[(o + 26u)] = _e134.o_m33_[2].y;
-    mx_output_buffer[(o + 27u)] = _e134.o_m33_[2].z;
-    mx_output_buffer[(o + 28u)] = _e134.o_default.x;
-    mx_output_buffer[(o + 29u)] = _e134.o_default.y;
-    mx_output_buffer[(o + 30u)] = _e134.o_default.z;
-    mx_output_buffer[(o + 31u)] = _e134.o_value;
+    mx_output_buffer[(o + 0u)] = _e10.o_float;
+    mx_output_buffer[(o + 1u)] = f32(_e10.o_int);
+    mx_output_buffer[(o + 2u)] = select(0f, 1f, _e10.o_bool);
+    mx_output_buffer[(o + 3u)] = _e10.o_v2_.x;
+    mx_output_buffer[(o + 4u)] = _e10.o_v2_.y;
+    mx_output_buffer[(o + 5u)] = _e10.o_v3_.x;
+    mx_output_buffer[(o + 6u)] = _e10.o_v3_.y;
+    mx_output_buffer[(o + 7u)] = _e10.o_v3_.z;
+    mx_output_buffer[(o + 8u)] = _e10.o_v4_.x;
+    mx_output_buffer[(o + 9u)] = _e10.o_v4_.y;
+    mx_output_buffer[(o + 10u)] = _e10.o_v4_.z;
+    mx_output_buffer[(o + 11u)] = _e10.o_v4_.w;
+    mx_output_buffer[(o + 12u)] = _e10.o_c3_.x;
+    mx_output_buffer[(o + 13u)] = _e10.o_c3_.y;
+    mx_output_buffer[(o + 14u)] = _e10.o_c3_.z;
+    mx_output_buffer[(o + 15u)] = _e10.o_c4_.x;
+    mx_output_buffer[(o + 16u)] = _e10.o_c4_.y;
+    mx_output_buffer[(o + 17u)] = _e10.o_c4_.z;
+    mx_output_buffer[(o + 18u)] = _e10.o_c4_.w;
+    mx_output_buffer[(o + 19u)] = _e10.o_m33_[0].x;
+    mx_output_buffer[(o + 20u)] = _e10.o_m33_[0].y;
+    mx_output_buffer[(o + 21u)] = _e10.o_m33_[0].z;
+    mx_output_buffer[(o + 22u)] = _e10.o_m33_[1].x;
+    mx_output_buffer[(o + 23u)] = _e10.o_m33_[1].y;
+    mx_output_buffer[(o + 24u)] = _e10.o_m33_[1].z;
+    mx_output_buffer[(o + 25u)] = _e10.o_m33_[2].x;
+    mx_output_buffer[(o + 26u)] = _e10.o_m33_[2].y;
+    mx_output_buffer[(o + 27u)] = _e10.o_m33_[2].z;
+    mx_output_buffer[(o + 28u)] = _e10.o_default.x;
+    mx_output_buffer[(o + 29u)] = _e10.o_default.y;
+    mx_output_buffer[(o + 30u)] = _e10.o_default.z;
+    mx_output_buffer[(o + 31u)] = _e10.o_value;
     return;
 }

@@ -40,21 +40,16 @@ fn mx_add_vector3_(in1_2: vec3<f32>, in2_2: vec3<f32>) -> vec3<f32> {
 }
 
 fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
-    let v0_ = geom_1.normal_world;
-    let v1_ = geom_1.tangent_world;
-    let v2_ = geom_1.texcoord;
-    let v3_ = geom_1.position_world;
-    let _e5 = mx_crossproduct_vector3_(v0_, v1_);
-    let _e7 = mx_extract_vector2_(v2_, 0i);
-    let _e9 = mx_extract_vector2_(v2_, 1i);
-    let _e11 = mx_combine3_vector3_(_e7, _e9, 0f);
-    let _e12 = mx_add_vector3_(_e5, _e11);
-    let _e13 = mx_add_vector3_(_e12, v3_);
-    let v13_ = vec3<f32>(0f, 0f, 1f);
-    let _e18 = mx_crossproduct_vector3_(v13_, v1_);
-    let _e19 = mx_add_vector3_(_e18, _e11);
-    let _e20 = mx_add_vector3_(_e19, v3_);
-    return MxOutputs(_e13, _e20);
+    let _e3 = mx_crossproduct_vector3_(geom_1.normal_world, geom_1.tangent_world);
+    let _e6 = mx_extract_vector2_(geom_1.texcoord, 0i);
+    let _e9 = mx_extract_vector2_(geom_1.texcoord, 1i);
+    let _e11 = mx_combine3_vector3_(_e6, _e9, 0f);
+    let _e12 = mx_add_vector3_(_e3, _e11);
+    let _e14 = mx_add_vector3_(_e12, geom_1.position_world);
+    let _e20 = mx_crossproduct_vector3_(vec3<f32>(0f, 0f, 1f), geom_1.tangent_world);
+    let _e21 = mx_add_vector3_(_e20, _e11);
+    let _e23 = mx_add_vector3_(_e21, geom_1.position_world);
+    return MxOutputs(_e14, _e23);
 }
 
 @compute @workgroup_size(64, 1, 1) 
@@ -67,47 +62,29 @@ fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let g = (i * 20u);
-    let _e12 = mx_geometry_buffer[g];
-    let _e17 = mx_geometry_buffer[(g + 1u)];
-    geom.texcoord = vec2<f32>(_e12, _e17);
-    let _e24 = mx_geometry_buffer[(g + 2u)];
-    let _e29 = mx_geometry_buffer[(g + 3u)];
-    let _e34 = mx_geometry_buffer[(g + 4u)];
-    geom.position_object = vec3<f32>(_e24, _e29, _e34);
-    let _e41 = mx_geometry_buffer[(g + 5u)];
-    let _e46 = mx_geometry_buffer[(g + 6u)];
-    let _e51 = mx_geometry_buffer[(g + 7u)];
-    geom.position_world = vec3<f32>(_e41, _e46, _e51);
-    let _e58 = mx_geometry_buffer[(g + 8u)];
-    let _e63 = mx_geometry_buffer[(g + 9u)];
-    let _e68 = mx_geometry_buffer[(g + 10u)];
-    geom.normal_object = vec3<f32>(_e58, _e63, _e68);
-    let _e75 = mx_geometry_buffer[(g + 11u)];
-    let _e80 = mx_geometry_buffer[(g + 12u)];
-    let _e85 = mx_geometry_buffer[(g + 13u)];
-    geom.normal_world = vec3<f32>(_e75, _e80, _e85);
-    let _e92 = mx_geometry_buffer[(g + 14u)];
-    let _e97 = mx_geometry_buffer[(g + 15u)];
-    let _e102 = mx_geometry_buffer[(g + 16u)];
-    geom.tangent_object = vec3<f32>(_e92, _e97, _e102);
-    let _e109 = mx_geometry_buffer[(g + 17u)];
-    let _e114 = mx_geometry_buffer[(g + 18u)];
-    let _e119 = mx_geometry_buffer[(g + 19u)];
-    geom.tangent_world = vec3<f32>(_e109, _e114, _e119);
-    let _e123 = geom.normal_object;
-    let _e125 = geom.tangent_object;
-    geom.bitangent_object = cross(_e123, _e125);
-    let _e129 = geom.normal_world;
-    let _e131 = geom.tangent_world;
-    geom.bitangent_world = cross(_e129, _e131);
-    let _e133 = geom;
-    let _e134 = mx_pattern(_e133);
+    let _e14 = mx_geometry_buffer[(g + 0u)];
+    let _e19 = mx_geometry_buffer[(g + 1u)];
+    geom.texcoord = vec2<f32>(_e14, _e19);
+    let _e26 = mx_geometry_buffer[(g + 5u)];
+    let _e31 = mx_geometry_buffer[(g + 6u)];
+    let _e36 = mx_geometry_buffer[(g + 7u)];
+    geom.position_world = vec3<f32>(_e26, _e31, _e36);
+    let _e43 = mx_geometry_buffer[(g + 11u)];
+    let _e48 = mx_geometry_buffer[(g + 12u)];
+    let _e53 = mx_geometry_buffer[(g + 13u)];
+    geom.normal_world = vec3<f32>(_e43, _e48, _e53);
+    let _e60 = mx_geometry_buffer[(g + 17u)];
+    let _e65 = mx_geometry_buffer[(g + 18u)];
+    let _e70 = mx_geometry_buffer[(g + 19u)];
+    geom.tangent_world = vec3<f32>(_e60, _e65, _e70);
+    let _e72 = geom;
+    let _e73 = mx_pattern(_e72);
     let o = (i * 6u);
-    mx_output_buffer[(o + 0u)] = _e134.default_frame.x;
-    mx_output_buffer[(o + 1u)] = _e134.default_frame.y;
-    mx_output_buffer[(o + 2u)] = _e134.default_frame.z;
-    mx_output_buffer[(o + 3u)] = _e134.override_frame.x;
-    mx_output_buffer[(o + 4u)] = _e134.override_frame.y;
-    mx_output_buffer[(o + 5u)] = _e134.override_frame.z;
+    mx_output_buffer[(o + 0u)] = _e73.default_frame.x;
+    mx_output_buffer[(o + 1u)] = _e73.default_frame.y;
+    mx_output_buffer[(o + 2u)] = _e73.default_frame.z;
+    mx_output_buffer[(o + 3u)] = _e73.override_frame.x;
+    mx_output_buffer[(o + 4u)] = _e73.override_frame.y;
+    mx_output_buffer[(o + 5u)] = _e73.override_frame.z;
     return;
 }

@@ -21,8 +21,6 @@ struct MxOutputs {
     posterize_out_default: f32,
 }
 
-@group(0) @binding(0) 
-var<storage> mx_geometry_buffer: array<f32>;
 @group(0) @binding(1) 
 var<storage> mx_input_buffer: array<f32>;
 @group(0) @binding(2) 
@@ -43,15 +41,13 @@ fn mx_divide_float(in1_1: f32, in2_1: f32) -> f32 {
 }
 
 fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
-    let v0_ = inputs.value;
-    let v1_ = inputs.levels;
-    let _e4 = mx_multiply_float(v0_, v1_);
+    let _e4 = mx_multiply_float(inputs.value, inputs.levels);
     let _e5 = mx_floor_float(_e4);
-    let _e6 = mx_divide_float(_e5, v1_);
-    let _e8 = mx_multiply_float(v0_, 4f);
-    let _e9 = mx_floor_float(_e8);
-    let _e10 = mx_divide_float(_e9, 4f);
-    return MxOutputs(_e6, _e10);
+    let _e7 = mx_divide_float(_e5, inputs.levels);
+    let _e10 = mx_multiply_float(inputs.value, 4f);
+    let _e11 = mx_floor_float(_e10);
+    let _e13 = mx_divide_float(_e11, 4f);
+    return MxOutputs(_e7, _e13);
 }
 
 @compute @workgroup_size(64, 1, 1) 
@@ -64,47 +60,14 @@ fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let g = (i * 20u);
-    let _e12 = mx_geometry_buffer[g];
-    let _e17 = mx_geometry_buffer[(g + 1u)];
-    geom.texcoord = vec2<f32>(_e12, _e17);
-    let _e24 = mx_geometry_buffer[(g + 2u)];
-    let _e29 = mx_geometry_buffer[(g + 3u)];
-    let _e34 = mx_geometry_buffer[(g + 4u)];
-    geom.position_object = vec3<f32>(_e24, _e29, _e34);
-    let _e41 = mx_geometry_buffer[(g + 5u)];
-    let _e46 = mx_geometry_buffer[(g + 6u)];
-    let _e51 = mx_geometry_buffer[(g + 7u)];
-    geom.position_world = vec3<f32>(_e41, _e46, _e51);
-    let _e58 = mx_geometry_buffer[(g + 8u)];
-    let _e63 = mx_geometry_buffer[(g + 9u)];
-    let _e68 = mx_geometry_buffer[(g + 10u)];
-    geom.normal_object = vec3<f32>(_e58, _e63, _e68);
-    let _e75 = mx_geometry_buffer[(g + 11u)];
-    let _e80 = mx_geometry_buffer[(g + 12u)];
-    let _e85 = mx_geometry_buffer[(g + 13u)];
-    geom.normal_world = vec3<f32>(_e75, _e80, _e85);
-    let _e92 = mx_geometry_buffer[(g + 14u)];
-    let _e97 = mx_geometry_buffer[(g + 15u)];
-    let _e102 = mx_geometry_buffer[(g + 16u)];
-    geom.tangent_object = vec3<f32>(_e92, _e97, _e102);
-    let _e109 = mx_geometry_buffer[(g + 17u)];
-    let _e114 = mx_geometry_buffer[(g + 18u)];
-    let _e119 = mx_geometry_buffer[(g + 19u)];
-    geom.tangent_world = vec3<f32>(_e109, _e114, _e119);
-    let _e123 = geom.normal_object;
-    let _e125 = geom.tangent_object;
-    geom.bitangent_object = cross(_e123, _e125);
-    let _e129 = geom.normal_world;
-    let _e131 = geom.tangent_world;
-    geom.bitangent_world = cross(_e129, _e131);
     let b = (i * 2u);
-    let _e139 = mx_input_buffer[(b + 0u)];
-    let _e144 = mx_input_buffer[(b + 1u)];
-    let inputs_1 = MxInputs(_e139, _e144);
-    let _e146 = geom;
-    let _e147 = mx_pattern(_e146, inputs_1);
+    let _e15 = mx_input_buffer[(b + 0u)];
+    let _e20 = mx_input_buffer[(b + 1u)];
+    let inputs_1 = MxInputs(_e15, _e20);
+    let _e22 = geom;
+    let _e23 = mx_pattern(_e22, inputs_1);
     let o = (i * 2u);
-    mx_output_buffer[(o + 0u)] = _e147.posterize_out;
-    mx_output_buffer[(o + 1u)] = _e147.posterize_out_default;
+    mx_output_buffer[(o + 0u)] = _e23.posterize_out;
+    mx_output_buffer[(o + 1u)] = _e23.posterize_out_default;
     return;
 }
