@@ -3,4 +3,6 @@
 
 pub mod atomic_write;
 pub mod cli;
+pub mod csv_table;
+pub mod texture_loader;
 pub mod wgpu_engine;

@@ -1,5 +1,5 @@
-//! The `uplift` command line: `check` and `compile` (the compiler spine); later stages add
-//! engines, data generation, training and rendering commands.
+//! The `uplift` command line: `check` and `compile` (the compiler spine) and `eval` (run an
+//! output over CSV rows); later stages add data generation, training and rendering commands.
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -17,6 +17,8 @@ enum Command {
     Check(uplift::cli::check::CheckArgs),
     /// Compile a document's outputs to a pattern kernel.
     Compile(uplift::cli::compile::CompileArgs),
+    /// Evaluate one output for every row of a CSV file of inputs; write a CSV of results.
+    Eval(uplift::cli::eval::EvalArgs),
 }
 
 fn main() -> ExitCode {
@@ -24,6 +26,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Check(a) => uplift::cli::check::run(a),
         Command::Compile(a) => uplift::cli::compile::run(a),
+        Command::Eval(a) => uplift::cli::eval::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

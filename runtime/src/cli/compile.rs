@@ -1,14 +1,93 @@
-//! `uplift compile FILE.mtlx [--output NAME] --target wgsl -o DIR`: writes the pattern kernel
-//! (`DIR/<stem>.wgsl`) and, with `--dump-ir`, the graph IR (`DIR/<stem>.ir`). With `--bench`
-//! it instead times library loading and repeated compilation and prints the figures.
+//! `uplift compile FILE.mtlx [--output NAME] --target wgsl|spirv|msl|glsl|hlsl|rust -o DIR`:
+//! writes the pattern kernel and, with `--dump-ir`, the graph IR (`DIR/<stem>.ir`). With
+//! `--bench` it instead times library loading and repeated compilation and prints the figures.
+//!
+//! Targets other than WGSL go through naga's own backends on the kernel's validated Module:
+//! `spirv` → `<stem>.spv` (binary SPIR-V 1.0 words), `msl` → `<stem>.metal` (MSL 2.0), `glsl` →
+//! `<stem>.comp.glsl` (GLSL 4.50 core compute shader), `hlsl` → `<stem>.hlsl` (shader model
+//! 5.1). The entry point is `mx_main` (GLSL requires `main`). `rust` is accepted but not built
+//! yet.
 
 use crate::atomic_write::write_atomically;
 use std::path::PathBuf;
-use uplift_compiler::{Compiler, OutputSelection};
+use uplift_compiler::kernel::ENTRY_POINT;
+use uplift_compiler::{Compiler, OutputSelection, PatternKernel};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Target {
     Wgsl,
+    Spirv,
+    Msl,
+    Glsl,
+    Hlsl,
+    Rust,
+}
+
+impl Target {
+    /// The file name suffix the target writes after the document's stem.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Target::Wgsl => "wgsl",
+            Target::Spirv => "spv",
+            Target::Msl => "metal",
+            Target::Glsl => "comp.glsl",
+            Target::Hlsl => "hlsl",
+            Target::Rust => "rs",
+        }
+    }
+}
+
+/// The kernel in `target`'s language (bytes to write); a backend error becomes a message.
+pub fn emit(kernel: &PatternKernel, target: Target) -> Result<Vec<u8>, String> {
+    use naga::back;
+    let (module, info) = (&kernel.module, &kernel.info);
+    let stage = naga::ShaderStage::Compute;
+    let entry = ENTRY_POINT.to_string();
+    match target {
+        Target::Wgsl => Ok(kernel.wgsl.clone().into_bytes()),
+        Target::Spirv => {
+            let options = back::spv::Options { flags: back::spv::WriterFlags::empty(), ..Default::default() };
+            let pipeline = back::spv::PipelineOptions { shader_stage: stage, entry_point: entry };
+            let words = back::spv::write_vec(module, info, &options, Some(&pipeline)).map_err(|e| format!("SPIR-V backend: {e}"))?;
+            Ok(words.iter().flat_map(|w| w.to_le_bytes()).collect())
+        }
+        Target::Msl => {
+            let options = back::msl::Options {
+                lang_version: (2, 0),
+                per_entry_point_map: [(entry.clone(), msl_resources(module))].into_iter().collect(),
+                fake_missing_bindings: false,
+                ..Default::default()
+            };
+            let pipeline = back::msl::PipelineOptions { entry_point: Some((stage, entry)), ..Default::default() };
+            let (text, _) = back::msl::write_string(module, info, &options, &pipeline).map_err(|e| format!("MSL backend: {e}"))?;
+            Ok(text.into_bytes())
+        }
+        Target::Glsl => {
+            // Explicit `layout(binding = N)`: each resource keeps its WGSL binding number.
+            let binding_map = module.global_variables.iter().filter_map(|(_, g)| g.binding).map(|b| (b, b.binding as u8)).collect();
+            let options = back::glsl::Options {
+                version: back::glsl::Version::Desktop(450),
+                writer_flags: back::glsl::WriterFlags::empty(),
+                binding_map,
+                ..Default::default()
+            };
+            let pipeline = back::glsl::PipelineOptions { shader_stage: stage, entry_point: entry, multiview: None };
+            let mut text = String::new();
+            let mut w = back::glsl::Writer::new(&mut text, module, info, &options, &pipeline, naga::proc::BoundsCheckPolicies::default())
+                .map_err(|e| format!("GLSL backend: {e}"))?;
+            w.write().map_err(|e| format!("GLSL backend: {e}"))?;
+            Ok(text.into_bytes())
+        }
+        Target::Hlsl => {
+            let options = back::hlsl::Options { shader_model: back::hlsl::ShaderModel::V5_1, ..Default::default() };
+            let pipeline = back::hlsl::PipelineOptions { entry_point: Some((stage, entry)) };
+            let mut text = String::new();
+            let mut w = back::hlsl::Writer::new(&mut text, &options, &pipeline);
+            w.write(module, info, None).map_err(|e| format!("HLSL backend: {e}"))?;
+            Ok(text.into_bytes())
+        }
+        Target::Rust => Err("the Rust backend is not built yet (issue 3)".into()),
+    }
 }
 
 #[derive(clap::Args)]
@@ -35,9 +114,36 @@ pub struct CompileArgs {
     pub bench: bool,
 }
 
+/// Metal argument slots for the kernel's resources: buffers in `[[buffer(k)]]` in binding order,
+/// then the buffer-sizes buffer; textures in `[[texture(k)]]` in binding order.
+fn msl_resources(module: &naga::Module) -> naga::back::msl::EntryPointResources {
+    use naga::back::msl::{BindTarget, EntryPointResources};
+    let mut globals: Vec<(&naga::ResourceBinding, &naga::GlobalVariable)> =
+        module.global_variables.iter().filter_map(|(_, g)| g.binding.as_ref().map(|b| (b, g))).collect();
+    globals.sort_by_key(|(b, _)| (b.group, b.binding));
+    let (mut buffers, mut textures) = (0u8, 0u8);
+    let mut resources = naga::back::msl::BindingMap::new();
+    for (binding, g) in globals {
+        let mut target = BindTarget::default();
+        if matches!(module.types[g.ty].inner, naga::TypeInner::Image { .. }) {
+            target.texture = Some(textures);
+            textures += 1;
+        } else {
+            target.buffer = Some(buffers);
+            target.mutable = matches!(g.space, naga::AddressSpace::Storage { access } if access.contains(naga::StorageAccess::STORE));
+            buffers += 1;
+        }
+        resources.insert(*binding, target);
+    }
+    EntryPointResources { resources, immediates_buffer: None, sizes_buffer: Some(buffers) }
+}
+
 pub fn run(args: CompileArgs) -> Result<(), String> {
     if args.bench {
         return crate::cli::compile_bench::run(&args.files, &args.library);
+    }
+    if args.target == Target::Rust {
+        return Err("the Rust backend is not built yet (issue 3)".into());
     }
     let compiler = Compiler::new(&args.library);
     if super::report(&compiler.library.diagnostics) {
@@ -51,8 +157,9 @@ pub fn run(args: CompileArgs) -> Result<(), String> {
         let Some(kernel) = c.kernel else { continue };
         let stem = file.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "kernel".into());
         std::fs::create_dir_all(&args.out_dir).map_err(|e| format!("{}: cannot create folder: {e}", args.out_dir.display()))?;
-        let path = args.out_dir.join(format!("{stem}.wgsl"));
-        write_atomically(&path, kernel.wgsl.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
+        let bytes = emit(&kernel, args.target).map_err(|e| format!("{}: {e}", file.display()))?;
+        let path = args.out_dir.join(format!("{stem}.{}", args.target.extension()));
+        write_atomically(&path, &bytes).map_err(|e| format!("{}: {e}", path.display()))?;
         println!("wrote {}", path.display());
         if args.dump_ir {
             let path = args.out_dir.join(format!("{stem}.ir"));

@@ -4,6 +4,7 @@
 pub mod check;
 pub mod compile;
 pub mod compile_bench;
+pub mod eval;
 
 use mtlx::Diagnostic;
 

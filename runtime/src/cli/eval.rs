@@ -1,0 +1,249 @@
+//! `uplift eval FILE.mtlx --output NAME --engine cpu|wgpu --input inputs.csv -o out.csv`:
+//! compiles one output and evaluates it for every row of a CSV file.
+//!
+//! Input columns (all optional, any order; see [`GEOMETRY_COLUMNS`] for the defaults):
+//! the geometric columns `texcoord_x,texcoord_y,position_x,…,tangent_z` (object space equals
+//! world space), and the kernel's interface inputs by name with component suffixes (`_x/_y/_z/_w`
+//! for vectors, `_r/_g/_b/_a` for colors, `_0…` for matrices, none for scalars). A missing
+//! interface column takes the input's value in the document; a column naming an input of the
+//! output's nodegraph that this output does not read is accepted and ignored, so one CSV serves
+//! every output of a graph. Output columns: the output's name as the kernel reports it
+//! (`graph/output`, or `output` for a top-level one) with the same suffixes. Textures named by
+//! the graph are loaded from their files (see `texture_loader`).
+
+use crate::atomic_write::write_atomically;
+use crate::csv_table;
+use crate::texture_loader::load_texture;
+use crate::wgpu_engine::{PatternBatch, WgpuEngine};
+use std::collections::HashMap;
+use mtlx::DataType;
+use std::path::{Path, PathBuf};
+use uplift_compiler::kernel::{GEOMETRY_STRIDE, WORKGROUP_SIZE};
+use uplift_compiler::{Compiler, OutputSelection, PatternKernel};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Engine {
+    /// Generated Rust on the CPU (not built yet).
+    Cpu,
+    /// Generated WGSL as wgpu compute shaders.
+    Wgpu,
+}
+
+#[derive(clap::Args)]
+pub struct EvalArgs {
+    /// The MaterialX document.
+    pub file: PathBuf,
+    /// The output to evaluate (`graph/output` or `output`).
+    #[arg(long)]
+    pub output: String,
+    #[arg(long, value_enum, default_value = "wgpu")]
+    pub engine: Engine,
+    /// CSV of inputs, one row per evaluation.
+    #[arg(long)]
+    pub input: PathBuf,
+    /// CSV file to write, one row per input row.
+    #[arg(short = 'o', long = "out")]
+    pub out: PathBuf,
+    /// Extra library folder (repeatable); MATERIALX_SEARCH_PATH is read too.
+    #[arg(long = "library")]
+    pub library: Vec<PathBuf>,
+}
+
+/// The geometric input columns and their defaults: texcoord (0, 0), position (0, 0, 0),
+/// normal (0, 0, 1), tangent (1, 0, 0).
+pub const GEOMETRY_COLUMNS: [(&str, f32); 11] = [
+    ("texcoord_x", 0.0),
+    ("texcoord_y", 0.0),
+    ("position_x", 0.0),
+    ("position_y", 0.0),
+    ("position_z", 0.0),
+    ("normal_x", 0.0),
+    ("normal_y", 0.0),
+    ("normal_z", 1.0),
+    ("tangent_x", 1.0),
+    ("tangent_y", 0.0),
+    ("tangent_z", 0.0),
+];
+
+/// Where a CSV column's value goes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Slot {
+    /// Index into [`GEOMETRY_COLUMNS`].
+    Geometry(usize),
+    /// Float offset in the kernel's input row.
+    Input(usize),
+    /// An input of the output's nodegraph that this output does not read: accepted, ignored.
+    Unused,
+    /// A name that two interface inputs (or an input and a geometric column) both claim.
+    Ambiguous,
+}
+
+/// Every column name accepted: the geometric ones, the kernel's interface inputs, and the other
+/// inputs of the output's nodegraph (`graph_inputs`, ignored).
+fn column_slots(kernel: &PatternKernel, graph_inputs: &[(String, DataType)]) -> HashMap<String, Slot> {
+    let mut slots: HashMap<String, Slot> = GEOMETRY_COLUMNS.iter().enumerate().map(|(k, (n, _))| (n.to_string(), Slot::Geometry(k))).collect();
+    for inp in &kernel.inputs {
+        for (k, suffix) in inp.input.ty.component_suffixes().iter().enumerate() {
+            let name = format!("{}{suffix}", inp.input.name);
+            let slot = if slots.contains_key(&name) { Slot::Ambiguous } else { Slot::Input(inp.offset + k) };
+            slots.insert(name, slot);
+        }
+    }
+    for (name, ty) in graph_inputs {
+        if !ty.is_numeric() || kernel.inputs.iter().any(|i| &i.input.name == name) {
+            continue;
+        }
+        for suffix in ty.component_suffixes() {
+            let name = format!("{name}{suffix}");
+            let slot = if matches!(slots.get(&name), Some(Slot::Geometry(_))) { Slot::Ambiguous } else { Slot::Unused };
+            slots.entry(name).or_insert(slot);
+        }
+    }
+    slots
+}
+
+/// The `<input>`s (name, type) of the nodegraph holding `output` in `file`; empty for a
+/// document-level output or when the document cannot be read.
+pub fn graph_inputs(file: &Path, output: &str) -> Vec<(String, DataType)> {
+    let (doc, _) = mtlx::read_file(file);
+    let outputs = uplift_compiler::graph_builder::document_outputs(&doc);
+    let found: Vec<_> = outputs.iter().filter(|o| o.name == output || o.name.rsplit('/').next() == Some(output)).collect();
+    let [one] = found.as_slice() else { return Vec::new() };
+    if one.graph == doc.root() {
+        return Vec::new();
+    }
+    doc.children_of(one.graph, "input")
+        .map(|i| {
+            let e = doc.get(i);
+            (e.name().to_string(), DataType::from_name(e.attr("type").unwrap_or("")))
+        })
+        .collect()
+}
+
+/// The output CSV header: one column per output component.
+pub fn output_columns(kernel: &PatternKernel) -> Vec<String> {
+    let mut cols = vec![String::new(); kernel.output_stride];
+    for o in &kernel.outputs {
+        for (k, suffix) in o.ty.component_suffixes().iter().enumerate() {
+            cols[o.offset + k] = format!("{}{suffix}", o.name);
+        }
+    }
+    cols
+}
+
+/// The kernel's per-point inputs for the rows of `table` (`file` names it in errors).
+/// `graph_inputs` are the nodegraph's other inputs (see [`graph_inputs`]): their columns are
+/// accepted and ignored.
+pub fn batch_from_table(kernel: &PatternKernel, graph_inputs: &[(String, DataType)], table: &csv_table::Table, file: &str) -> Result<PatternBatch, String> {
+    let slots = column_slots(kernel, graph_inputs);
+    let mut mapping = Vec::with_capacity(table.header.len());
+    for name in &table.header {
+        match slots.get(name) {
+            Some(Slot::Ambiguous) => {
+                return Err(format!("{file}:{}: column `{name}` is ambiguous: several inputs of the graph have that name", table.header_line))
+            }
+            Some(s) => mapping.push(*s),
+            None => {
+                let mut inputs: Vec<String> = slots.iter().filter(|(_, s)| matches!(s, Slot::Input(_) | Slot::Unused)).map(|(n, _)| n.clone()).collect();
+                inputs.sort();
+                let inputs = if inputs.is_empty() { "none".to_string() } else { inputs.join(", ") };
+                return Err(format!(
+                    "{file}:{}: unknown column `{name}`; expected geometric columns ({}) or the graph's interface inputs ({inputs})",
+                    table.header_line,
+                    GEOMETRY_COLUMNS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+                ));
+            }
+        }
+    }
+    let mut input_defaults = vec![0.0f32; kernel.input_stride];
+    for inp in &kernel.inputs {
+        let d = &inp.input.default;
+        input_defaults[inp.offset..inp.offset + d.len()].copy_from_slice(d);
+    }
+    let n = table.rows.len();
+    let mut geometry = Vec::with_capacity(n * GEOMETRY_STRIDE);
+    let mut inputs = Vec::with_capacity(n * kernel.input_stride);
+    for row in &table.rows {
+        let mut g: [f32; 11] = GEOMETRY_COLUMNS.map(|(_, d)| d);
+        let start = inputs.len();
+        inputs.extend_from_slice(&input_defaults);
+        for (v, slot) in row.iter().zip(&mapping) {
+            match slot {
+                Slot::Geometry(k) => g[*k] = *v,
+                Slot::Input(o) => inputs[start + o] = *v,
+                Slot::Unused => {}
+                Slot::Ambiguous => unreachable!("rejected above"),
+            }
+        }
+        let geom = crate::wgpu_engine::Geometry {
+            texcoord: [g[0], g[1]],
+            position: [g[2], g[3], g[4]],
+            normal: [g[5], g[6], g[7]],
+            tangent: [g[8], g[9], g[10]],
+        };
+        geometry.extend_from_slice(&geom.row());
+    }
+    let mut textures = Vec::with_capacity(kernel.textures.len());
+    for t in &kernel.textures {
+        textures.push(load_texture(&t.path, t.colorspace.as_deref())?);
+    }
+    Ok(PatternBatch { geometry, inputs, textures })
+}
+
+/// Runs `kernel` on wgpu over `n` points, in dispatch-sized chunks
+/// (`max_compute_workgroups_per_dimension` × [`WORKGROUP_SIZE`] points each).
+pub fn run_wgpu(engine: &WgpuEngine, kernel: &PatternKernel, n: usize, batch: PatternBatch) -> Result<Vec<f32>, String> {
+    let max_groups = engine.device.limits().max_compute_workgroups_per_dimension.max(1) as usize;
+    run_wgpu_chunked(engine, kernel, n, batch, max_groups * WORKGROUP_SIZE as usize)
+}
+
+/// [`run_wgpu`] with at most `chunk` points per dispatch.
+pub fn run_wgpu_chunked(engine: &WgpuEngine, kernel: &PatternKernel, n: usize, batch: PatternBatch, chunk: usize) -> Result<Vec<f32>, String> {
+    let chunk = chunk.max(1);
+    if n <= chunk {
+        return engine.run_pattern(kernel, n, &batch);
+    }
+    let PatternBatch { geometry, inputs, textures } = batch;
+    let mut part = PatternBatch { geometry: Vec::new(), inputs: Vec::new(), textures };
+    let mut out = Vec::with_capacity(n * kernel.output_stride);
+    let mut start = 0;
+    while start < n {
+        let m = chunk.min(n - start);
+        part.geometry = geometry[start * GEOMETRY_STRIDE..(start + m) * GEOMETRY_STRIDE].to_vec();
+        part.inputs = inputs[start * kernel.input_stride..(start + m) * kernel.input_stride].to_vec();
+        out.extend(engine.run_pattern(kernel, m, &part)?);
+        start += m;
+    }
+    Ok(out)
+}
+
+pub fn run(args: EvalArgs) -> Result<(), String> {
+    if args.engine == Engine::Cpu {
+        return Err("the CPU engine is not built yet (issue 3)".into());
+    }
+    let compiler = Compiler::new(&args.library);
+    if super::report(&compiler.library.diagnostics) {
+        return Err("errors in the node library".into());
+    }
+    let c = compiler.compile_file(&args.file, &OutputSelection::Named(vec![args.output.clone()]));
+    super::report(&c.diagnostics);
+    let Some(kernel) = c.kernel else {
+        return Err(format!("{}: cannot evaluate output `{}` (see the errors above)", args.file.display(), args.output));
+    };
+    let input_name = args.input.display().to_string();
+    let text = std::fs::read_to_string(&args.input).map_err(|e| format!("{input_name}: cannot read: {e}"))?;
+    let table = csv_table::parse(&input_name, &text)?;
+    let n = table.rows.len();
+    let batch = batch_from_table(&kernel, &graph_inputs(&args.file, &args.output), &table, &input_name)?;
+    let values = match args.engine {
+        Engine::Wgpu => {
+            let engine = WgpuEngine::new()?;
+            run_wgpu(&engine, &kernel, n, batch)?
+        }
+        Engine::Cpu => unreachable!("rejected above"),
+    };
+    let text = csv_table::write(&output_columns(&kernel), &values);
+    write_atomically(&args.out, text.as_bytes()).map_err(|e| format!("{}: {e}", args.out.display()))?;
+    println!("wrote {} ({n} rows)", args.out.display());
+    Ok(())
+}
