@@ -141,20 +141,25 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str) -> Result<PatternKer
     // every call gets one `let` (naga's parse time grows with the statements it reads).
     let mut operand: Vec<String> = Vec::with_capacity(graph.values.len());
     for (h, v) in graph.values.iter() {
-        let inline = match &v.kind {
+        let rhs = match &v.kind {
             // Strings and filenames exist only at compile time (enum strings are already
             // integers, filenames texture bindings): they have no WGSL expression.
-            ValueKind::Constant(lit) => Some(constant_expr(&v.ty, lit).unwrap_or_default()),
-            ValueKind::Geometry(g) => Some(format!("geom.{}", g.field())),
-            ValueKind::Input(i) => Some(format!("inputs.{}", input_fields[*i].field)),
-            ValueKind::Texture(t) => Some(textures[*t].name.clone()),
-            ValueKind::Call { .. } | ValueKind::Field { .. } => None,
-        };
-        if let Some(e) = inline {
-            operand.push(e);
-            continue;
-        }
-        let rhs = match &v.kind {
+            ValueKind::Constant(lit) => {
+                operand.push(constant_expr(&v.ty, lit).unwrap_or_default());
+                continue;
+            }
+            ValueKind::Geometry(g) => {
+                operand.push(format!("geom.{}", g.field()));
+                continue;
+            }
+            ValueKind::Input(i) => {
+                operand.push(format!("inputs.{}", input_fields[*i].field));
+                continue;
+            }
+            ValueKind::Texture(t) => {
+                operand.push(textures[*t].name.clone());
+                continue;
+            }
             ValueKind::Call { function, args, geometry } => {
                 roots.push(function);
                 let mut a: Vec<String> = args.iter().map(|&x| operand[x.index()].clone()).collect();
@@ -164,7 +169,6 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str) -> Result<PatternKer
                 format!("{function}({})", a.join(", "))
             }
             ValueKind::Field { base, field } => format!("{}.{field}", operand[base.index()]),
-            _ => unreachable!("leaves are inline"),
         };
         let name = format!("v{}", h.index());
         body.push(format!("let {name} = {rhs};"));
