@@ -1,9 +1,11 @@
 //! uplift's compiler: MaterialX documents (through the `mtlx` crate) become a typed graph IR
 //! (`ir`, built by `graph_builder` against the indexed `node_library`), which is lowered
 //! (`lower`, askama templates in `templates/`) to WGSL text, parsed once by naga, validated,
-//! compacted and emitted. This crate never touches wgpu, reads textures or runs kernels.
+//! compacted and emitted: as WGSL by naga's writer, and as Rust by `backend_rust` (from the
+//! same naga module). This crate never touches wgpu, reads textures or runs kernels.
 
 pub mod arena;
+pub mod backend_rust;
 pub mod compile;
 pub mod const_eval;
 pub mod graph_builder;

@@ -53,6 +53,9 @@ fn check_document(compiler: &Compiler, path: &Path) -> (Status, Vec<Row>) {
             (Some(k), None) => {
                 // The emitted text must itself re-validate.
                 uplift_compiler::lower::to_naga(&k.wgsl).unwrap_or_else(|e| panic!("{}: emitted WGSL does not re-validate: {}", path.display(), e.0));
+                // Every compiled kernel is also written as Rust (the CPU engine's kernel).
+                uplift_compiler::backend_rust::write_rust_kernel(k)
+                    .unwrap_or_else(|e| panic!("{}: output {}: the Rust writer failed: {e}", path.display(), o.name));
                 rows.push(Row { output: o.name, ok: true, reason: String::new() })
             }
             (_, Some(e)) => {

@@ -1,0 +1,52 @@
+//! Compiles every Rust snapshot (`tests/out/rs/*.rs`, written by the compiler's snapshot test)
+//! as a module of this crate, so the generated Rust is checked by rustc and not only as text.
+//! `build.rs` lists the snapshots; the tests in `tests/` run some kernels against closed forms.
+
+/// A kernel of the table: its strides and its batch entry point.
+pub struct Kernel {
+    pub name: &'static str,
+    pub input_stride: usize,
+    pub output_stride: usize,
+    pub batch: fn(&[f32], &[f32], &mut [f32], &Checker),
+}
+
+/// A procedural stand-in for the runtime's textures: texture `k` is `width(k)` × 2 texels and
+/// texel (x, y) is `(x, y, k, 1)`; coordinates outside the texture read zero, as wgpu's robust
+/// access does. Texture indices at or past `present` are missing (dimensions 0 × 0).
+#[derive(Clone, Copy, Debug)]
+pub struct Checker {
+    pub present: usize,
+}
+
+impl Checker {
+    /// Width of texture `k`.
+    pub fn width(k: usize) -> u32 {
+        4 + k as u32
+    }
+
+    pub fn dimensions(&self, texture: usize) -> glam::UVec2 {
+        if texture < self.present {
+            glam::UVec2::new(Self::width(texture), 2)
+        } else {
+            glam::UVec2::ZERO
+        }
+    }
+
+    pub fn load(&self, texture: usize, x: i32, y: i32) -> glam::Vec4 {
+        let d = self.dimensions(texture);
+        if x < 0 || y < 0 || x as u32 >= d.x || y as u32 >= d.y {
+            return glam::Vec4::ZERO;
+        }
+        glam::Vec4::new(x as f32, y as f32, texture as f32, 1.0)
+    }
+}
+
+// The generated code is meant to compile without rustc warnings (it allows the naming lints itself
+// where it keeps naga's names); clippy's style lints are not its concern.
+#[allow(clippy::all)]
+mod generated {
+    use super::Kernel;
+    include!(concat!(env!("OUT_DIR"), "/kernels.rs"));
+}
+
+pub use generated::*;
