@@ -6,6 +6,7 @@
 
 pub mod arena;
 pub mod backend_rust;
+pub mod build_api;
 pub mod compile;
 pub mod const_eval;
 pub mod graph_builder;

@@ -1,0 +1,111 @@
+//! Build-script integration, in the spirit of prost-build: compile MaterialX graphs to Rust
+//! modules in `OUT_DIR`, so a crate that ships graphs carries their CPU kernels. Adding a node
+//! (a nodedef plus a WGSL function under a library folder) and rebuilding is all a new node
+//! needs.
+//!
+//! ```no_run
+//! // build.rs
+//! uplift_compiler::build_api::Builder::new()
+//!     .graph("graphs/marble.mtlx")
+//!     .compile_to_out_dir()
+//!     .unwrap();
+//! // src/lib.rs: include!(concat!(env!("OUT_DIR"), "/marble.rs"));
+//! ```
+
+use crate::backend_rust::write_rust_kernel;
+use crate::compile::{Compiler, OutputSelection};
+use std::path::{Path, PathBuf};
+
+/// Which graphs to compile and where their nodes come from.
+#[derive(Clone, Debug, Default)]
+pub struct Builder {
+    libraries: Vec<PathBuf>,
+    graphs: Vec<(PathBuf, OutputSelection)>,
+}
+
+impl Builder {
+    pub fn new() -> Builder {
+        Builder::default()
+    }
+
+    /// Adds a library folder (nodedefs + WGSL), searched after the builtin library.
+    pub fn library(mut self, dir: impl Into<PathBuf>) -> Builder {
+        self.libraries.push(dir.into());
+        self
+    }
+
+    /// Adds a document; every numeric output becomes part of its kernel.
+    pub fn graph(mut self, path: impl Into<PathBuf>) -> Builder {
+        self.graphs.push((path.into(), OutputSelection::AllNumeric));
+        self
+    }
+
+    /// Adds a document, compiling only the named outputs.
+    pub fn graph_outputs(mut self, path: impl Into<PathBuf>, outputs: &[&str]) -> Builder {
+        self.graphs.push((path.into(), OutputSelection::Named(outputs.iter().map(|s| s.to_string()).collect())));
+        self
+    }
+
+    /// Writes `<stem>.rs` for every graph into `out_dir`; returns the files written. Prints
+    /// `cargo:rerun-if-changed` for the documents and library folders. Errors are the
+    /// compiler's positioned diagnostics, one per line.
+    pub fn compile(&self, out_dir: &Path) -> Result<Vec<PathBuf>, String> {
+        let compiler = Compiler::new(&self.libraries);
+        if mtlx::has_errors(&compiler.library.diagnostics) {
+            return Err(lines(&compiler.library.diagnostics));
+        }
+        for dir in &self.libraries {
+            println!("cargo:rerun-if-changed={}", dir.display());
+        }
+        let mut written = Vec::new();
+        for (path, selection) in &self.graphs {
+            println!("cargo:rerun-if-changed={}", path.display());
+            let c = compiler.compile_file(path, selection);
+            let Some(kernel) = c.kernel.filter(|_| !mtlx::has_errors(&c.diagnostics)) else {
+                let mut msg = lines(&c.diagnostics);
+                if msg.is_empty() {
+                    msg = format!("{}: no numeric output to compile", path.display());
+                }
+                return Err(msg);
+            };
+            let rust = write_rust_kernel(&kernel).map_err(|e| format!("{}: {e}", path.display()))?;
+            let stem = path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "kernel".into());
+            let out = out_dir.join(format!("{stem}.rs"));
+            std::fs::write(&out, rust).map_err(|e| format!("{}: {e}", out.display()))?;
+            written.push(out);
+        }
+        Ok(written)
+    }
+
+    /// `compile` into the `OUT_DIR` cargo gives build scripts.
+    pub fn compile_to_out_dir(&self) -> Result<Vec<PathBuf>, String> {
+        let out = std::env::var_os("OUT_DIR").ok_or("OUT_DIR is not set: call this from a build script")?;
+        self.compile(Path::new(&out))
+    }
+}
+
+fn lines(diagnostics: &[mtlx::Diagnostic]) -> String {
+    diagnostics.iter().filter(|d| d.is_error()).map(|d| d.to_string()).collect::<Vec<_>>().join("\n")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn writes_one_module_per_graph_and_reports_errors() {
+        let dir = std::env::temp_dir().join(format!("uplift-build-api-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let good = dir.join("good.mtlx");
+        std::fs::write(&good, r#"<materialx version="1.39"><nodegraph name="g"><input name="a" type="float" value="1"/><sin name="s" type="float"><input name="in" type="float" interfacename="a"/></sin><output name="out" type="float" nodename="s"/></nodegraph></materialx>"#).unwrap();
+        let files = Builder::new().graph(&good).compile(&dir).unwrap();
+        assert_eq!(files, vec![dir.join("good.rs")]);
+        let text = std::fs::read_to_string(&files[0]).unwrap();
+        assert!(text.contains("pub fn mx_pattern_batch") && text.contains("fn mx_sin_float"), "{text}");
+        let bad = dir.join("bad.mtlx");
+        std::fs::write(&bad, "<materialx version=\"1.39\">\n  <nodegraph name=\"g\"><output name=\"out\" type=\"float\" nodename=\"nope\"/></nodegraph>\n</materialx>").unwrap();
+        let err = Builder::new().graph(&bad).compile(&dir).unwrap_err();
+        assert!(err.contains("bad.mtlx:2:") && err.contains("dangling reference"), "{err}");
+    }
+}
