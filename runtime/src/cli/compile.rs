@@ -5,8 +5,8 @@
 //! Targets other than WGSL go through naga's own backends on the kernel's validated Module:
 //! `spirv` → `<stem>.spv` (binary SPIR-V 1.0 words), `msl` → `<stem>.metal` (MSL 2.0), `glsl` →
 //! `<stem>.comp.glsl` (GLSL 4.50 core compute shader), `hlsl` → `<stem>.hlsl` (shader model
-//! 5.1). The entry point is `mx_main` (GLSL requires `main`). `rust` is accepted but not built
-//! yet.
+//! 5.1). The entry point is `mx_main` (GLSL requires `main`). `rust` → `<stem>.rs`: our own
+//! naga → Rust writer (`uplift_compiler::backend_rust`), a module with `mx_pattern_batch`.
 
 use crate::atomic_write::write_atomically;
 use std::path::PathBuf;
@@ -86,7 +86,7 @@ pub fn emit(kernel: &PatternKernel, target: Target) -> Result<Vec<u8>, String> {
             w.write(module, info, None).map_err(|e| format!("HLSL backend: {e}"))?;
             Ok(text.into_bytes())
         }
-        Target::Rust => Err("the Rust backend is not built yet (issue 3)".into()),
+        Target::Rust => uplift_compiler::backend_rust::write_rust_kernel(kernel).map(String::into_bytes).map_err(|e| format!("Rust backend: {e}")),
     }
 }
 
@@ -141,9 +141,6 @@ fn msl_resources(module: &naga::Module) -> naga::back::msl::EntryPointResources 
 pub fn run(args: CompileArgs) -> Result<(), String> {
     if args.bench {
         return crate::cli::compile_bench::run(&args.files, &args.library);
-    }
-    if args.target == Target::Rust {
-        return Err("the Rust backend is not built yet (issue 3)".into());
     }
     let compiler = Compiler::new(&args.library);
     if super::report(&compiler.library.diagnostics) {
