@@ -1,5 +1,6 @@
 //! Lists every Rust snapshot in `tests/out/rs/` and writes `$OUT_DIR/kernels.rs`: one module per
-//! snapshot (`include!`d), an `MxTextures` impl of each module's trait for [`Checker`], and
+//! snapshot (`include!`d), an `MxTextures` impl of each module's trait for every
+//! [`Textures`] type (such as `Checker`), and
 //! `KERNELS`, a table that runs any kernel's `mx_pattern_batch` by name; and one module
 //! `wgsl_<stem>` per `tests/out/rs_wgsl/<stem>.rs` (Rust written from plain WGSL modules that
 //! pin down WGSL semantics). A new snapshot is picked up by the next build.
@@ -39,14 +40,14 @@ fn main() {
         let _ = writeln!(out, "/// `tests/out/rs/{stem}.rs`.\npub mod {stem} {{\n    include!({:?});\n}}\n", path.display().to_string());
         let _ = writeln!(
             out,
-            "impl {stem}::MxTextures for crate::Checker {{\n    fn load(&self, texture: usize, x: i32, y: i32) -> glam::Vec4 {{\n        crate::Checker::load(self, texture, x, y)\n    }}\n    fn dimensions(&self, texture: usize) -> glam::UVec2 {{\n        crate::Checker::dimensions(self, texture)\n    }}\n}}\n"
+            "impl<T: Textures + ?Sized> {stem}::MxTextures for T {{\n    fn load(&self, texture: usize, x: i32, y: i32) -> glam::Vec4 {{\n        Textures::load(self, texture, x, y)\n    }}\n    fn dimensions(&self, texture: usize) -> glam::UVec2 {{\n        Textures::dimensions(self, texture)\n    }}\n}}\n"
         );
     }
     out.push_str("/// Every snapshot kernel: (name, input stride, output stride, batch function).\npub const KERNELS: &[Kernel] = &[\n");
     for stem in &stems {
         let _ = writeln!(
             out,
-            "    Kernel {{ name: {stem:?}, input_stride: {stem}::INPUT_STRIDE, output_stride: {stem}::OUTPUT_STRIDE, batch: |g, i, o, t| {stem}::mx_pattern_batch(g, i, o, t) }},"
+            "    Kernel {{ name: {stem:?}, input_stride: {stem}::INPUT_STRIDE, output_stride: {stem}::OUTPUT_STRIDE, batch: |g, i, o, t| {stem}::mx_pattern_batch(g, i, o, t), texture_count: {stem}::TEXTURE_COUNT, batch_with: |g, i, o, t| {stem}::mx_pattern_batch(g, i, o, t) }},"
         );
     }
     out.push_str("];\n");

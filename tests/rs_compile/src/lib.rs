@@ -8,6 +8,27 @@ pub struct Kernel {
     pub input_stride: usize,
     pub output_stride: usize,
     pub batch: fn(&[f32], &[f32], &mut [f32], &Checker),
+    /// Textures the kernel reads (`TEXTURE_COUNT`).
+    pub texture_count: usize,
+    /// The same batch function with any [`Textures`] (dynamically dispatched).
+    pub batch_with: fn(&[f32], &[f32], &mut [f32], &dyn Textures),
+}
+
+/// Textures for any snapshot kernel: every module's `MxTextures` is implemented for each type
+/// implementing this trait (same contract: texel indices may lie outside the texture and read
+/// zero there; row 0 is the first row of the image; a missing texture has dimensions 0 × 0).
+pub trait Textures {
+    fn load(&self, texture: usize, x: i32, y: i32) -> glam::Vec4;
+    fn dimensions(&self, texture: usize) -> glam::UVec2;
+}
+
+impl Textures for Checker {
+    fn load(&self, texture: usize, x: i32, y: i32) -> glam::Vec4 {
+        Checker::load(self, texture, x, y)
+    }
+    fn dimensions(&self, texture: usize) -> glam::UVec2 {
+        Checker::dimensions(self, texture)
+    }
 }
 
 /// A procedural stand-in for the runtime's textures: texture `k` is `width(k)` × 2 texels and
@@ -45,7 +66,7 @@ impl Checker {
 // where it keeps naga's names); clippy's style lints are not its concern.
 #[allow(clippy::all)]
 mod generated {
-    use super::Kernel;
+    use super::{Kernel, Textures};
     include!(concat!(env!("OUT_DIR"), "/kernels.rs"));
 }
 
