@@ -395,7 +395,7 @@ impl<'a> GraphBuilder<'a> {
         let parent = self.scopes[s].parent.unwrap_or(0);
         let doc = self.scopes[s].doc.clone();
         let e = doc.get(inp);
-        if e.attr("nodename").is_some() || e.attr("nodegraph").is_some() || e.attr("interfacename").is_some() {
+        if mtlx::schema::CONNECTION_ATTRIBUTES.iter().any(|a| e.attr(a).is_some()) {
             self.resolve_connection(parent, inp, None)
         } else {
             self.resolve_connection(s, inp, None)
