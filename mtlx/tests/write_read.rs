@@ -230,6 +230,7 @@ fn xi_include_merges_a_sibling_file() {
 /// the document's own children and skips those whose name is already taken: included elements
 /// come first and win name conflicts, and no two siblings share a name. uplift does the same,
 /// and says so with a warning at the skipped element.
+#[test]
 fn xi_include_conflicts_resolve_as_materialx_does() {
     let dir = TempDir::new("conflict");
     dir.write("lib.mtlx", r#"<materialx version="1.39"><constant name="local" type="float" /><constant name="only_lib" type="float" /></materialx>"#);
