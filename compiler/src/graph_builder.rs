@@ -612,7 +612,7 @@ impl<'a> GraphBuilder<'a> {
             let Some(gp) = GeomProp::from_name(g) else {
                 return Err(self.error(&p.pos, format!("unknown defaultgeomprop `{g}`")));
             };
-            let ty = crate::ir::GEOMPROPS.iter().find(|r| r.1 == gp).unwrap().3.clone();
+            let ty = gp.data_type();
             let h = self.add(ValueKind::Geometry(gp), ty.clone(), gp.name().to_string(), p.pos.clone());
             if ty != p.ty {
                 return Err(self.error(&p.pos, format!("defaultgeomprop `{g}` is {ty}, input `{}` is {}", p.name, p.ty)));

@@ -50,6 +50,10 @@ impl GeomProp {
     pub fn field(self) -> &'static str {
         self.row().2
     }
+
+    pub fn data_type(self) -> DataType {
+        self.row().3.clone()
+    }
 }
 
 /// What a value is.

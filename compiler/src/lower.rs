@@ -180,27 +180,28 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str) -> Result<PatternKer
         return Err(LowerError("the library defines no `mx_geometry` struct (stdlib/wgsl/geometric.wgsl)".into()));
     }
     // Load only the geometric properties the graph reads (all of them when a library function
-    // receives the whole `mx_geometry`); the others stay zero.
+    // receives the whole `mx_geometry`); a bitangent also needs its normal and tangent. The
+    // others stay zero.
     let whole = graph.values.iter().any(|(_, v)| matches!(v.kind, ValueKind::Call { geometry: true, .. }));
-    let used: HashSet<GeomProp> = graph.values.iter().filter_map(|(_, v)| match v.kind { ValueKind::Geometry(g) => Some(g), _ => None }).collect();
+    let mut used: HashSet<GeomProp> = graph.values.iter().filter_map(|(_, v)| match v.kind { ValueKind::Geometry(g) => Some(g), _ => None }).collect();
+    let bitangents = [
+        (GeomProp::BitangentObject, GeomProp::NormalObject, GeomProp::TangentObject),
+        (GeomProp::BitangentWorld, GeomProp::NormalWorld, GeomProp::TangentWorld),
+    ];
+    for (b, n, t) in bitangents {
+        if whole || used.contains(&b) {
+            used.extend([b, n, t]);
+        }
+    }
     let mut geometry_loads = Vec::new();
     for (prop, offset) in GEOMETRY_LAYOUT {
         if whole || used.contains(&prop) {
-            let ty = if prop == GeomProp::Texcoord { DataType::Vector2 } else { DataType::Vector3 };
-            geometry_loads.push(format!("geom.{} = {};", prop.field(), load_expr(&ty, "mx_geometry_buffer", "g", offset)));
+            geometry_loads.push(format!("geom.{} = {};", prop.field(), load_expr(&prop.data_type(), "mx_geometry_buffer", "g", offset)));
         }
     }
-    for (b, n, t) in [(GeomProp::BitangentObject, "normal_object", "tangent_object"), (GeomProp::BitangentWorld, "normal_world", "tangent_world")] {
-        if whole || used.contains(&b) {
-            if !whole {
-                // The bitangent needs its normal and tangent even when the graph reads neither.
-                for (prop, offset) in GEOMETRY_LAYOUT.iter().filter(|(p, _)| p.field() == n || p.field() == t) {
-                    if !used.contains(prop) {
-                        geometry_loads.push(format!("geom.{} = {};", prop.field(), load_expr(&DataType::Vector3, "mx_geometry_buffer", "g", *offset)));
-                    }
-                }
-            }
-            geometry_loads.push(format!("geom.{} = cross(geom.{n}, geom.{t});", b.field()));
+    for (b, n, t) in bitangents {
+        if used.contains(&b) || whole {
+            geometry_loads.push(format!("geom.{} = cross(geom.{}, geom.{});", b.field(), n.field(), t.field()));
         }
     }
     let template = PatternKernelTemplate {

@@ -50,7 +50,7 @@ mod oracle {
 }
 
 use naga_rust_rt::Scalar;
-use uplift_rs_snapshots::{Checker, KERNELS};
+use uplift_rs_snapshots::{Checker, Rng, KERNELS};
 
 /// The value naga-rust-back should give for output component `component` of kernel `name` at
 /// geometry row `g`, where its translation of a builtin is known to be wrong; such components are
@@ -75,35 +75,6 @@ fn corrected(name: &str, component: usize, g: &[f32]) -> Option<f32> {
 
 /// Points per kernel.
 const POINTS: usize = 4096;
-
-/// A small deterministic generator (SplitMix64).
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [lo, hi).
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        let u = (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
-        lo + (hi - lo) * u
-    }
-    /// A unit vector (rejection sampling in the unit ball).
-    fn unit(&mut self) -> [f32; 3] {
-        loop {
-            let v = [self.range(-1.0, 1.0), self.range(-1.0, 1.0), self.range(-1.0, 1.0)];
-            let l2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-            if (0.01..=1.0).contains(&l2) {
-                let l = l2.sqrt();
-                return [v[0] / l, v[1] / l, v[2] / l];
-            }
-        }
-    }
-}
 
 #[test]
 fn generated_rust_matches_naga_rust_back() {
