@@ -18,9 +18,11 @@ struct MxOutputs {
 {%- endfor %}
 }
 
-// Buffers: per-point geometry ({{ geometry_stride }} floats: texcoord xy, position object/world,
-// normal object/world, tangent object/world), interface inputs ({{ input_stride }} floats),
-// outputs ({{ output_stride }} floats), and the point count.
+// Buffers, each column-major (component c of point i at [c * n + i], n = mx_params.x points):
+// geometry ({{ geometry_stride }} columns: texcoord xy, position object/world, normal object/world,
+// tangent object/world), interface inputs ({{ input_stride }} columns), outputs ({{ output_stride }} columns).
+// mx_params = (n, 0, 0, 0). Dispatch ceil(n / {{ workgroup_size }}) workgroups, split over x and y when
+// they exceed one dimension's limit.
 @group(0) @binding(0) var<storage, read> mx_geometry_buffer: array<f32>;
 {%- if !inputs.is_empty() %}
 @group(0) @binding(1) var<storage, read> mx_input_buffer: array<f32>;
@@ -40,24 +42,22 @@ fn mx_pattern(geom: mx_geometry{% if !inputs.is_empty() %}, inputs: MxInputs{% e
 }
 
 @compute @workgroup_size({{ workgroup_size }})
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.x;
-    if (i >= mx_params.x) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let n = mx_params.x;
+    let i = id.x + id.y * groups.x * {{ workgroup_size }}u;
+    if (i >= n) {
         return;
     }
-    let g = i * {{ geometry_stride }}u;
     var geom: mx_geometry;
 {%- for line in geometry_loads %}
     {{ line }}
 {%- endfor %}
 {%- if !inputs.is_empty() %}
-    let b = i * {{ input_stride }}u;
     let inputs = MxInputs({{ input_loads|join(", ") }});
     let out = mx_pattern(geom, inputs);
 {%- else %}
     let out = mx_pattern(geom);
 {%- endif %}
-    let o = i * {{ output_stride }}u;
 {%- for line in output_stores %}
     {{ line }}
 {%- endfor %}

@@ -117,8 +117,8 @@ const RESERVED: &[&str] = &[
     "String", "Box", "core", "std", "glam", // glam names the generated code uses
     "Vec2", "Vec3", "Vec4", "IVec2", "IVec3", "IVec4", "UVec2", "UVec3", "UVec4", "BVec2", "BVec3", "BVec4", "Mat2",
     "Mat3", "Mat4", // the writer's and the template's own names
-    "MxTextures", "tex", "GEOMETRY_STRIDE", "INPUT_STRIDE", "OUTPUT_STRIDE", "TEXTURE_COUNT", "INPUTS",
-    "OUTPUTS", "mx_pattern_batch", "mx_n", "mx_g", "mx_x", "mx_o", "mx_geom", "mx_inputs", "mx_out",
+    "MxTextures", "tex", "GEOMETRY_COLUMNS", "INPUT_COLUMNS", "OUTPUT_COLUMNS", "TEXTURE_COUNT", "INPUTS",
+    "OUTPUTS", "mx_pattern_batch", "mx_n", "mx_i", "mx_geom", "mx_inputs", "mx_out",
 ];
 
 fn reserved_set() -> &'static KeywordSet {
@@ -1770,6 +1770,10 @@ struct RustKernelTemplate<'a> {
     geometry_stride: usize,
     input_stride: usize,
     output_stride: usize,
+    /// Column indices of the geometry and input buffers, and the output column names.
+    geometry_columns: Vec<usize>,
+    input_columns: Vec<usize>,
+    output_columns: Vec<String>,
     texture_count: usize,
     inputs: Vec<Slot>,
     outputs: Vec<Slot>,
@@ -1814,12 +1818,12 @@ pub fn write_rust_kernel_with(kernel: &PatternKernel, options: &RustOptions) -> 
     // normal × tangent, as in the WGSL kernel.
     let (gh, geometry_struct) = struct_of("mx_geometry").ok_or_else(|| kernel_err("a pattern kernel without `mx_geometry`".into()))?;
     let geometry_members = member_names(gh);
-    let load3 = |buf: &str, o: usize| format!("Vec3::new({buf}[{o}], {buf}[{}], {buf}[{}])", o + 1, o + 2);
+    let load3 = |buf: &str, o: usize| format!("Vec3::new({buf}{o}[mx_i], {buf}{}[mx_i], {buf}{}[mx_i])", o + 1, o + 2);
     let prop_offset = |field: &str| GEOMETRY_LAYOUT.iter().find(|(p, _)| p.field() == field).map(|(_, o)| *o);
     let mut geometry_fields = Vec::new();
     for (wgsl_name, rust_name) in &geometry_members {
         let expr = match (prop_offset(wgsl_name), wgsl_name.strip_prefix("bitangent_")) {
-            (Some(o), _) if wgsl_name == "texcoord" => format!("Vec2::new(mx_g[{o}], mx_g[{}])", o + 1),
+            (Some(o), _) if wgsl_name == "texcoord" => format!("Vec2::new(mx_g{o}[mx_i], mx_g{}[mx_i])", o + 1),
             (Some(o), _) => load3("mx_g", o),
             (None, Some(space)) => {
                 let n = prop_offset(&format!("normal_{space}")).ok_or_else(|| kernel_err(format!("the geometry field `{wgsl_name}`")))?;
@@ -1879,6 +1883,9 @@ pub fn write_rust_kernel_with(kernel: &PatternKernel, options: &RustOptions) -> 
         geometry_stride: GEOMETRY_STRIDE,
         input_stride: kernel.input_stride,
         output_stride: kernel.output_stride,
+        geometry_columns: (0..GEOMETRY_STRIDE).collect(),
+        input_columns: (0..kernel.input_stride).collect(),
+        output_columns: (0..kernel.output_stride).map(|k| format!("mx_o{k}")).collect(),
         texture_count: kernel.textures.len(),
         inputs: slots(kernel.inputs.iter().map(|i| (i.input.name.clone(), i.offset, i.input.ty.components().unwrap_or(0))).collect()),
         outputs: slots(kernel.outputs.iter().map(|o| (o.name.clone(), o.offset, o.ty.components().unwrap_or(0))).collect()),
@@ -1897,9 +1904,10 @@ pub fn write_rust_kernel_with(kernel: &PatternKernel, options: &RustOptions) -> 
     Ok(text)
 }
 
-/// Reads a value of MaterialX type `ty` from `buf[offset..]` (as the WGSL kernel does).
+/// Reads a value of MaterialX type `ty` from point `mx_i` of columns `offset..` (column `c` is
+/// the local `{buf}{c}`), as the WGSL kernel does.
 fn load_row(ty: &DataType, buf: &str, offset: usize) -> Result<String, String> {
-    let at = |k: usize| format!("{buf}[{}]", offset + k);
+    let at = |k: usize| format!("{buf}{}[mx_i]", offset + k);
     let list = |n: usize| (0..n).map(at).collect::<Vec<_>>().join(", ");
     Ok(match ty {
         DataType::Boolean => format!("{} != 0.0", at(0)),
@@ -1914,9 +1922,10 @@ fn load_row(ty: &DataType, buf: &str, offset: usize) -> Result<String, String> {
     })
 }
 
-/// Stores `value` (of MaterialX type `ty`) into `mx_o[offset..]`, one statement per component.
+/// Stores `value` (of MaterialX type `ty`) into point `mx_i` of output columns `offset..` (column
+/// `c` is the local `mx_o{c}`), one statement per component.
 fn store_row(ty: &DataType, value: &str, offset: usize) -> Result<Vec<String>, String> {
-    let at = |k: usize| format!("mx_o[{}]", offset + k);
+    let at = |k: usize| format!("mx_o{}[mx_i]", offset + k);
     Ok(match ty {
         DataType::Boolean => vec![format!("{} = if {value} {{ 1.0 }} else {{ 0.0 }};", at(0))],
         DataType::Integer => vec![format!("{} = {value} as f32;", at(0))],

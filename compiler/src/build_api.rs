@@ -84,6 +84,14 @@ impl Builder {
     }
 }
 
+/// A fingerprint of a generated Rust kernel (FNV-1a, 64 bits, over the text after its first
+/// line, which names the source file): equal fingerprints mean the same code. The runtime uses
+/// it to find a kernel it was built with.
+pub fn kernel_fingerprint(rust: &str) -> u64 {
+    let body = rust.split_once('\n').map_or("", |(_, rest)| rest);
+    body.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+}
+
 fn lines(diagnostics: &[mtlx::Diagnostic]) -> String {
     diagnostics.iter().filter(|d| d.is_error()).map(|d| d.to_string()).collect::<Vec<_>>().join("\n")
 }

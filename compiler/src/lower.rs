@@ -58,9 +58,10 @@ fn identifier(name: &str, prefix: &str, used: &mut HashSet<String>) -> String {
     s
 }
 
-/// Reads `ty` from `buf[base + offset ..]` as a WGSL expression.
-fn load_expr(ty: &DataType, buf: &str, base: &str, offset: usize) -> String {
-    let at = |k: usize| format!("{buf}[{base} + {}u]", offset + k);
+/// Reads `ty` from columns `offset..` of the column-major buffer `buf` (component `c` of point
+/// `i` at `buf[c * n + i]`) as a WGSL expression.
+fn load_expr(ty: &DataType, buf: &str, offset: usize) -> String {
+    let at = |k: usize| format!("{buf}[{}u * n + i]", offset + k);
     match ty {
         DataType::Boolean => format!("{} != 0.0", at(0)),
         DataType::Integer => format!("i32({})", at(0)),
@@ -73,9 +74,10 @@ fn load_expr(ty: &DataType, buf: &str, base: &str, offset: usize) -> String {
     }
 }
 
-/// Stores `value` (of type `ty`) into `buf[base + offset ..]`, one statement per component.
+/// Stores `value` (of type `ty`) into columns `offset..` of the column-major output buffer, one
+/// statement per component.
 fn store_stmts(ty: &DataType, value: &str, offset: usize) -> Vec<String> {
-    let at = |k: usize| format!("mx_output_buffer[o + {}u]", offset + k);
+    let at = |k: usize| format!("mx_output_buffer[{}u * n + i]", offset + k);
     match ty {
         DataType::Boolean => vec![format!("{} = select(0.0, 1.0, {value});", at(0))],
         DataType::Integer => vec![format!("{} = f32({value});", at(0))],
@@ -102,7 +104,7 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str) -> Result<PatternKer
     for inp in &graph.inputs {
         let t = wgsl_type(&inp.ty, false).ok_or_else(|| LowerError(format!("input `{}` has unsupported type {}", inp.name, inp.ty)))?;
         input_fields.push(Field { field: identifier(&inp.name, "", &mut used), wgsl_type: t.into() });
-        input_loads.push(load_expr(&inp.ty, "mx_input_buffer", "b", offset));
+        input_loads.push(load_expr(&inp.ty, "mx_input_buffer", offset));
         inputs.push(KernelInput { input: inp.clone(), offset });
         offset += inp.ty.components().unwrap();
     }
@@ -196,7 +198,7 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str) -> Result<PatternKer
     let mut geometry_loads = Vec::new();
     for (prop, offset) in GEOMETRY_LAYOUT {
         if whole || used.contains(&prop) {
-            geometry_loads.push(format!("geom.{} = {};", prop.field(), load_expr(&prop.data_type(), "mx_geometry_buffer", "g", offset)));
+            geometry_loads.push(format!("geom.{} = {};", prop.field(), load_expr(&prop.data_type(), "mx_geometry_buffer", offset)));
         }
     }
     for (b, n, t) in bitangents {

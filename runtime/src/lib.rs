@@ -1,8 +1,11 @@
-//! uplift's runtime: the engines that run compiled kernels (wgpu now; the CPU engine comes
-//! with the Rust backend), and the `uplift` CLI's subcommands.
+//! uplift's runtime: the batch API (`batch`) and the two engines that implement it — the CPU
+//! engine (generated Rust, `cpu_engine`) and the wgpu engine (generated WGSL, `wgpu_engine`) —
+//! and the `uplift` CLI's subcommands.
 
 pub mod atomic_write;
+pub mod batch;
 pub mod cli;
+pub mod cpu_engine;
 pub mod csv_table;
 pub mod texture_loader;
 pub mod wgpu_engine;

@@ -9,7 +9,7 @@
 //!
 //! Only the transfer function is applied; primaries are not converted.
 
-use crate::wgpu_engine::TextureData;
+use crate::batch::TextureData;
 use std::path::Path;
 
 /// The transfer function of a MaterialX colour space name, as applied by [`load_texture`].

@@ -1,8 +1,10 @@
 //! The wgpu engine: runs compiled pattern kernels as compute shaders. The adapter is chosen
 //! automatically (a real GPU when present, else a software adapter such as Mesa's lavapipe);
 //! a machine with no adapter at all gets a clear error. Buffers follow the kernel layout of
-//! `uplift_compiler::kernel` (geometry, interface inputs, outputs, point count, textures).
+//! `uplift_compiler::kernel`: column-major geometry, interface inputs and outputs, the point
+//! count, textures. A batch larger than one storage binding allows runs in several dispatches.
 
+use crate::batch::{Columns, PatternBatch, PatternEngine, TextureData};
 use uplift_compiler::kernel::*;
 use uplift_compiler::PatternKernel;
 use wgpu::util::DeviceExt;
@@ -12,51 +14,6 @@ pub struct WgpuEngine {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub adapter_info: wgpu::AdapterInfo,
-}
-
-/// An RGBA float image bound to a kernel texture; row 0 is the top of the image.
-#[derive(Clone, Debug)]
-pub struct TextureData {
-    pub width: u32,
-    pub height: u32,
-    pub rgba: Vec<f32>,
-}
-
-/// Per-point inputs of a pattern kernel, structure of rows: `geometry` holds
-/// [`GEOMETRY_STRIDE`] floats per point, `inputs` the kernel's `input_stride` floats per point.
-#[derive(Clone, Debug, Default)]
-pub struct PatternBatch {
-    pub geometry: Vec<f32>,
-    pub inputs: Vec<f32>,
-    pub textures: Vec<TextureData>,
-}
-
-/// One shading point's geometry; object space equals world space.
-#[derive(Clone, Copy, Debug)]
-pub struct Geometry {
-    pub texcoord: [f32; 2],
-    pub position: [f32; 3],
-    pub normal: [f32; 3],
-    pub tangent: [f32; 3],
-}
-
-impl Default for Geometry {
-    fn default() -> Self {
-        Geometry { texcoord: [0.0; 2], position: [0.0; 3], normal: [0.0, 0.0, 1.0], tangent: [1.0, 0.0, 0.0] }
-    }
-}
-
-impl Geometry {
-    /// The point's row in the geometry buffer.
-    pub fn row(&self) -> [f32; GEOMETRY_STRIDE] {
-        let mut r = [0.0; GEOMETRY_STRIDE];
-        r[0..2].copy_from_slice(&self.texcoord);
-        for (k, v) in [self.position, self.normal, self.tangent].iter().enumerate() {
-            r[2 + 6 * k..5 + 6 * k].copy_from_slice(v);
-            r[5 + 6 * k..8 + 6 * k].copy_from_slice(v);
-        }
-        r
-    }
 }
 
 impl WgpuEngine {
@@ -92,20 +49,9 @@ impl WgpuEngine {
         Ok(WgpuEngine { device, queue, adapter_info })
     }
 
-    /// Evaluates `kernel` for `n` points; returns `n * kernel.output_stride` floats.
-    pub fn run_pattern(&self, kernel: &PatternKernel, n: usize, batch: &PatternBatch) -> Result<Vec<f32>, String> {
-        if batch.geometry.len() != n * GEOMETRY_STRIDE {
-            return Err(format!("geometry has {} floats; {n} points need {}", batch.geometry.len(), n * GEOMETRY_STRIDE));
-        }
-        if batch.inputs.len() != n * kernel.input_stride {
-            return Err(format!("inputs have {} floats; {n} points need {}", batch.inputs.len(), n * kernel.input_stride));
-        }
-        if batch.textures.len() != kernel.textures.len() {
-            return Err(format!("kernel reads {} textures, {} given", kernel.textures.len(), batch.textures.len()));
-        }
-        if n == 0 {
-            return Ok(Vec::new());
-        }
+    /// Builds the compute pipeline for `kernel` (shader compilation happens here), so that
+    /// several batches can run without compiling again.
+    pub fn prepare(&self, kernel: &PatternKernel) -> WgpuPipeline {
         let d = &self.device;
         let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("pattern kernel"),
@@ -138,8 +84,8 @@ impl WgpuEngine {
             .iter()
             .map(|(b, ty)| wgpu::BindGroupLayoutEntry { binding: *b, visibility: wgpu::ShaderStages::COMPUTE, ty: *ty, count: None })
             .collect();
-        let bgl = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &layout_entries });
-        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: None, bind_group_layouts: &[Some(&bgl)], immediate_size: 0 });
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: None, entries: &layout_entries });
+        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: None, bind_group_layouts: &[Some(&layout)], immediate_size: 0 });
         let pipeline = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("pattern kernel"),
             layout: Some(&pl),
@@ -148,14 +94,69 @@ impl WgpuEngine {
             compilation_options: Default::default(),
             cache: None,
         });
+        WgpuPipeline {
+            pipeline,
+            layout,
+            input_stride: kernel.input_stride,
+            output_stride: kernel.output_stride,
+            texture_count: kernel.textures.len(),
+        }
+    }
+
+    /// The most points one dispatch takes: every buffer within one storage binding, and the
+    /// workgroups within a two-dimensional dispatch.
+    pub fn max_points_per_dispatch(&self, p: &WgpuPipeline) -> usize {
+        let limits = self.device.limits();
+        let widest = GEOMETRY_STRIDE.max(p.input_stride).max(p.output_stride) as u64 * 4;
+        let binding = (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size) / widest;
+        let groups = limits.max_compute_workgroups_per_dimension as u64;
+        binding.min(groups * groups * WORKGROUP_SIZE as u64).max(1) as usize
+    }
+
+    /// Evaluates a prepared kernel for every point of `batch` (checked with
+    /// [`PatternBatch::check`] by the caller), in as many dispatches as the limits need.
+    pub fn run_prepared(&self, p: &WgpuPipeline, batch: &PatternBatch) -> Result<Columns, String> {
+        self.run_chunked(p, batch, self.max_points_per_dispatch(p))
+    }
+
+    /// [`run_prepared`](Self::run_prepared) with at most `chunk` points per dispatch.
+    pub fn run_chunked(&self, p: &WgpuPipeline, batch: &PatternBatch, chunk: usize) -> Result<Columns, String> {
+        let n = batch.n();
+        let chunk = chunk.clamp(1, self.max_points_per_dispatch(p));
+        if n <= chunk {
+            return self.dispatch(p, batch);
+        }
+        let mut out = Columns::zeros(n, p.output_stride);
+        let mut part = PatternBatch { geometry: Columns::default(), inputs: Columns::default(), textures: batch.textures.clone() };
+        let mut start = 0;
+        while start < n {
+            let m = chunk.min(n - start);
+            part.geometry = batch.geometry.slice(start, m);
+            part.inputs = batch.inputs.slice(start, m);
+            out.write_at(start, &self.dispatch(p, &part)?);
+            start += m;
+        }
+        Ok(out)
+    }
+
+    /// One dispatch over the whole of `batch`.
+    fn dispatch(&self, p: &WgpuPipeline, batch: &PatternBatch) -> Result<Columns, String> {
+        let n = batch.n();
+        if n == 0 {
+            return Ok(Columns::zeros(0, p.output_stride));
+        }
+        if batch.inputs.width() != p.input_stride || batch.textures.len() != p.texture_count {
+            return Err("the batch does not match the prepared kernel".into());
+        }
+        let d = &self.device;
         let buf = |data: &[f32], usage| {
             // Storage bindings may not be empty.
             let data: &[f32] = if data.is_empty() { &[0.0] } else { data };
             d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents: bytemuck::cast_slice(data), usage })
         };
-        let geometry = buf(&batch.geometry, wgpu::BufferUsages::STORAGE);
-        let inputs = buf(&batch.inputs, wgpu::BufferUsages::STORAGE);
-        let out_len = (n * kernel.output_stride) as u64 * 4;
+        let geometry = buf(batch.geometry.data(), wgpu::BufferUsages::STORAGE);
+        let inputs = buf(batch.inputs.data(), wgpu::BufferUsages::STORAGE);
+        let out_len = (n * p.output_stride) as u64 * 4;
         let outputs = d.create_buffer(&wgpu::BufferDescriptor { label: None, size: out_len, usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC, mapped_at_creation: false });
         let readback = d.create_buffer(&wgpu::BufferDescriptor { label: None, size: out_len, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
         let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents: bytemuck::cast_slice(&[n as u32, 0, 0, 0]), usage: wgpu::BufferUsages::UNIFORM });
@@ -165,24 +166,26 @@ impl WgpuEngine {
             wgpu::BindGroupEntry { binding: BINDING_OUTPUTS, resource: outputs.as_entire_binding() },
             wgpu::BindGroupEntry { binding: BINDING_PARAMS, resource: params.as_entire_binding() },
         ];
-        if kernel.input_stride > 0 {
+        if p.input_stride > 0 {
             group_entries.push(wgpu::BindGroupEntry { binding: BINDING_INPUTS, resource: inputs.as_entire_binding() });
         }
         for (k, v) in views.iter().enumerate() {
             group_entries.push(wgpu::BindGroupEntry { binding: BINDING_FIRST_TEXTURE + k as u32, resource: wgpu::BindingResource::TextureView(v) });
         }
-        let group = d.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &bgl, entries: &group_entries });
+        let group = d.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &p.layout, entries: &group_entries });
         let mut encoder = d.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&pipeline);
+            pass.set_pipeline(&p.pipeline);
             pass.set_bind_group(0, &group, &[]);
-            let groups = (n as u32).div_ceil(WORKGROUP_SIZE);
-            let max = d.limits().max_compute_workgroups_per_dimension;
-            if groups > max {
-                return Err(format!("{n} points exceed one dispatch ({max} workgroups); split the batch"));
+            // The kernel numbers points id.x + id.y × (groups in x) × WORKGROUP_SIZE.
+            let groups = (n as u64).div_ceil(WORKGROUP_SIZE as u64);
+            let max = d.limits().max_compute_workgroups_per_dimension as u64;
+            let (x, y) = if groups <= max { (groups, 1) } else { (max, groups.div_ceil(max)) };
+            if y > max {
+                return Err(format!("{n} points exceed one dispatch ({max} × {max} workgroups); split the batch"));
             }
-            pass.dispatch_workgroups(groups, 1, 1);
+            pass.dispatch_workgroups(x as u32, y as u32, 1);
         }
         encoder.copy_buffer_to_buffer(&outputs, 0, &readback, 0, out_len);
         self.queue.submit([encoder.finish()]);
@@ -197,13 +200,11 @@ impl WgpuEngine {
         let result: Vec<f32> = bytemuck::cast_slice(&data).to_vec();
         drop(data);
         readback.unmap();
-        Ok(result)
+        Columns::from_column_major(n, p.output_stride, result)
     }
 
     fn upload_texture(&self, t: &TextureData) -> Result<wgpu::TextureView, String> {
-        if t.rgba.len() != (t.width * t.height * 4) as usize || t.width == 0 || t.height == 0 {
-            return Err(format!("texture data has {} floats for {}x{} RGBA", t.rgba.len(), t.width, t.height));
-        }
+        t.check()?;
         let size = wgpu::Extent3d { width: t.width, height: t.height, depth_or_array_layers: 1 };
         let tex = self.device.create_texture_with_data(
             &self.queue,
@@ -221,5 +222,26 @@ impl WgpuEngine {
             bytemuck::cast_slice(&t.rgba),
         );
         Ok(tex.create_view(&Default::default()))
+    }
+}
+
+/// A kernel's compute pipeline and bind-group layout on one device ([`WgpuEngine::prepare`]).
+pub struct WgpuPipeline {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    input_stride: usize,
+    output_stride: usize,
+    texture_count: usize,
+}
+
+impl PatternEngine for WgpuEngine {
+    fn describe(&self) -> String {
+        format!("wgpu on {} ({:?})", self.adapter_info.name, self.adapter_info.backend)
+    }
+
+    fn run_pattern(&self, kernel: &PatternKernel, batch: &PatternBatch) -> Result<Columns, String> {
+        batch.check(kernel)?;
+        let p = self.prepare(kernel);
+        self.run_prepared(&p, batch)
     }
 }

@@ -183,7 +183,7 @@ fn bad_csv_is_a_positioned_error() {
 }
 
 #[test]
-fn closure_outputs_and_unbuilt_engines_are_clear_errors() {
+fn closure_outputs_are_clear_errors_on_both_engines() {
     let dir = temp_dir("closure");
     let doc = dir.join("shader.mtlx");
     std::fs::write(
@@ -205,9 +205,10 @@ fn closure_outputs_and_unbuilt_engines_are_clear_errors() {
     assert!(e.contains("output `g/shader` is surfaceshader, not a pattern value"), "{e}");
     assert!(e.contains("cannot evaluate output `shader`"), "{e}");
 
-    let (code, _, stderr) = uplift(&["eval", s(&doc), "--output", "f", "--engine", "cpu", "--input", s(&input), "-o", s(&out)]);
+    let (code, _, stderr) = uplift(&["eval", s(&doc), "--output", "shader", "--engine", "cpu", "--input", s(&input), "-o", s(&out)]);
     assert_eq!(code, 1);
-    assert!(stderr.contains("the CPU engine is not built yet (issue 3)"), "{stderr}");
+    assert!(stderr.contains("output `g/shader` is surfaceshader, not a pattern value"), "{stderr}");
+    assert!(!out.exists(), "no output file on error");
 }
 
 /// The sRGB EOTF, written out here independently of the runtime.
@@ -318,7 +319,8 @@ fn naga_backends_write_files() {
 /// Batches larger than one dispatch are split; the chunks together give the unsplit result.
 #[test]
 fn large_batches_run_in_chunks() {
-    use uplift::cli::eval::{batch_from_table, graph_inputs, run_wgpu, run_wgpu_chunked};
+    use uplift::batch::PatternEngine;
+    use uplift::cli::eval::{batch_from_table, graph_inputs};
     let (doc, input, _) = setup("chunks", "");
     let mut csv = String::from("position_x,position_y,texcoord_y,scale\n");
     for i in 0..300 {
@@ -331,10 +333,11 @@ fn large_batches_run_in_chunks() {
     for output in ["pos_out", "sum"] {
         let kernel = compiler.compile_file(&doc, &uplift_compiler::OutputSelection::Named(vec![output.into()])).kernel.unwrap();
         let batch = batch_from_table(&kernel, &graph_inputs(&doc, output), &table, "inputs.csv").unwrap();
-        let whole = run_wgpu(&engine, &kernel, table.rows.len(), batch.clone()).unwrap();
-        assert_eq!(whole.len(), 300 * kernel.output_stride);
+        let whole = engine.run_pattern(&kernel, &batch).unwrap();
+        assert_eq!((whole.n(), whole.width()), (300, kernel.output_stride));
+        let pipeline = engine.prepare(&kernel);
         for chunk in [1, 64, 100, 299] {
-            let parts = run_wgpu_chunked(&engine, &kernel, table.rows.len(), batch.clone(), chunk).unwrap();
+            let parts = engine.run_chunked(&pipeline, &batch, chunk).unwrap();
             assert_eq!(parts, whole, "{output}, chunks of {chunk}");
         }
     }

@@ -20,7 +20,7 @@ mod graph_kit;
 
 use common::*;
 use graph_kit::*;
-use uplift::wgpu_engine::Geometry;
+use uplift::batch::Geometry;
 use uplift_compiler::PatternKernel;
 
 /// Cases left out of the runs because of compiler issues (none found so far).

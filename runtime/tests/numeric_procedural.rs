@@ -17,7 +17,7 @@ mod graph_kit;
 
 use common::*;
 use graph_kit::*;
-use uplift::wgpu_engine::Geometry;
+use uplift::batch::Geometry;
 
 /// Cases left out because of compiler issues (none found so far).
 const KNOWN_GAPS: &[&str] = &[];

@@ -3,7 +3,7 @@
 
 mod common;
 use common::*;
-use uplift::wgpu_engine::Geometry;
+use uplift::batch::Geometry;
 
 #[test]
 fn add_and_multiply_through_interface_inputs() {

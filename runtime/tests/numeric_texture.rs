@@ -25,7 +25,7 @@ mod graph_kit;
 use common::*;
 use graph_kit::*;
 use std::path::PathBuf;
-use uplift::wgpu_engine::{Geometry, TextureData};
+use uplift::batch::{Geometry, TextureData};
 use uplift_compiler::PatternKernel;
 
 /// Cases left out because of compiler issues (none found so far).

@@ -52,7 +52,7 @@ fn main() {
     for stem in &stems {
         let _ = writeln!(
             out,
-            "    Kernel {{ name: {stem:?}, input_stride: {stem}::INPUT_STRIDE, output_stride: {stem}::OUTPUT_STRIDE, batch: |g, i, o, t| {stem}::mx_pattern_batch(g, i, o, t), texture_count: {stem}::TEXTURE_COUNT, batch_with: |g, i, o, t| {stem}::mx_pattern_batch(g, i, o, t) }},"
+            "    Kernel {{ name: {stem:?}, input_stride: {stem}::INPUT_COLUMNS, output_stride: {stem}::OUTPUT_COLUMNS, batch: |g, i, o, t| crate::batch_rows!({stem}, g, i, o, t), texture_count: {stem}::TEXTURE_COUNT, batch_with: |g, i, o, t| crate::batch_rows!({stem}, g, i, o, t) }},"
         );
     }
     out.push_str("];\n");
@@ -135,7 +135,7 @@ fn member_shape(stem: &str, module: &naga::Module, m: &naga::StructMember) -> (n
 }
 
 /// The row value at `slot` of `row`, as the struct member's scalar type (rows hold floats;
-/// booleans are 0.0/1.0 and integers are floats, as in the generated `mx_pattern_batch`).
+/// booleans are 0.0/1.0 and integers are floats, as in the generated `mx_pattern_batch`'s columns).
 fn read_scalar(kind: naga::ScalarKind, row: &str, slot: usize) -> String {
     match kind {
         naga::ScalarKind::Float => format!("{row}[{slot}]"),
@@ -185,7 +185,7 @@ fn write_oracles() {
         let cross = |a: usize, b: usize| format!("cross([g[{a}], g[{}], g[{}]], [g[{b}], g[{}], g[{}]]).into()", a + 1, a + 2, b + 1, b + 2);
         let mut glue = String::new();
         let _ = writeln!(glue, "    /// Evaluates this module's `mx_pattern` on one geometry row (`GEOMETRY_STRIDE` floats)");
-        let _ = writeln!(glue, "    /// and input row, writing one output row, with the row layout of `mx_pattern_batch`.");
+        let _ = writeln!(glue, "    /// and input row, writing one output row, with the row layout the tests use.");
         let _ = writeln!(glue, "    pub fn eval_row(g: &[f32], x: &[f32], o: &mut [f32]) {{");
         let _ = writeln!(glue, "        let _ = x;");
         let _ = writeln!(

@@ -14,16 +14,17 @@
 use crate::atomic_write::write_atomically;
 use crate::csv_table;
 use crate::texture_loader::load_texture;
-use crate::wgpu_engine::{PatternBatch, WgpuEngine};
+use crate::batch::{Columns, Geometry, PatternBatch, PatternEngine};
+use crate::cpu_engine::CpuEngine;
+use crate::wgpu_engine::WgpuEngine;
 use std::collections::HashMap;
 use mtlx::DataType;
 use std::path::{Path, PathBuf};
-use uplift_compiler::kernel::{GEOMETRY_STRIDE, WORKGROUP_SIZE};
 use uplift_compiler::{Compiler, OutputSelection, PatternKernel};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Engine {
-    /// Generated Rust on the CPU (not built yet).
+    /// Generated Rust on the CPU (shipped kernels in-process; others built once with cargo).
     Cpu,
     /// Generated WGSL as wgpu compute shaders.
     Wgpu,
@@ -161,7 +162,7 @@ pub fn batch_from_table(kernel: &PatternKernel, graph_inputs: &[(String, DataTyp
         input_defaults[inp.offset..inp.offset + d.len()].copy_from_slice(d);
     }
     let n = table.rows.len();
-    let mut geometry = Vec::with_capacity(n * GEOMETRY_STRIDE);
+    let mut points = Vec::with_capacity(n);
     let mut inputs = Vec::with_capacity(n * kernel.input_stride);
     for row in &table.rows {
         let mut g: [f32; 11] = GEOMETRY_COLUMNS.map(|(_, d)| d);
@@ -175,52 +176,16 @@ pub fn batch_from_table(kernel: &PatternKernel, graph_inputs: &[(String, DataTyp
                 Slot::Ambiguous => unreachable!("rejected above"),
             }
         }
-        let geom = crate::wgpu_engine::Geometry {
-            texcoord: [g[0], g[1]],
-            position: [g[2], g[3], g[4]],
-            normal: [g[5], g[6], g[7]],
-            tangent: [g[8], g[9], g[10]],
-        };
-        geometry.extend_from_slice(&geom.row());
+        points.push(Geometry { texcoord: [g[0], g[1]], position: [g[2], g[3], g[4]], normal: [g[5], g[6], g[7]], tangent: [g[8], g[9], g[10]] });
     }
     let mut textures = Vec::with_capacity(kernel.textures.len());
     for t in &kernel.textures {
         textures.push(load_texture(&t.path, t.colorspace.as_deref())?);
     }
-    Ok(PatternBatch { geometry, inputs, textures })
-}
-
-/// Runs `kernel` on wgpu over `n` points, in dispatch-sized chunks
-/// (`max_compute_workgroups_per_dimension` × [`WORKGROUP_SIZE`] points each).
-pub fn run_wgpu(engine: &WgpuEngine, kernel: &PatternKernel, n: usize, batch: PatternBatch) -> Result<Vec<f32>, String> {
-    let max_groups = engine.device.limits().max_compute_workgroups_per_dimension.max(1) as usize;
-    run_wgpu_chunked(engine, kernel, n, batch, max_groups * WORKGROUP_SIZE as usize)
-}
-
-/// [`run_wgpu`] with at most `chunk` points per dispatch.
-pub fn run_wgpu_chunked(engine: &WgpuEngine, kernel: &PatternKernel, n: usize, batch: PatternBatch, chunk: usize) -> Result<Vec<f32>, String> {
-    let chunk = chunk.max(1);
-    if n <= chunk {
-        return engine.run_pattern(kernel, n, &batch);
-    }
-    let PatternBatch { geometry, inputs, textures } = batch;
-    let mut part = PatternBatch { geometry: Vec::new(), inputs: Vec::new(), textures };
-    let mut out = Vec::with_capacity(n * kernel.output_stride);
-    let mut start = 0;
-    while start < n {
-        let m = chunk.min(n - start);
-        part.geometry = geometry[start * GEOMETRY_STRIDE..(start + m) * GEOMETRY_STRIDE].to_vec();
-        part.inputs = inputs[start * kernel.input_stride..(start + m) * kernel.input_stride].to_vec();
-        out.extend(engine.run_pattern(kernel, m, &part)?);
-        start += m;
-    }
-    Ok(out)
+    Ok(PatternBatch::from_rows(&points, &inputs, kernel.input_stride, textures))
 }
 
 pub fn run(args: EvalArgs) -> Result<(), String> {
-    if args.engine == Engine::Cpu {
-        return Err("the CPU engine is not built yet (issue 3)".into());
-    }
     let compiler = Compiler::new(&args.library);
     if super::report(&compiler.library.diagnostics) {
         return Err("errors in the node library".into());
@@ -235,14 +200,11 @@ pub fn run(args: EvalArgs) -> Result<(), String> {
     let table = csv_table::parse(&input_name, &text)?;
     let n = table.rows.len();
     let batch = batch_from_table(&kernel, &graph_inputs(&args.file, &args.output), &table, &input_name)?;
-    let values = match args.engine {
-        Engine::Wgpu => {
-            let engine = WgpuEngine::new()?;
-            run_wgpu(&engine, &kernel, n, batch)?
-        }
-        Engine::Cpu => unreachable!("rejected above"),
+    let values: Columns = match args.engine {
+        Engine::Wgpu => WgpuEngine::new()?.run_pattern(&kernel, &batch)?,
+        Engine::Cpu => CpuEngine::new()?.run_pattern(&kernel, &batch)?,
     };
-    let text = csv_table::write(&output_columns(&kernel), &values);
+    let text = csv_table::write(&output_columns(&kernel), &values.to_rows());
     write_atomically(&args.out, text.as_bytes()).map_err(|e| format!("{}: {e}", args.out.display()))?;
     println!("wrote {} ({n} rows)", args.out.display());
     Ok(())

@@ -3,7 +3,8 @@
 #![allow(dead_code)]
 
 use std::sync::OnceLock;
-use uplift::wgpu_engine::{Geometry, PatternBatch, TextureData, WgpuEngine};
+use uplift::batch::{Geometry, PatternBatch, PatternEngine, TextureData};
+use uplift::wgpu_engine::WgpuEngine;
 use uplift_compiler::{Compiler, OutputSelection, PatternKernel};
 
 pub fn compiler() -> &'static Compiler {
@@ -49,17 +50,14 @@ impl Rng {
 
 /// Runs `kernel` for the given per-point geometry and interface-input rows.
 pub fn run(kernel: &PatternKernel, geometry: &[Geometry], inputs: &[Vec<f32>], textures: Vec<TextureData>) -> Vec<Vec<f32>> {
-    let n = geometry.len();
-    let mut batch = PatternBatch { geometry: Vec::new(), inputs: Vec::new(), textures };
-    for g in geometry {
-        batch.geometry.extend_from_slice(&g.row());
-    }
+    let mut rows = Vec::new();
     for row in inputs {
         assert_eq!(row.len(), kernel.input_stride, "input row width");
-        batch.inputs.extend_from_slice(row);
+        rows.extend_from_slice(row);
     }
-    let out = engine().run_pattern(kernel, n, &batch).unwrap_or_else(|e| panic!("{e}"));
-    out.chunks(kernel.output_stride).map(|c| c.to_vec()).collect()
+    let batch = PatternBatch::from_rows(geometry, &rows, kernel.input_stride, textures);
+    let out = engine().run_pattern(kernel, &batch).unwrap_or_else(|e| panic!("{e}"));
+    out.to_rows().chunks(kernel.output_stride).map(|c| c.to_vec()).collect()
 }
 
 /// Asserts |got - want| ≤ tol componentwise, naming the case.

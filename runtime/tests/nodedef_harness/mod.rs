@@ -20,7 +20,7 @@ use crate::common::{compiler, engine, Rng};
 use mtlx::schema::{NodeDef, PortDef};
 use mtlx::DataType;
 use std::collections::BTreeMap;
-use uplift::wgpu_engine::{Geometry, PatternBatch};
+use uplift::batch::{Geometry, PatternBatch, PatternEngine};
 use uplift_compiler::ir::ValueKind;
 use uplift_compiler::node_library::NodeLibrary;
 use uplift_compiler::{OutputSelection, PatternKernel};
@@ -397,14 +397,9 @@ fn check_chunk<'a>(
         values.push(per_row);
     }
     let geometry = vec![Geometry::default(); ROWS];
-    let mut batch = PatternBatch { geometry: Vec::new(), inputs: Vec::new(), textures: vec![] };
-    for g in &geometry {
-        batch.geometry.extend_from_slice(&g.row());
-    }
-    for r in &rows {
-        batch.inputs.extend_from_slice(r);
-    }
-    let out = engine().run_pattern(k, ROWS, &batch).unwrap_or_else(|e| panic!("{e}"));
+    let flat: Vec<f32> = rows.iter().flatten().copied().collect();
+    let batch = PatternBatch::from_rows(&geometry, &flat, k.input_stride, vec![]);
+    let out = engine().run_pattern(k, &batch).unwrap_or_else(|e| panic!("{e}")).to_rows();
     let out: Vec<&[f32]> = out.chunks(k.output_stride).collect();
 
     for ((nd, spec), per_row) in chunk.iter().zip(&values) {

@@ -36,21 +36,18 @@ fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
 }
 
 @compute @workgroup_size(64, 1, 1) 
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     var geom: mx_geometry;
 
-    let i = id.x;
-    let _e4 = mx_params.x;
-    if (i >= _e4) {
+    let n = mx_params.x;
+    let i = (id.x + ((id.y * groups.x) * 64u));
+    if (i >= n) {
         return;
     }
-    let g = (i * 20u);
-    let b = (i * 1u);
-    let _e15 = mx_input_buffer[(b + 0u)];
-    let inputs_1 = MxInputs(_e15);
-    let _e17 = geom;
-    let _e18 = mx_pattern(_e17, inputs_1);
-    let o = (i * 1u);
-    mx_output_buffer[(o + 0u)] = _e18.g_out;
+    let _e19 = mx_input_buffer[((0u * n) + i)];
+    let inputs_1 = MxInputs(_e19);
+    let _e21 = geom;
+    let _e22 = mx_pattern(_e21, inputs_1);
+    mx_output_buffer[((0u * n) + i)] = _e22.g_out;
     return;
 }

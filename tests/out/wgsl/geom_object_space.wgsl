@@ -76,62 +76,60 @@ fn mx_pattern(geom_5: mx_geometry) -> MxOutputs {
 }
 
 @compute @workgroup_size(64, 1, 1) 
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     var geom: mx_geometry;
 
-    let i = id.x;
-    let _e4 = mx_params.x;
-    if (i >= _e4) {
+    let n = mx_params.x;
+    let i = (id.x + ((id.y * groups.x) * 64u));
+    if (i >= n) {
         return;
     }
-    let g = (i * 20u);
-    let _e14 = mx_geometry_buffer[(g + 0u)];
-    let _e19 = mx_geometry_buffer[(g + 1u)];
-    geom.texcoord = vec2<f32>(_e14, _e19);
-    let _e26 = mx_geometry_buffer[(g + 2u)];
-    let _e31 = mx_geometry_buffer[(g + 3u)];
-    let _e36 = mx_geometry_buffer[(g + 4u)];
-    geom.position_object = vec3<f32>(_e26, _e31, _e36);
-    let _e43 = mx_geometry_buffer[(g + 5u)];
-    let _e48 = mx_geometry_buffer[(g + 6u)];
-    let _e53 = mx_geometry_buffer[(g + 7u)];
-    geom.position_world = vec3<f32>(_e43, _e48, _e53);
-    let _e60 = mx_geometry_buffer[(g + 8u)];
-    let _e65 = mx_geometry_buffer[(g + 9u)];
-    let _e70 = mx_geometry_buffer[(g + 10u)];
-    geom.normal_object = vec3<f32>(_e60, _e65, _e70);
-    let _e77 = mx_geometry_buffer[(g + 11u)];
-    let _e82 = mx_geometry_buffer[(g + 12u)];
-    let _e87 = mx_geometry_buffer[(g + 13u)];
-    geom.normal_world = vec3<f32>(_e77, _e82, _e87);
-    let _e94 = mx_geometry_buffer[(g + 14u)];
-    let _e99 = mx_geometry_buffer[(g + 15u)];
-    let _e104 = mx_geometry_buffer[(g + 16u)];
-    geom.tangent_object = vec3<f32>(_e94, _e99, _e104);
-    let _e111 = mx_geometry_buffer[(g + 17u)];
-    let _e116 = mx_geometry_buffer[(g + 18u)];
-    let _e121 = mx_geometry_buffer[(g + 19u)];
-    geom.tangent_world = vec3<f32>(_e111, _e116, _e121);
-    let _e125 = geom.normal_object;
-    let _e127 = geom.tangent_object;
-    geom.bitangent_object = cross(_e125, _e127);
-    let _e131 = geom.normal_world;
-    let _e133 = geom.tangent_world;
-    geom.bitangent_world = cross(_e131, _e133);
-    let _e135 = geom;
-    let _e136 = mx_pattern(_e135);
-    let o = (i * 12u);
-    mx_output_buffer[(o + 0u)] = _e136.position_out.x;
-    mx_output_buffer[(o + 1u)] = _e136.position_out.y;
-    mx_output_buffer[(o + 2u)] = _e136.position_out.z;
-    mx_output_buffer[(o + 3u)] = _e136.normal_out.x;
-    mx_output_buffer[(o + 4u)] = _e136.normal_out.y;
-    mx_output_buffer[(o + 5u)] = _e136.normal_out.z;
-    mx_output_buffer[(o + 6u)] = _e136.tangent_out.x;
-    mx_output_buffer[(o + 7u)] = _e136.tangent_out.y;
-    mx_output_buffer[(o + 8u)] = _e136.tangent_out.z;
-    mx_output_buffer[(o + 9u)] = _e136.bitangent_out.x;
-    mx_output_buffer[(o + 10u)] = _e136.bitangent_out.y;
-    mx_output_buffer[(o + 11u)] = _e136.bitangent_out.z;
+    let _e20 = mx_geometry_buffer[((0u * n) + i)];
+    let _e26 = mx_geometry_buffer[((1u * n) + i)];
+    geom.texcoord = vec2<f32>(_e20, _e26);
+    let _e34 = mx_geometry_buffer[((2u * n) + i)];
+    let _e40 = mx_geometry_buffer[((3u * n) + i)];
+    let _e46 = mx_geometry_buffer[((4u * n) + i)];
+    geom.position_object = vec3<f32>(_e34, _e40, _e46);
+    let _e54 = mx_geometry_buffer[((5u * n) + i)];
+    let _e60 = mx_geometry_buffer[((6u * n) + i)];
+    let _e66 = mx_geometry_buffer[((7u * n) + i)];
+    geom.position_world = vec3<f32>(_e54, _e60, _e66);
+    let _e74 = mx_geometry_buffer[((8u * n) + i)];
+    let _e80 = mx_geometry_buffer[((9u * n) + i)];
+    let _e86 = mx_geometry_buffer[((10u * n) + i)];
+    geom.normal_object = vec3<f32>(_e74, _e80, _e86);
+    let _e94 = mx_geometry_buffer[((11u * n) + i)];
+    let _e100 = mx_geometry_buffer[((12u * n) + i)];
+    let _e106 = mx_geometry_buffer[((13u * n) + i)];
+    geom.normal_world = vec3<f32>(_e94, _e100, _e106);
+    let _e114 = mx_geometry_buffer[((14u * n) + i)];
+    let _e120 = mx_geometry_buffer[((15u * n) + i)];
+    let _e126 = mx_geometry_buffer[((16u * n) + i)];
+    geom.tangent_object = vec3<f32>(_e114, _e120, _e126);
+    let _e134 = mx_geometry_buffer[((17u * n) + i)];
+    let _e140 = mx_geometry_buffer[((18u * n) + i)];
+    let _e146 = mx_geometry_buffer[((19u * n) + i)];
+    geom.tangent_world = vec3<f32>(_e134, _e140, _e146);
+    let _e150 = geom.normal_object;
+    let _e152 = geom.tangent_object;
+    geom.bitangent_object = cross(_e150, _e152);
+    let _e156 = geom.normal_world;
+    let _e158 = geom.tangent_world;
+    geom.bitangent_world = cross(_e156, _e158);
+    let _e160 = geom;
+    let _e161 = mx_pattern(_e160);
+    mx_output_buffer[((0u * n) + i)] = _e161.position_out.x;
+    mx_output_buffer[((1u * n) + i)] = _e161.position_out.y;
+    mx_output_buffer[((2u * n) + i)] = _e161.position_out.z;
+    mx_output_buffer[((3u * n) + i)] = _e161.normal_out.x;
+    mx_output_buffer[((4u * n) + i)] = _e161.normal_out.y;
+    mx_output_buffer[((5u * n) + i)] = _e161.normal_out.z;
+    mx_output_buffer[((6u * n) + i)] = _e161.tangent_out.x;
+    mx_output_buffer[((7u * n) + i)] = _e161.tangent_out.y;
+    mx_output_buffer[((8u * n) + i)] = _e161.tangent_out.z;
+    mx_output_buffer[((9u * n) + i)] = _e161.bitangent_out.x;
+    mx_output_buffer[((10u * n) + i)] = _e161.bitangent_out.y;
+    mx_output_buffer[((11u * n) + i)] = _e161.bitangent_out.z;
     return;
 }

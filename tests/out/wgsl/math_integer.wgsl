@@ -26,19 +26,17 @@ fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
 }
 
 @compute @workgroup_size(64, 1, 1) 
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     var geom: mx_geometry;
 
-    let i = id.x;
-    let _e4 = mx_params.x;
-    if (i >= _e4) {
+    let n = mx_params.x;
+    let i = (id.x + ((id.y * groups.x) * 64u));
+    if (i >= n) {
         return;
     }
-    let g = (i * 20u);
-    let _e9 = geom;
-    let _e10 = mx_pattern(_e9);
-    let o = (i * 2u);
-    mx_output_buffer[(o + 0u)] = f32(_e10.int_out);
-    mx_output_buffer[(o + 1u)] = _e10.float_out;
+    let _e14 = geom;
+    let _e15 = mx_pattern(_e14);
+    mx_output_buffer[((0u * n) + i)] = f32(_e15.int_out);
+    mx_output_buffer[((1u * n) + i)] = _e15.float_out;
     return;
 }

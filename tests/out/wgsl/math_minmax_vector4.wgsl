@@ -28,33 +28,31 @@ fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
 }
 
 @compute @workgroup_size(64, 1, 1) 
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     var geom: mx_geometry;
 
-    let i = id.x;
-    let _e4 = mx_params.x;
-    if (i >= _e4) {
+    let n = mx_params.x;
+    let i = (id.x + ((id.y * groups.x) * 64u));
+    if (i >= n) {
         return;
     }
-    let g = (i * 20u);
-    let _e9 = geom;
-    let _e10 = mx_pattern(_e9);
-    let o = (i * 16u);
-    mx_output_buffer[(o + 0u)] = _e10.clamped.x;
-    mx_output_buffer[(o + 1u)] = _e10.clamped.y;
-    mx_output_buffer[(o + 2u)] = _e10.clamped.z;
-    mx_output_buffer[(o + 3u)] = _e10.clamped.w;
-    mx_output_buffer[(o + 4u)] = _e10.signs.x;
-    mx_output_buffer[(o + 5u)] = _e10.signs.y;
-    mx_output_buffer[(o + 6u)] = _e10.signs.z;
-    mx_output_buffer[(o + 7u)] = _e10.signs.w;
-    mx_output_buffer[(o + 8u)] = _e10.ceiled.x;
-    mx_output_buffer[(o + 9u)] = _e10.ceiled.y;
-    mx_output_buffer[(o + 10u)] = _e10.ceiled.z;
-    mx_output_buffer[(o + 11u)] = _e10.ceiled.w;
-    mx_output_buffer[(o + 12u)] = _e10.rounded.x;
-    mx_output_buffer[(o + 13u)] = _e10.rounded.y;
-    mx_output_buffer[(o + 14u)] = _e10.rounded.z;
-    mx_output_buffer[(o + 15u)] = _e10.rounded.w;
+    let _e14 = geom;
+    let _e15 = mx_pattern(_e14);
+    mx_output_buffer[((0u * n) + i)] = _e15.clamped.x;
+    mx_output_buffer[((1u * n) + i)] = _e15.clamped.y;
+    mx_output_buffer[((2u * n) + i)] = _e15.clamped.z;
+    mx_output_buffer[((3u * n) + i)] = _e15.clamped.w;
+    mx_output_buffer[((4u * n) + i)] = _e15.signs.x;
+    mx_output_buffer[((5u * n) + i)] = _e15.signs.y;
+    mx_output_buffer[((6u * n) + i)] = _e15.signs.z;
+    mx_output_buffer[((7u * n) + i)] = _e15.signs.w;
+    mx_output_buffer[((8u * n) + i)] = _e15.ceiled.x;
+    mx_output_buffer[((9u * n) + i)] = _e15.ceiled.y;
+    mx_output_buffer[((10u * n) + i)] = _e15.ceiled.z;
+    mx_output_buffer[((11u * n) + i)] = _e15.ceiled.w;
+    mx_output_buffer[((12u * n) + i)] = _e15.rounded.x;
+    mx_output_buffer[((13u * n) + i)] = _e15.rounded.y;
+    mx_output_buffer[((14u * n) + i)] = _e15.rounded.z;
+    mx_output_buffer[((15u * n) + i)] = _e15.rounded.w;
     return;
 }

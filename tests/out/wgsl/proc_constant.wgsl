@@ -35,49 +35,47 @@ fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
 }
 
 @compute @workgroup_size(64, 1, 1) 
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     var geom: mx_geometry;
 
-    let i = id.x;
-    let _e4 = mx_params.x;
-    if (i >= _e4) {
+    let n = mx_params.x;
+    let i = (id.x + ((id.y * groups.x) * 64u));
+    if (i >= n) {
         return;
     }
-    let g = (i * 20u);
-    let _e9 = geom;
-    let _e10 = mx_pattern(_e9);
-    let o = (i * 32u);
-    mx_output_buffer[(o + 0u)] = _e10.o_float;
-    mx_output_buffer[(o + 1u)] = f32(_e10.o_int);
-    mx_output_buffer[(o + 2u)] = select(0f, 1f, _e10.o_bool);
-    mx_output_buffer[(o + 3u)] = _e10.o_v2_.x;
-    mx_output_buffer[(o + 4u)] = _e10.o_v2_.y;
-    mx_output_buffer[(o + 5u)] = _e10.o_v3_.x;
-    mx_output_buffer[(o + 6u)] = _e10.o_v3_.y;
-    mx_output_buffer[(o + 7u)] = _e10.o_v3_.z;
-    mx_output_buffer[(o + 8u)] = _e10.o_v4_.x;
-    mx_output_buffer[(o + 9u)] = _e10.o_v4_.y;
-    mx_output_buffer[(o + 10u)] = _e10.o_v4_.z;
-    mx_output_buffer[(o + 11u)] = _e10.o_v4_.w;
-    mx_output_buffer[(o + 12u)] = _e10.o_c3_.x;
-    mx_output_buffer[(o + 13u)] = _e10.o_c3_.y;
-    mx_output_buffer[(o + 14u)] = _e10.o_c3_.z;
-    mx_output_buffer[(o + 15u)] = _e10.o_c4_.x;
-    mx_output_buffer[(o + 16u)] = _e10.o_c4_.y;
-    mx_output_buffer[(o + 17u)] = _e10.o_c4_.z;
-    mx_output_buffer[(o + 18u)] = _e10.o_c4_.w;
-    mx_output_buffer[(o + 19u)] = _e10.o_m33_[0].x;
-    mx_output_buffer[(o + 20u)] = _e10.o_m33_[0].y;
-    mx_output_buffer[(o + 21u)] = _e10.o_m33_[0].z;
-    mx_output_buffer[(o + 22u)] = _e10.o_m33_[1].x;
-    mx_output_buffer[(o + 23u)] = _e10.o_m33_[1].y;
-    mx_output_buffer[(o + 24u)] = _e10.o_m33_[1].z;
-    mx_output_buffer[(o + 25u)] = _e10.o_m33_[2].x;
-    mx_output_buffer[(o + 26u)] = _e10.o_m33_[2].y;
-    mx_output_buffer[(o + 27u)] = _e10.o_m33_[2].z;
-    mx_output_buffer[(o + 28u)] = _e10.o_default.x;
-    mx_output_buffer[(o + 29u)] = _e10.o_default.y;
-    mx_output_buffer[(o + 30u)] = _e10.o_default.z;
-    mx_output_buffer[(o + 31u)] = _e10.o_value;
+    let _e14 = geom;
+    let _e15 = mx_pattern(_e14);
+    mx_output_buffer[((0u * n) + i)] = _e15.o_float;
+    mx_output_buffer[((1u * n) + i)] = f32(_e15.o_int);
+    mx_output_buffer[((2u * n) + i)] = select(0f, 1f, _e15.o_bool);
+    mx_output_buffer[((3u * n) + i)] = _e15.o_v2_.x;
+    mx_output_buffer[((4u * n) + i)] = _e15.o_v2_.y;
+    mx_output_buffer[((5u * n) + i)] = _e15.o_v3_.x;
+    mx_output_buffer[((6u * n) + i)] = _e15.o_v3_.y;
+    mx_output_buffer[((7u * n) + i)] = _e15.o_v3_.z;
+    mx_output_buffer[((8u * n) + i)] = _e15.o_v4_.x;
+    mx_output_buffer[((9u * n) + i)] = _e15.o_v4_.y;
+    mx_output_buffer[((10u * n) + i)] = _e15.o_v4_.z;
+    mx_output_buffer[((11u * n) + i)] = _e15.o_v4_.w;
+    mx_output_buffer[((12u * n) + i)] = _e15.o_c3_.x;
+    mx_output_buffer[((13u * n) + i)] = _e15.o_c3_.y;
+    mx_output_buffer[((14u * n) + i)] = _e15.o_c3_.z;
+    mx_output_buffer[((15u * n) + i)] = _e15.o_c4_.x;
+    mx_output_buffer[((16u * n) + i)] = _e15.o_c4_.y;
+    mx_output_buffer[((17u * n) + i)] = _e15.o_c4_.z;
+    mx_output_buffer[((18u * n) + i)] = _e15.o_c4_.w;
+    mx_output_buffer[((19u * n) + i)] = _e15.o_m33_[0].x;
+    mx_output_buffer[((20u * n) + i)] = _e15.o_m33_[0].y;
+    mx_output_buffer[((21u * n) + i)] = _e15.o_m33_[0].z;
+    mx_output_buffer[((22u * n) + i)] = _e15.o_m33_[1].x;
+    mx_output_buffer[((23u * n) + i)] = _e15.o_m33_[1].y;
+    mx_output_buffer[((24u * n) + i)] = _e15.o_m33_[1].z;
+    mx_output_buffer[((25u * n) + i)] = _e15.o_m33_[2].x;
+    mx_output_buffer[((26u * n) + i)] = _e15.o_m33_[2].y;
+    mx_output_buffer[((27u * n) + i)] = _e15.o_m33_[2].z;
+    mx_output_buffer[((28u * n) + i)] = _e15.o_default.x;
+    mx_output_buffer[((29u * n) + i)] = _e15.o_default.y;
+    mx_output_buffer[((30u * n) + i)] = _e15.o_default.z;
+    mx_output_buffer[((31u * n) + i)] = _e15.o_value;
     return;
 }

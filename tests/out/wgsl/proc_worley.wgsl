@@ -533,30 +533,28 @@ fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
 }
 
 @compute @workgroup_size(64, 1, 1) 
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     var geom: mx_geometry;
 
-    let i = id.x;
-    let _e4 = mx_params.x;
-    if (i >= _e4) {
+    let n = mx_params.x;
+    let i = (id.x + ((id.y * groups.x) * 64u));
+    if (i >= n) {
         return;
     }
-    let g = (i * 20u);
-    let _e14 = mx_geometry_buffer[(g + 0u)];
-    let _e19 = mx_geometry_buffer[(g + 1u)];
-    geom.texcoord = vec2<f32>(_e14, _e19);
-    let _e26 = mx_geometry_buffer[(g + 2u)];
-    let _e31 = mx_geometry_buffer[(g + 3u)];
-    let _e36 = mx_geometry_buffer[(g + 4u)];
-    geom.position_object = vec3<f32>(_e26, _e31, _e36);
-    let _e38 = geom;
-    let _e39 = mx_pattern(_e38);
-    let o = (i * 6u);
-    mx_output_buffer[(o + 0u)] = _e39.w2_out.x;
-    mx_output_buffer[(o + 1u)] = _e39.w2_out.y;
-    mx_output_buffer[(o + 2u)] = _e39.w3_out;
-    mx_output_buffer[(o + 3u)] = _e39.w3v_out.x;
-    mx_output_buffer[(o + 4u)] = _e39.w3v_out.y;
-    mx_output_buffer[(o + 5u)] = _e39.w3v_out.z;
+    let _e20 = mx_geometry_buffer[((0u * n) + i)];
+    let _e26 = mx_geometry_buffer[((1u * n) + i)];
+    geom.texcoord = vec2<f32>(_e20, _e26);
+    let _e34 = mx_geometry_buffer[((2u * n) + i)];
+    let _e40 = mx_geometry_buffer[((3u * n) + i)];
+    let _e46 = mx_geometry_buffer[((4u * n) + i)];
+    geom.position_object = vec3<f32>(_e34, _e40, _e46);
+    let _e48 = geom;
+    let _e49 = mx_pattern(_e48);
+    mx_output_buffer[((0u * n) + i)] = _e49.w2_out.x;
+    mx_output_buffer[((1u * n) + i)] = _e49.w2_out.y;
+    mx_output_buffer[((2u * n) + i)] = _e49.w3_out;
+    mx_output_buffer[((3u * n) + i)] = _e49.w3v_out.x;
+    mx_output_buffer[((4u * n) + i)] = _e49.w3v_out.y;
+    mx_output_buffer[((5u * n) + i)] = _e49.w3v_out.z;
     return;
 }

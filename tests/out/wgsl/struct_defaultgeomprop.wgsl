@@ -53,38 +53,36 @@ fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
 }
 
 @compute @workgroup_size(64, 1, 1) 
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     var geom: mx_geometry;
 
-    let i = id.x;
-    let _e4 = mx_params.x;
-    if (i >= _e4) {
+    let n = mx_params.x;
+    let i = (id.x + ((id.y * groups.x) * 64u));
+    if (i >= n) {
         return;
     }
-    let g = (i * 20u);
-    let _e14 = mx_geometry_buffer[(g + 0u)];
-    let _e19 = mx_geometry_buffer[(g + 1u)];
-    geom.texcoord = vec2<f32>(_e14, _e19);
-    let _e26 = mx_geometry_buffer[(g + 5u)];
-    let _e31 = mx_geometry_buffer[(g + 6u)];
-    let _e36 = mx_geometry_buffer[(g + 7u)];
-    geom.position_world = vec3<f32>(_e26, _e31, _e36);
-    let _e43 = mx_geometry_buffer[(g + 11u)];
-    let _e48 = mx_geometry_buffer[(g + 12u)];
-    let _e53 = mx_geometry_buffer[(g + 13u)];
-    geom.normal_world = vec3<f32>(_e43, _e48, _e53);
-    let _e60 = mx_geometry_buffer[(g + 17u)];
-    let _e65 = mx_geometry_buffer[(g + 18u)];
-    let _e70 = mx_geometry_buffer[(g + 19u)];
-    geom.tangent_world = vec3<f32>(_e60, _e65, _e70);
-    let _e72 = geom;
-    let _e73 = mx_pattern(_e72);
-    let o = (i * 6u);
-    mx_output_buffer[(o + 0u)] = _e73.default_frame.x;
-    mx_output_buffer[(o + 1u)] = _e73.default_frame.y;
-    mx_output_buffer[(o + 2u)] = _e73.default_frame.z;
-    mx_output_buffer[(o + 3u)] = _e73.override_frame.x;
-    mx_output_buffer[(o + 4u)] = _e73.override_frame.y;
-    mx_output_buffer[(o + 5u)] = _e73.override_frame.z;
+    let _e20 = mx_geometry_buffer[((0u * n) + i)];
+    let _e26 = mx_geometry_buffer[((1u * n) + i)];
+    geom.texcoord = vec2<f32>(_e20, _e26);
+    let _e34 = mx_geometry_buffer[((5u * n) + i)];
+    let _e40 = mx_geometry_buffer[((6u * n) + i)];
+    let _e46 = mx_geometry_buffer[((7u * n) + i)];
+    geom.position_world = vec3<f32>(_e34, _e40, _e46);
+    let _e54 = mx_geometry_buffer[((11u * n) + i)];
+    let _e60 = mx_geometry_buffer[((12u * n) + i)];
+    let _e66 = mx_geometry_buffer[((13u * n) + i)];
+    geom.normal_world = vec3<f32>(_e54, _e60, _e66);
+    let _e74 = mx_geometry_buffer[((17u * n) + i)];
+    let _e80 = mx_geometry_buffer[((18u * n) + i)];
+    let _e86 = mx_geometry_buffer[((19u * n) + i)];
+    geom.tangent_world = vec3<f32>(_e74, _e80, _e86);
+    let _e88 = geom;
+    let _e89 = mx_pattern(_e88);
+    mx_output_buffer[((0u * n) + i)] = _e89.default_frame.x;
+    mx_output_buffer[((1u * n) + i)] = _e89.default_frame.y;
+    mx_output_buffer[((2u * n) + i)] = _e89.default_frame.z;
+    mx_output_buffer[((3u * n) + i)] = _e89.override_frame.x;
+    mx_output_buffer[((4u * n) + i)] = _e89.override_frame.y;
+    mx_output_buffer[((5u * n) + i)] = _e89.override_frame.z;
     return;
 }

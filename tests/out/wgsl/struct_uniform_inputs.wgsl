@@ -51,23 +51,20 @@ fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
 }
 
 @compute @workgroup_size(64, 1, 1) 
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     var geom: mx_geometry;
 
-    let i = id.x;
-    let _e4 = mx_params.x;
-    if (i >= _e4) {
+    let n = mx_params.x;
+    let i = (id.x + ((id.y * groups.x) * 64u));
+    if (i >= n) {
         return;
     }
-    let g = (i * 20u);
-    let b = (i * 2u);
-    let _e15 = mx_input_buffer[(b + 0u)];
-    let _e20 = mx_input_buffer[(b + 1u)];
-    let inputs_1 = MxInputs(_e15, _e20);
-    let _e22 = geom;
-    let _e23 = mx_pattern(_e22, inputs_1);
-    let o = (i * 2u);
-    mx_output_buffer[(o + 0u)] = _e23.posterize_out;
-    mx_output_buffer[(o + 1u)] = _e23.posterize_out_default;
+    let _e19 = mx_input_buffer[((0u * n) + i)];
+    let _e25 = mx_input_buffer[((1u * n) + i)];
+    let inputs_1 = MxInputs(_e19, _e25);
+    let _e27 = geom;
+    let _e28 = mx_pattern(_e27, inputs_1);
+    mx_output_buffer[((0u * n) + i)] = _e28.posterize_out;
+    mx_output_buffer[((1u * n) + i)] = _e28.posterize_out_default;
     return;
 }

@@ -143,24 +143,22 @@ fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
 }
 
 @compute @workgroup_size(64, 1, 1) 
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     var geom: mx_geometry;
 
-    let i_2 = id.x;
-    let _e4 = mx_params.x;
-    if (i_2 >= _e4) {
+    let n_1 = mx_params.x;
+    let i_2 = (id.x + ((id.y * groups.x) * 64u));
+    if (i_2 >= n_1) {
         return;
     }
-    let g = (i_2 * 20u);
-    let _e14 = mx_geometry_buffer[(g + 0u)];
-    let _e19 = mx_geometry_buffer[(g + 1u)];
-    geom.texcoord = vec2<f32>(_e14, _e19);
-    let _e21 = geom;
-    let _e22 = mx_pattern(_e21);
-    let o = (i_2 * 4u);
-    mx_output_buffer[(o + 0u)] = _e22.color.x;
-    mx_output_buffer[(o + 1u)] = _e22.color.y;
-    mx_output_buffer[(o + 2u)] = _e22.color.z;
-    mx_output_buffer[(o + 3u)] = _e22.alpha;
+    let _e20 = mx_geometry_buffer[((0u * n_1) + i_2)];
+    let _e26 = mx_geometry_buffer[((1u * n_1) + i_2)];
+    geom.texcoord = vec2<f32>(_e20, _e26);
+    let _e28 = geom;
+    let _e29 = mx_pattern(_e28);
+    mx_output_buffer[((0u * n_1) + i_2)] = _e29.color.x;
+    mx_output_buffer[((1u * n_1) + i_2)] = _e29.color.y;
+    mx_output_buffer[((2u * n_1) + i_2)] = _e29.color.z;
+    mx_output_buffer[((3u * n_1) + i_2)] = _e29.alpha;
     return;
 }

@@ -26,21 +26,19 @@ fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
 }
 
 @compute @workgroup_size(64, 1, 1) 
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     var geom: mx_geometry;
 
-    let i = id.x;
-    let _e4 = mx_params.x;
-    if (i >= _e4) {
+    let n = mx_params.x;
+    let i = (id.x + ((id.y * groups.x) * 64u));
+    if (i >= n) {
         return;
     }
-    let g = (i * 20u);
-    let _e9 = geom;
-    let _e10 = mx_pattern(_e9);
-    let o = (i * 4u);
-    mx_output_buffer[(o + 0u)] = _e10.color.x;
-    mx_output_buffer[(o + 1u)] = _e10.color.y;
-    mx_output_buffer[(o + 2u)] = _e10.color.z;
-    mx_output_buffer[(o + 3u)] = _e10.empty;
+    let _e14 = geom;
+    let _e15 = mx_pattern(_e14);
+    mx_output_buffer[((0u * n) + i)] = _e15.color.x;
+    mx_output_buffer[((1u * n) + i)] = _e15.color.y;
+    mx_output_buffer[((2u * n) + i)] = _e15.color.z;
+    mx_output_buffer[((3u * n) + i)] = _e15.empty;
     return;
 }

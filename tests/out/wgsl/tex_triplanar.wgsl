@@ -219,28 +219,26 @@ fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
 }
 
 @compute @workgroup_size(64, 1, 1) 
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     var geom: mx_geometry;
 
-    let i_2 = id.x;
-    let _e4 = mx_params.x;
-    if (i_2 >= _e4) {
+    let n_1 = mx_params.x;
+    let i_2 = (id.x + ((id.y * groups.x) * 64u));
+    if (i_2 >= n_1) {
         return;
     }
-    let g = (i_2 * 20u);
-    let _e14 = mx_geometry_buffer[(g + 2u)];
-    let _e19 = mx_geometry_buffer[(g + 3u)];
-    let _e24 = mx_geometry_buffer[(g + 4u)];
-    geom.position_object = vec3<f32>(_e14, _e19, _e24);
-    let _e31 = mx_geometry_buffer[(g + 8u)];
-    let _e36 = mx_geometry_buffer[(g + 9u)];
-    let _e41 = mx_geometry_buffer[(g + 10u)];
-    geom.normal_object = vec3<f32>(_e31, _e36, _e41);
-    let _e43 = geom;
-    let _e44 = mx_pattern(_e43);
-    let o = (i_2 * 3u);
-    mx_output_buffer[(o + 0u)] = _e44.out.x;
-    mx_output_buffer[(o + 1u)] = _e44.out.y;
-    mx_output_buffer[(o + 2u)] = _e44.out.z;
+    let _e20 = mx_geometry_buffer[((2u * n_1) + i_2)];
+    let _e26 = mx_geometry_buffer[((3u * n_1) + i_2)];
+    let _e32 = mx_geometry_buffer[((4u * n_1) + i_2)];
+    geom.position_object = vec3<f32>(_e20, _e26, _e32);
+    let _e40 = mx_geometry_buffer[((8u * n_1) + i_2)];
+    let _e46 = mx_geometry_buffer[((9u * n_1) + i_2)];
+    let _e52 = mx_geometry_buffer[((10u * n_1) + i_2)];
+    geom.normal_object = vec3<f32>(_e40, _e46, _e52);
+    let _e54 = geom;
+    let _e55 = mx_pattern(_e54);
+    mx_output_buffer[((0u * n_1) + i_2)] = _e55.out.x;
+    mx_output_buffer[((1u * n_1) + i_2)] = _e55.out.y;
+    mx_output_buffer[((2u * n_1) + i_2)] = _e55.out.z;
     return;
 }

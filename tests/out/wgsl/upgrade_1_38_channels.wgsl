@@ -25,20 +25,18 @@ fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
 }
 
 @compute @workgroup_size(64, 1, 1) 
-fn mx_main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn mx_main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     var geom: mx_geometry;
 
-    let i = id.x;
-    let _e4 = mx_params.x;
-    if (i >= _e4) {
+    let n = mx_params.x;
+    let i = (id.x + ((id.y * groups.x) * 64u));
+    if (i >= n) {
         return;
     }
-    let g = (i * 20u);
-    let _e9 = geom;
-    let _e10 = mx_pattern(_e9);
-    let o = (i * 3u);
-    mx_output_buffer[(o + 0u)] = _e10.out.x;
-    mx_output_buffer[(o + 1u)] = _e10.out.y;
-    mx_output_buffer[(o + 2u)] = _e10.out.z;
+    let _e14 = geom;
+    let _e15 = mx_pattern(_e14);
+    mx_output_buffer[((0u * n) + i)] = _e15.out.x;
+    mx_output_buffer[((1u * n) + i)] = _e15.out.y;
+    mx_output_buffer[((2u * n) + i)] = _e15.out.z;
     return;
 }

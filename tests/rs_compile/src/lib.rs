@@ -2,7 +2,8 @@
 //! as a module of this crate, so the generated Rust is checked by rustc and not only as text.
 //! `build.rs` lists the snapshots; the tests in `tests/` run some kernels against closed forms.
 
-/// A kernel of the table: its strides and its batch entry point.
+/// A kernel of the table: its column counts and its batch entry point, on row-major buffers
+/// (the tests' layout; [`with_rows`] turns them into the kernel's columns and back).
 pub struct Kernel {
     pub name: &'static str,
     pub input_stride: usize,
@@ -60,6 +61,43 @@ impl Checker {
         }
         glam::Vec4::new(x as f32, y as f32, texture as f32, 1.0)
     }
+}
+
+/// Runs `f`, a batch over structure-of-arrays columns (a generated `mx_pattern_batch`), on
+/// row-major buffers: `geom` rows of `geometry_columns` floats, `inputs` rows of
+/// `input_columns`, `outputs` rows of `output_columns` (the number of points is
+/// `outputs.len() / output_columns`).
+pub fn with_rows(
+    geom: &[f32],
+    inputs: &[f32],
+    outputs: &mut [f32],
+    (geometry_columns, input_columns, output_columns): (usize, usize, usize),
+    f: impl FnOnce(&[&[f32]], &[&[f32]], &mut [&mut [f32]]),
+) {
+    let n = outputs.len() / output_columns;
+    let columns = |rows: &[f32], width: usize| -> Vec<Vec<f32>> { (0..width).map(|c| (0..n).map(|i| rows[i * width + c]).collect()).collect() };
+    let g = columns(geom, geometry_columns);
+    let x = columns(inputs, input_columns);
+    let mut o = vec![vec![0.0f32; n]; output_columns];
+    {
+        let g: Vec<&[f32]> = g.iter().map(|c| c.as_slice()).collect();
+        let x: Vec<&[f32]> = x.iter().map(|c| c.as_slice()).collect();
+        let mut o: Vec<&mut [f32]> = o.iter_mut().map(|c| c.as_mut_slice()).collect();
+        f(&g, &x, &mut o);
+    }
+    for (c, column) in o.iter().enumerate() {
+        for (i, v) in column.iter().enumerate() {
+            outputs[i * output_columns + c] = *v;
+        }
+    }
+}
+
+/// `$k::mx_pattern_batch` on row-major buffers (see [`with_rows`]).
+#[macro_export]
+macro_rules! batch_rows {
+    ($k:ident, $geom:expr, $inputs:expr, $out:expr, $tex:expr) => {
+        $crate::with_rows($geom, $inputs, $out, ($k::GEOMETRY_COLUMNS, $k::INPUT_COLUMNS, $k::OUTPUT_COLUMNS), |g, x, o| $k::mx_pattern_batch(g, x, o, $tex))
+    };
 }
 
 // The generated code is meant to compile without rustc warnings (it allows the naming lints itself

@@ -8,7 +8,8 @@
 use glam::{UVec2, Vec4};
 use mtlx::DataType;
 use std::path::Path;
-use uplift::wgpu_engine::{Geometry, PatternBatch, TextureData, WgpuEngine};
+use uplift::batch::{Columns, Geometry, PatternBatch, PatternEngine, TextureData};
+use uplift::wgpu_engine::WgpuEngine;
 use uplift_compiler::{Compiler, OutputSelection};
 use uplift_rs_snapshots::{Rng, Textures, KERNELS};
 
@@ -146,8 +147,8 @@ fn every_snapshot_kernel_agrees_on_cpu_and_wgpu() {
 
         let mut cpu = vec![0.0f32; POINTS * k.output_stride];
         (k.batch_with)(&geom, &inputs, &mut cpu, &TextureSet(textures.clone()));
-        let batch = PatternBatch { geometry: geom.clone(), inputs: inputs.clone(), textures };
-        let gpu = engine.run_pattern(&kernel, POINTS, &batch).unwrap_or_else(|e| panic!("{}: {e}", k.name));
+        let batch = PatternBatch { geometry: Columns::from_rows(&geom, uplift_compiler::kernel::GEOMETRY_STRIDE), inputs: Columns::from_rows(&inputs, kernel.input_stride), textures };
+        let gpu = engine.run_pattern(&kernel, &batch).unwrap_or_else(|e| panic!("{}: {e}", k.name)).to_rows();
         assert_eq!(gpu.len(), cpu.len(), "{}: output length", k.name);
 
         let abs_floor = ABS_FLOOR.iter().find(|(n, _)| *n == k.name).map_or(ABS_TOL, |a| a.1);

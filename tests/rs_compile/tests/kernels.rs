@@ -10,7 +10,7 @@ fn geometry_row(uv: Vec2, p: Vec3, n: Vec3, t: Vec3) -> Vec<f32> {
     for v in [p, p, n, n, t, t] {
         row.extend([v.x, v.y, v.z]);
     }
-    assert_eq!(row.len(), uplift_rs_snapshots::math_float_ops::GEOMETRY_STRIDE);
+    assert_eq!(row.len(), uplift_rs_snapshots::math_float_ops::GEOMETRY_COLUMNS);
     row
 }
 
@@ -33,8 +33,8 @@ fn math_float_ops_matches_its_closed_form() {
     use uplift_rs_snapshots::math_float_ops as k;
     let us: Vec<f32> = (0..200).map(|i| -1.3 + i as f32 * 0.0173).collect();
     let geom: Vec<f32> = us.iter().flat_map(|&u| geometry_row(Vec2::new(u, 0.5), Vec3::ZERO, Vec3::Z, Vec3::X)).collect();
-    let mut out = vec![0.0; us.len() * k::OUTPUT_STRIDE];
-    k::mx_pattern_batch(&geom, &[], &mut out, &Checker { present: 0 });
+    let mut out = vec![0.0; us.len() * k::OUTPUT_COLUMNS];
+    uplift_rs_snapshots::batch_rows!(k, &geom, &[], &mut out, &Checker { present: 0 });
     for (i, &u) in us.iter().enumerate() {
         let m = (u + 0.25 - 0.125) * 3.0;
         let d = m / 2.0;
@@ -52,8 +52,8 @@ fn math_vector_ops_matches_glam() {
     // The geometry nodes normalize their vectors: use unit vectors.
     let rows: Vec<(Vec3, Vec3)> = (0..100).map(|_| (rng.vec3().normalize(), rng.vec3().normalize())).collect();
     let geom: Vec<f32> = rows.iter().flat_map(|&(n, t)| geometry_row(Vec2::ZERO, Vec3::ONE, n, t)).collect();
-    let mut out = vec![0.0; rows.len() * k::OUTPUT_STRIDE];
-    k::mx_pattern_batch(&geom, &[], &mut out, &Checker { present: 0 });
+    let mut out = vec![0.0; rows.len() * k::OUTPUT_COLUMNS];
+    uplift_rs_snapshots::batch_rows!(k, &geom, &[], &mut out, &Checker { present: 0 });
     assert_eq!(k::OUTPUTS, &[("ndotl_out", 0, 1), ("len_out", 1, 1), ("dist_out", 2, 1)]);
     for (i, &(n, t)) in rows.iter().enumerate() {
         let nn = n / n.length();
@@ -68,8 +68,8 @@ fn math_vector_ops_matches_glam() {
 fn math_integer_is_constant() {
     use uplift_rs_snapshots::math_integer as k;
     let geom = geometry_row(Vec2::ZERO, Vec3::ZERO, Vec3::Z, Vec3::X).repeat(3);
-    let mut out = vec![0.0; 3 * k::OUTPUT_STRIDE];
-    k::mx_pattern_batch(&geom, &[], &mut out, &Checker { present: 0 });
+    let mut out = vec![0.0; 3 * k::OUTPUT_COLUMNS];
+    uplift_rs_snapshots::batch_rows!(k, &geom, &[], &mut out, &Checker { present: 0 });
     assert_eq!(out, [-11.0, -11.0].repeat(3));
 }
 
@@ -80,8 +80,8 @@ fn struct_uniform_inputs_reads_its_input_rows() {
     let rows = [(3.0f32, 0.6f32), (5.0, 0.33), (2.0, 0.99), (4.0, -0.3)];
     let inputs: Vec<f32> = rows.iter().flat_map(|&(l, v)| [l, v]).collect();
     let geom = geometry_row(Vec2::ZERO, Vec3::ZERO, Vec3::Z, Vec3::X).repeat(rows.len());
-    let mut out = vec![0.0; rows.len() * k::OUTPUT_STRIDE];
-    k::mx_pattern_batch(&geom, &inputs, &mut out, &Checker { present: 0 });
+    let mut out = vec![0.0; rows.len() * k::OUTPUT_COLUMNS];
+    uplift_rs_snapshots::batch_rows!(k, &geom, &inputs, &mut out, &Checker { present: 0 });
     for (i, &(levels, value)) in rows.iter().enumerate() {
         assert_eq!(out[2 * i], (value * levels).floor() / levels);
         assert_eq!(out[2 * i + 1], (value * 4.0).floor() / 4.0);
@@ -94,8 +94,8 @@ fn tex_image_addresses_and_filters_through_the_texture_trait() {
     assert_eq!(k::TEXTURE_COUNT, 2);
     let uvs = [Vec2::new(0.3, 0.2), Vec2::new(1.5, -0.3), Vec2::new(0.5, 0.5)];
     let geom: Vec<f32> = uvs.iter().flat_map(|&uv| geometry_row(uv, Vec3::ZERO, Vec3::Z, Vec3::X)).collect();
-    let mut out = vec![0.0; uvs.len() * k::OUTPUT_STRIDE];
-    k::mx_pattern_batch(&geom, &[], &mut out, &Checker { present: 2 });
+    let mut out = vec![0.0; uvs.len() * k::OUTPUT_COLUMNS];
+    uplift_rs_snapshots::batch_rows!(k, &geom, &[], &mut out, &Checker { present: 2 });
     // Texture 0 (4 × 2): color3, u clamped, v mirrored, closest texel; texel (x, y) = (x, y, 0).
     // (0.3, 0.2) → st (1.2, 1.6) → texel (1, 1).
     assert_eq!(&out[0..3], &[1.0, 1.0, 0.0]);
@@ -105,7 +105,7 @@ fn tex_image_addresses_and_filters_through_the_texture_trait() {
     // and 3 with weight 0 on x = 3 → 2.
     assert_eq!(out[11], 2.0);
     // Missing textures give the defaults: color (1, 0, 1), alpha 0.
-    k::mx_pattern_batch(&geom, &[], &mut out, &Checker { present: 0 });
+    uplift_rs_snapshots::batch_rows!(k, &geom, &[], &mut out, &Checker { present: 0 });
     assert_eq!(&out[0..4], &[1.0, 0.0, 1.0, 0.0]);
 }
 
@@ -132,9 +132,25 @@ fn every_snapshot_kernel_runs_and_writes_every_output() {
 }
 
 #[test]
-#[should_panic(expected = "geom holds fewer rows")]
-fn short_geometry_is_an_error() {
+#[should_panic(expected = "mx_pattern_batch: columns of different lengths")]
+fn short_geometry_column_is_an_error() {
     use uplift_rs_snapshots::math_float_ops as k;
-    let mut out = vec![0.0; 2 * k::OUTPUT_STRIDE];
-    k::mx_pattern_batch(&[0.0; 20], &[], &mut out, &Checker { present: 0 });
+    let long = [0.0f32; 2];
+    let mut geom: Vec<&[f32]> = vec![&long; k::GEOMETRY_COLUMNS];
+    geom[7] = &long[..1];
+    let (mut a, mut b) = ([0.0f32; 2], [0.0f32; 2]);
+    let mut out: Vec<&mut [f32]> = vec![&mut a, &mut b];
+    assert_eq!(out.len(), k::OUTPUT_COLUMNS);
+    k::mx_pattern_batch(&geom, &[], &mut out, &Checker { present: 0 });
+}
+
+#[test]
+#[should_panic(expected = "mx_pattern_batch: expected 20 geometry, 0 input and 2 output columns")]
+fn wrong_column_count_is_an_error() {
+    use uplift_rs_snapshots::math_float_ops as k;
+    let long = [0.0f32; 2];
+    let geom: Vec<&[f32]> = vec![&long; 3];
+    let (mut a, mut b) = ([0.0f32; 2], [0.0f32; 2]);
+    let mut out: Vec<&mut [f32]> = vec![&mut a, &mut b];
+    k::mx_pattern_batch(&geom, &[], &mut out, &Checker { present: 0 });
 }

@@ -81,7 +81,7 @@ fn generated_rust_matches_naga_rust_back() {
     let mut failures = Vec::new();
     for (ki, &(name, oracle_row)) in oracle::ORACLES.iter().enumerate() {
         let k = KERNELS.iter().find(|k| k.name == name).unwrap_or_else(|| panic!("{name}: no snapshot kernel"));
-        let gs = uplift_rs_snapshots::math_float_ops::GEOMETRY_STRIDE;
+        let gs = uplift_rs_snapshots::math_float_ops::GEOMETRY_COLUMNS;
         let mut rng = Rng(0x0dac_1e00_5eed_0000 ^ ki as u64);
         let mut geom = Vec::with_capacity(POINTS * gs);
         for _ in 0..POINTS {

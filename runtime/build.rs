@@ -1,0 +1,68 @@
+//! Builds the CPU kernels the runtime ships: every graph in `runtime/graphs/` and
+//! `examples/marble.mtlx`, compiled by `uplift_compiler::build_api` into `OUT_DIR`, and
+//! `builtin_kernels.rs`, the table `cpu_engine::builtin` includes (each kernel's fingerprint,
+//! shape and dispatching batch function). Adding a node to `mtlx/libraries/` and rebuilding is
+//! all a shipped graph needs. Also records, from the workspace's Cargo.lock, the exact versions
+//! of the crates the CPU engine's external kernel runners depend on.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+fn main() {
+    let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
+    let out_dir = PathBuf::from(std::env::var("OUT_DIR").unwrap());
+    let graphs_dir = manifest.join("graphs");
+    println!("cargo:rerun-if-changed={}", graphs_dir.display());
+    let mut graphs: Vec<PathBuf> = std::fs::read_dir(&graphs_dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", graphs_dir.display()))
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "mtlx"))
+        .collect();
+    graphs.sort();
+    graphs.push(manifest.join("../examples/marble.mtlx"));
+    let mut builder = uplift_compiler::build_api::Builder::new();
+    for g in &graphs {
+        builder = builder.graph(g);
+    }
+    let files = builder.compile(&out_dir).unwrap_or_else(|e| panic!("compiling the runtime's graphs:\n{e}"));
+
+    let mut table = String::from("// Written by runtime/build.rs: the CPU kernels the runtime ships.\n\n");
+    let mut entries = String::new();
+    for (graph, file) in graphs.iter().zip(&files) {
+        let stem = file.file_stem().unwrap().to_string_lossy().to_string();
+        let text = std::fs::read_to_string(file).unwrap();
+        let fingerprint = uplift_compiler::build_api::kernel_fingerprint(&text);
+        let _ = writeln!(
+            table,
+            "#[allow(clippy::all, dead_code, unused_imports)]\npub mod {stem} {{\n    include!({:?});\n}}\n",
+            file.display().to_string()
+        );
+        let _ = writeln!(
+            entries,
+            "    BuiltinKernel {{ name: {stem:?}, source: {:?}, fingerprint: {fingerprint:#x}, input_columns: {stem}::INPUT_COLUMNS, output_columns: {stem}::OUTPUT_COLUMNS, texture_count: {stem}::TEXTURE_COUNT, batch: cpu_batch_fn!({stem}) }},",
+            relative(graph, &manifest)
+        );
+    }
+    let _ = writeln!(table, "/// Every shipped kernel.\npub static BUILTIN_KERNELS: &[BuiltinKernel] = &[\n{entries}];");
+    std::fs::write(out_dir.join("builtin_kernels.rs"), table).unwrap();
+
+    let lock = manifest.join("../Cargo.lock");
+    println!("cargo:rerun-if-changed={}", lock.display());
+    let lock = std::fs::read_to_string(&lock).unwrap_or_default();
+    for (krate, fallback) in [("glam", "=0.30.10"), ("rayon", "1"), ("multiversion", "0.8")] {
+        let version = locked_version(&lock, krate).map(|v| format!("={v}")).unwrap_or_else(|| fallback.to_string());
+        println!("cargo:rustc-env=UPLIFT_RUNNER_{}_VERSION={version}", krate.to_uppercase());
+    }
+}
+
+/// `path` relative to the runtime's manifest folder, with `/` separators.
+fn relative(path: &Path, manifest: &Path) -> String {
+    path.strip_prefix(manifest).unwrap_or(path).to_string_lossy().replace('\\', "/")
+}
+
+/// The version Cargo.lock records for `krate`.
+fn locked_version(lock: &str, krate: &str) -> Option<String> {
+    let head = format!("name = \"{krate}\"\nversion = \"");
+    let at = lock.find(&head)? + head.len();
+    Some(lock[at..].split('"').next()?.to_string())
+}

@@ -1,0 +1,34 @@
+//! The CPU kernels built into the runtime: `runtime/build.rs` compiles every shipped graph
+//! (`runtime/graphs/*.mtlx`, `examples/marble.mtlx`) with `uplift_compiler::build_api` and
+//! writes the table included here. The CPU engine finds a kernel by the fingerprint of its
+//! generated Rust, so a document that compiles to the same code runs in-process.
+
+use super::driver::{BatchFn, TextureSet};
+use crate::cpu_batch_fn;
+
+/// One shipped kernel.
+pub struct BuiltinKernel {
+    /// The generated module's name (the document's stem).
+    pub name: &'static str,
+    /// The document, relative to the runtime crate.
+    pub source: &'static str,
+    /// `uplift_compiler::build_api::kernel_fingerprint` of its generated Rust.
+    pub fingerprint: u64,
+    pub input_columns: usize,
+    pub output_columns: usize,
+    pub texture_count: usize,
+    /// `mx_pattern_batch` behind runtime CPU dispatch.
+    pub batch: BatchFn,
+}
+
+include!(concat!(env!("OUT_DIR"), "/builtin_kernels.rs"));
+
+/// The shipped kernel whose generated Rust has this fingerprint.
+pub fn find(fingerprint: u64) -> Option<&'static BuiltinKernel> {
+    BUILTIN_KERNELS.iter().find(|k| k.fingerprint == fingerprint)
+}
+
+/// The shipped kernel named `name` (a document stem).
+pub fn by_name(name: &str) -> Option<&'static BuiltinKernel> {
+    BUILTIN_KERNELS.iter().find(|k| k.name == name)
+}

@@ -1,0 +1,146 @@
+//! The CPU engine: generated Rust kernels, parallel over blocks of points with rayon, each batch
+//! loop compiled for several CPU levels with runtime dispatch (`driver.rs`). A kernel the
+//! runtime ships (`builtin.rs`, built by `runtime/build.rs`) runs in-process; any other kernel
+//! is built once with cargo into a cached runner and run as a child process (`external.rs`).
+//! Both paths run the same generated `mx_pattern_batch` through the same driver.
+
+pub mod builtin;
+pub mod driver;
+pub mod external;
+pub mod runner_protocol;
+
+use crate::batch::{Columns, PatternBatch, PatternEngine};
+use driver::{TextureImage, TextureSet};
+use external::{ExternalKernel, RunnerOptions};
+use uplift_compiler::backend_rust::write_rust_kernel;
+use uplift_compiler::build_api::kernel_fingerprint;
+use uplift_compiler::kernel::GEOMETRY_STRIDE;
+use uplift_compiler::PatternKernel;
+
+/// A kernel ready to run on the CPU.
+pub enum CpuKernel {
+    /// Shipped with the runtime: runs in-process.
+    Builtin(&'static builtin::BuiltinKernel),
+    /// Built on demand: runs in a cached runner process.
+    External(ExternalKernel),
+}
+
+impl CpuKernel {
+    fn shape(&self) -> (usize, usize, usize) {
+        match self {
+            CpuKernel::Builtin(k) => (k.input_columns, k.output_columns, k.texture_count),
+            CpuKernel::External(k) => (k.input_columns, k.output_columns, k.texture_count),
+        }
+    }
+
+    /// Where the kernel's code comes from.
+    pub fn describe(&self) -> String {
+        match self {
+            CpuKernel::Builtin(k) => format!("built-in kernel `{}` ({})", k.name, k.source),
+            CpuKernel::External(k) => format!("kernel runner {}", k.exe.display()),
+        }
+    }
+}
+
+/// The CPU engine: a rayon pool and where to build runners.
+pub struct CpuEngine {
+    pool: rayon::ThreadPool,
+    threads: usize,
+    runner: RunnerOptions,
+}
+
+impl CpuEngine {
+    /// An engine on every available core.
+    pub fn new() -> Result<CpuEngine, String> {
+        Self::with_threads(std::thread::available_parallelism().map_or(1, |n| n.get()))
+    }
+
+    /// An engine on `threads` threads (at least one).
+    pub fn with_threads(threads: usize) -> Result<CpuEngine, String> {
+        let threads = threads.max(1);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| format!("cannot start the CPU engine's threads: {e}"))?;
+        Ok(CpuEngine { pool, threads, runner: RunnerOptions::default() })
+    }
+
+    /// Builds kernel runners under `dir` instead of the default cache folder.
+    pub fn with_cache_dir(mut self, dir: impl Into<std::path::PathBuf>) -> CpuEngine {
+        self.runner.cache_dir = dir.into();
+        self
+    }
+
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// The CPU level the batch loops dispatch to on this machine.
+    pub fn cpu_level(&self) -> &'static str {
+        driver::cpu_level()
+    }
+
+    /// Finds `kernel` among the shipped ones (by the fingerprint of its generated Rust), or
+    /// builds its runner (the first time for a given kernel: a cargo build).
+    pub fn prepare(&self, kernel: &PatternKernel) -> Result<CpuKernel, String> {
+        let rust = write_rust_kernel(kernel).map_err(|e| format!("the kernel cannot be written as Rust: {e}"))?;
+        if let Some(k) = builtin::find(kernel_fingerprint(&rust)) {
+            return Ok(CpuKernel::Builtin(k));
+        }
+        self.prepare_external(&rust, kernel, &self.runner).map(CpuKernel::External)
+    }
+
+    /// Builds `kernel`'s runner even when it is shipped, with `options` (the benchmark builds
+    /// one with vectorisation off).
+    pub fn prepare_runner(&self, kernel: &PatternKernel, options: &RunnerOptions) -> Result<ExternalKernel, String> {
+        let rust = write_rust_kernel(kernel).map_err(|e| format!("the kernel cannot be written as Rust: {e}"))?;
+        self.prepare_external(&rust, kernel, options)
+    }
+
+    fn prepare_external(&self, rust: &str, kernel: &PatternKernel, options: &RunnerOptions) -> Result<ExternalKernel, String> {
+        external::build(rust, kernel.input_stride, kernel.output_stride, kernel.textures.len(), options)
+    }
+
+    /// Runner options of this engine (cache folder; vectorisation on).
+    pub fn runner_options(&self) -> &RunnerOptions {
+        &self.runner
+    }
+
+    /// Evaluates a prepared kernel for every point of `batch`.
+    pub fn run_prepared(&self, kernel: &CpuKernel, batch: &PatternBatch) -> Result<Columns, String> {
+        let n = batch.n();
+        let (input_columns, output_columns, texture_count) = kernel.shape();
+        if batch.geometry.width() != GEOMETRY_STRIDE || batch.inputs.width() != input_columns || (input_columns > 0 && batch.inputs.n() != n) || batch.textures.len() != texture_count {
+            return Err(format!(
+                "the batch ({} geometry and {} input columns, {} textures) does not fit the kernel ({GEOMETRY_STRIDE}, {input_columns}, {texture_count})",
+                batch.geometry.width(),
+                batch.inputs.width(),
+                batch.textures.len()
+            ));
+        }
+        for t in &batch.textures {
+            t.check()?;
+        }
+        match kernel {
+            CpuKernel::Builtin(k) => {
+                let textures = TextureSet(batch.textures.iter().map(|t| TextureImage { width: t.width, height: t.height, rgba: &t.rgba }).collect());
+                let mut out = Columns::zeros(n, output_columns);
+                let inputs: &[f32] = if input_columns == 0 { &[] } else { batch.inputs.data() };
+                self.pool.install(|| {
+                    driver::run_blocks(k.batch, n, batch.geometry.data(), GEOMETRY_STRIDE, inputs, input_columns, out.data_mut(), output_columns, &textures)
+                });
+                Ok(out)
+            }
+            CpuKernel::External(k) => external::run(k, batch, self.threads),
+        }
+    }
+}
+
+impl PatternEngine for CpuEngine {
+    fn describe(&self) -> String {
+        format!("CPU, {} thread(s), {}", self.threads, self.cpu_level())
+    }
+
+    fn run_pattern(&self, kernel: &PatternKernel, batch: &PatternBatch) -> Result<Columns, String> {
+        batch.check(kernel)?;
+        let k = self.prepare(kernel)?;
+        self.run_prepared(&k, batch)
+    }
+}
