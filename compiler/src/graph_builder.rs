@@ -461,6 +461,7 @@ impl<'a> GraphBuilder<'a> {
             _ => {
                 if !value.is_empty() {
                     self.diagnostics.push(Diagnostic::warning(pos.clone(), format!("file `{rel}` not found; texture nodes reading it return their `default`")));
+                    self.graph.missing_files.push((rel.clone(), pos.clone()));
                 }
                 Ok(self.add(ValueKind::Constant(Literal::String(String::new())), DataType::Filename, origin.to_string(), pos))
             }

@@ -116,6 +116,10 @@ pub struct Graph {
     pub inputs: Vec<InterfaceInput>,
     pub textures: Vec<TextureBinding>,
     pub outputs: Vec<GraphOutput>,
+    /// Files that texture nodes name but that do not exist (as written, with their position):
+    /// those nodes return their `default`, as MaterialX does. Graphs are built from their
+    /// outputs up, so these are files the built outputs would read.
+    pub missing_files: Vec<(String, SourcePos)>,
 }
 
 impl Graph {

@@ -1,14 +1,17 @@
 //! `uplift eval` and `uplift compile --target spirv|msl|glsl|hlsl|rust` as a user meets them: CSV
 //! rows in (geometric columns and interface inputs, missing columns at their defaults), CSV out
 //! with exact values; bad CSV, closure outputs, textures (PNG decoded, sRGB converted, missing
-//! files at the node's `default`), and naga's other backends writing files. Errors exit 1 with
-//! a message naming the file, the line and the column, never a panic.
+//! files an error unless allowed), both engines writing the same CSV, and naga's other backends
+//! writing files. Errors exit 1 with a message naming the file, the line and the column, never a
+//! panic.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn uplift(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_uplift")).args(args).output().expect("run uplift");
+    // The CPU engine builds runners for kernels it does not ship; keep them in the target folder.
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("uplift-kernel-cache");
+    let out = Command::new(env!("CARGO_BIN_EXE_uplift")).args(args).env("UPLIFT_CACHE_DIR", cache).output().expect("run uplift");
     (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
 }
 
@@ -280,11 +283,25 @@ fn image_textures_are_loaded_and_converted() {
     let e = eval_err(&doc, "out", &input, &out);
     assert!(e.contains("broken.png: cannot decode texture"), "{e}");
 
-    // A missing file: the compiler substitutes the node's `default`.
+    // A missing file is an error naming it and its place...
     let doc = dir.join("missing.mtlx");
     std::fs::write(&doc, image_doc("nowhere.png", Some("srgb_texture"))).unwrap();
-    let (_, got) = eval_ok(&doc, "out", &input, &out);
+    let e = eval_err(&doc, "out", &input, &out);
+    assert!(e.contains("missing.mtlx:") && e.contains("texture file `nowhere.png` not found") && e.contains("--allow-missing-textures"), "{e}");
+    // ...unless asked for MaterialX's behaviour: the node returns its `default`.
+    let (code, _, stderr) = uplift(&["eval", s(&doc), "--output", "out", "--allow-missing-textures", "--input", s(&input), "-o", s(&out)]);
+    assert_eq!(code, 0, "{stderr}");
+    let (_, got) = read_csv(&out);
     assert_eq!(got, vec![vec![0.125, 0.25, 0.5, 0.75]; texels.len()]);
+    // An output that does not read the missing file evaluates as usual.
+    let doc = dir.join("missing_elsewhere.mtlx");
+    let text = image_doc("nowhere.png", None).replace(
+        "  </nodegraph>",
+        "    <constant name=\"c\" type=\"float\"><input name=\"value\" type=\"float\" value=\"2.5\" /></constant>\n    <output name=\"f\" type=\"float\" nodename=\"c\" />\n  </nodegraph>",
+    );
+    std::fs::write(&doc, text).unwrap();
+    let (_, got) = eval_ok(&doc, "f", &input, &out);
+    assert_eq!(got, vec![vec![2.5]; texels.len()]);
 }
 
 #[test]
@@ -339,6 +356,40 @@ fn large_batches_run_in_chunks() {
         for chunk in [1, 64, 100, 299] {
             let parts = engine.run_chunked(&pipeline, &batch, chunk).unwrap();
             assert_eq!(parts, whole, "{output}, chunks of {chunk}");
+        }
+    }
+}
+
+/// `--engine cpu` and `--engine wgpu` write the same CSV (within 1e-4 relative, 1e-6 absolute):
+/// for a shipped graph's output (a runner, since one output is a different kernel from the
+/// shipped all-outputs one) and for the example's.
+#[test]
+fn both_engines_write_the_same_csv() {
+    let dir = temp_dir("engines");
+    let input = dir.join("in.csv");
+    let mut csv = String::from("position_x,position_y,position_z,normal_x,normal_y,normal_z,texcoord_x,texcoord_y,scale\n");
+    for i in 0..500 {
+        let t = i as f32 * 0.137;
+        let n = [t.sin(), t.cos(), (0.3 * t).sin()];
+        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        csv.push_str(&format!("{},{},{},{},{},{},{},{},{}\n", t.sin() * 3.0, t.cos() * 2.0, t * 0.1, n[0] / l, n[1] / l, n[2] / l, (t * 0.31).fract(), (t * 0.17).fract(), 2.0 + (i % 5) as f32));
+    }
+    std::fs::write(&input, csv).unwrap();
+    for (doc, output) in [(repo().join("runtime/graphs/triplanar_mask.mtlx"), "triplanar_mask/color"), (repo().join("examples/marble.mtlx"), "out_color")] {
+        let mut tables = Vec::new();
+        for engine in ["cpu", "wgpu"] {
+            let out = dir.join(format!("{engine}.csv"));
+            let (code, _, stderr) = uplift(&["eval", s(&doc), "--output", output, "--engine", engine, "--input", s(&input), "-o", s(&out)]);
+            assert_eq!(code, 0, "{engine}: {stderr}");
+            tables.push(read_csv(&out));
+        }
+        let [(cpu_header, cpu), (gpu_header, gpu)] = [tables.remove(0), tables.remove(0)];
+        assert_eq!(cpu_header, gpu_header);
+        assert_eq!(cpu.len(), 500);
+        for (i, (a, b)) in cpu.iter().zip(&gpu).enumerate() {
+            for (x, y) in a.iter().zip(b) {
+                assert!((x - y).abs() <= (1e-4 * x.abs().max(y.abs())).max(1e-6), "{output} row {i}: cpu {a:?} wgpu {b:?}");
+            }
         }
     }
 }

@@ -48,6 +48,10 @@ pub struct EvalArgs {
     /// Extra library folder (repeatable); MATERIALX_SEARCH_PATH is read too.
     #[arg(long = "library")]
     pub library: Vec<PathBuf>,
+    /// Evaluate even when a texture file the output reads does not exist: the texture node
+    /// returns its `default`, as MaterialX does (without this flag, a missing file is an error).
+    #[arg(long)]
+    pub allow_missing_textures: bool,
 }
 
 /// The geometric input columns and their defaults: texcoord (0, 0), position (0, 0, 0),
@@ -195,6 +199,12 @@ pub fn run(args: EvalArgs) -> Result<(), String> {
     let Some(kernel) = c.kernel else {
         return Err(format!("{}: cannot evaluate output `{}` (see the errors above)", args.file.display(), args.output));
     };
+    if let Some((file, pos)) = kernel.graph.missing_files.first().filter(|_| !args.allow_missing_textures) {
+        return Err(format!(
+            "{pos}: texture file `{file}` not found: output `{}` would read the node's `default` instead (pass --allow-missing-textures to evaluate it so, as MaterialX does)",
+            args.output
+        ));
+    }
     let input_name = args.input.display().to_string();
     let text = std::fs::read_to_string(&args.input).map_err(|e| format!("{input_name}: cannot read: {e}"))?;
     let table = csv_table::parse(&input_name, &text)?;
