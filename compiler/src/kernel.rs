@@ -4,11 +4,12 @@
 use crate::ir::{Graph, InterfaceInput, TextureBinding};
 use mtlx::DataType;
 
-/// Floats per point in the geometry buffer: texcoord (2), then position, normal and tangent,
-/// each in object and world space (3 each).
+/// Geometry components per point — the columns of the column-major geometry buffer: texcoord
+/// (2), then position, normal and tangent, each in object and world space (3 each). Every kernel
+/// buffer is column-major: component `c` of point `i` at `[c * n + i]` for a batch of `n`.
 pub const GEOMETRY_STRIDE: usize = 20;
 
-/// Where each geometric property sits in a geometry row (bitangents are computed as
+/// The first geometry column of each geometric property (bitangents are computed as
 /// normal × tangent in the kernel).
 pub const GEOMETRY_LAYOUT: [(crate::ir::GeomProp, usize); 7] = {
     use crate::ir::GeomProp::*;

@@ -28,9 +28,10 @@ impl Columns {
         Ok(Columns { n, width, data })
     }
 
-    /// Columns from row-major data: `rows.len() / width` rows of `width` floats.
+    /// Columns from row-major data: `rows.len() / width` rows of `width` floats. Panics when
+    /// `rows.len()` is not a multiple of `width` (a caller's bug, not bad input).
     pub fn from_rows(rows: &[f32], width: usize) -> Columns {
-        let n = if width == 0 { 0 } else { rows.len() / width };
+        let n = rows.len().checked_div(width).unwrap_or(0);
         assert_eq!(n * width, rows.len(), "Columns::from_rows: {} floats are not rows of {width}", rows.len());
         let mut c = Columns::zeros(n, width);
         for (i, row) in rows.chunks_exact(width.max(1)).enumerate().take(n) {

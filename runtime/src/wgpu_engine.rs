@@ -108,7 +108,7 @@ impl WgpuEngine {
     pub fn max_points_per_dispatch(&self, p: &WgpuPipeline) -> usize {
         let limits = self.device.limits();
         let widest = GEOMETRY_STRIDE.max(p.input_stride).max(p.output_stride) as u64 * 4;
-        let binding = (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size) / widest;
+        let binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size) / widest;
         let groups = limits.max_compute_workgroups_per_dimension as u64;
         binding.min(groups * groups * WORKGROUP_SIZE as u64).max(1) as usize
     }

@@ -31,7 +31,7 @@ fn cpu(threads: usize) -> CpuEngine {
 
 /// Seeded random points: positions in [-4, 4]³, unit normals and tangents, texcoords in [0, 1)².
 fn random_points(rng: &mut Rng, n: usize) -> Vec<Geometry> {
-    let mut unit = |rng: &mut Rng| loop {
+    let unit = |rng: &mut Rng| loop {
         let v = [rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)];
         let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
         if (0.1..=1.0).contains(&l) {

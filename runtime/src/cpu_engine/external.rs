@@ -15,6 +15,14 @@ const RUNNER_MAIN: &str = include_str!("../../kernel_runner/main.rs");
 const DRIVER: &str = include_str!("driver.rs");
 const PROTOCOL: &str = include_str!("runner_protocol.rs");
 
+/// LLVM's loop-unroll threshold for kernel code (`-C llvm-args=-unroll-threshold=…`; LLVM's
+/// default at -O3 is 300). Library loops with a trip count that is constant once inlined, such
+/// as fractal noise's octaves, must be unrolled fully for the batch loop around them to
+/// vectorise: measured on `runtime/graphs/triplanar_mask.mtlx` (three 3-octave fractal3d), one
+/// thread, AVX2: 0.79 M evals/s at the default, 0.80 at 1000, 6.8 at 3000, 10.9 at 6000.
+/// The workspace's `.cargo/config.toml` passes the same flag to the crates it builds.
+pub const KERNEL_UNROLL_THRESHOLD: u32 = 6000;
+
 /// Where runners are built and how.
 #[derive(Clone, Debug)]
 pub struct RunnerOptions {
@@ -80,7 +88,7 @@ fn manifest(name: &str) -> String {
 pub fn build(rust: &str, input_columns: usize, output_columns: usize, texture_count: usize, options: &RunnerOptions) -> Result<ExternalKernel, String> {
     let variant = if options.vectorize { "" } else { "-novec" };
     let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for part in [rust, RUNNER_MAIN, DRIVER, PROTOCOL, &manifest("")] {
+    for part in [rust, RUNNER_MAIN, DRIVER, PROTOCOL, &manifest(""), &KERNEL_UNROLL_THRESHOLD.to_string()] {
         h = fnv(h, part.as_bytes());
         h = fnv(h, &[0]);
     }
@@ -111,12 +119,14 @@ pub fn build(rust: &str, input_columns: usize, output_columns: usize, texture_co
         if offline {
             c.arg("--offline");
         }
-        c.env("CARGO_TARGET_DIR", &target_dir).env_remove("RUSTFLAGS").env_remove("CARGO_BUILD_RUSTFLAGS");
-        if options.vectorize {
-            c.env_remove("CARGO_ENCODED_RUSTFLAGS");
-        } else {
-            c.env("CARGO_ENCODED_RUSTFLAGS", "-Cno-vectorize-loops\u{1f}-Cno-vectorize-slp");
+        // Flags are the runner's own: not the caller's RUSTFLAGS, nor a `.cargo/config.toml`
+        // around the caller's working directory.
+        let mut flags = vec![format!("-Cllvm-args=-unroll-threshold={KERNEL_UNROLL_THRESHOLD}")];
+        if !options.vectorize {
+            flags.extend(["-Cno-vectorize-loops".to_string(), "-Cno-vectorize-slp".to_string()]);
         }
+        c.current_dir(&crate_dir).env("CARGO_TARGET_DIR", &target_dir).env_remove("RUSTFLAGS").env_remove("CARGO_BUILD_RUSTFLAGS");
+        c.env("CARGO_ENCODED_RUSTFLAGS", flags.join("\u{1f}"));
         c.stdin(Stdio::null()).output()
     };
     let describe = |e: std::io::Error| format!("the CPU engine builds kernels it was not built with by running cargo ({}), which failed to start: {e}; install Rust (rustup) or use --engine wgpu", Path::new(&cargo).display());
@@ -199,5 +209,15 @@ pub fn bench(k: &ExternalKernel, batch: &PatternBatch, threads: usize, seconds: 
     match (rate, level) {
         (Some(r), Some(l)) => Ok((r, l)),
         _ => Err(format!("unexpected benchmark output from the kernel runner: {text}")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_workspace_builds_kernels_with_the_runners_unroll_threshold() {
+        let config = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../.cargo/config.toml")).expect(".cargo/config.toml");
+        let flag = format!("\"-Cllvm-args=-unroll-threshold={}\"", super::KERNEL_UNROLL_THRESHOLD);
+        assert!(config.lines().any(|l| l.starts_with("rustflags") && l.contains(&flag)), "{flag} not in .cargo/config.toml");
     }
 }

@@ -86,7 +86,7 @@ pub fn encode_floats_into(values: &[f32], out: &mut Vec<u8>) {
 }
 
 pub fn decode_floats(bytes: &[u8]) -> Result<Vec<f32>, String> {
-    if bytes.len() % 4 != 0 {
+    if !bytes.len().is_multiple_of(4) {
         return Err(format!("{} bytes are not whole floats", bytes.len()));
     }
     Ok(bytes.chunks_exact(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect())
