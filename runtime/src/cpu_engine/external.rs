@@ -131,6 +131,7 @@ pub fn build(rust: &str, input_columns: usize, output_columns: usize, texture_co
     };
     let describe = |e: std::io::Error| format!("the CPU engine builds kernels it was not built with by running cargo ({}), which failed to start: {e}; install Rust (rustup) or use --engine wgpu", Path::new(&cargo).display());
     // Offline first (the dependencies are usually cached); online when they are not.
+    eprintln!("uplift: building the CPU kernel runner {name} with cargo (once per kernel; cached in {})", kernels.display());
     let mut out = run_cargo(true).map_err(describe)?;
     if !out.status.success() {
         out = run_cargo(false).map_err(describe)?;
