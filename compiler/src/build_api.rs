@@ -89,7 +89,15 @@ impl Builder {
 /// it to find a kernel it was built with.
 pub fn kernel_fingerprint(rust: &str) -> u64 {
     let body = rust.split_once('\n').map_or("", |(_, rest)| rest);
-    body.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))
+    fnv1a(FNV1A_START, body.as_bytes())
+}
+
+/// FNV-1a's 64-bit offset basis: the state [`fnv1a`] starts from.
+pub const FNV1A_START: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// Continues a 64-bit FNV-1a hash from state `h` over `bytes`.
+pub fn fnv1a(h: u64, bytes: &[u8]) -> u64 {
+    bytes.iter().fold(h, |h, b| (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3))
 }
 
 fn lines(diagnostics: &[mtlx::Diagnostic]) -> String {

@@ -11,7 +11,7 @@
 use crate::atomic_write::write_atomically;
 use std::path::PathBuf;
 use uplift_compiler::kernel::ENTRY_POINT;
-use uplift_compiler::{Compiler, OutputSelection, PatternKernel};
+use uplift_compiler::{OutputSelection, PatternKernel};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Target {
@@ -142,10 +142,7 @@ pub fn run(args: CompileArgs) -> Result<(), String> {
     if args.bench {
         return crate::cli::compile_bench::run(&args.files, &args.library);
     }
-    let compiler = Compiler::new(&args.library);
-    if super::report(&compiler.library.diagnostics) {
-        return Err("errors in the node library".into());
-    }
+    let compiler = super::compiler(&args.library)?;
     let selection = if args.output.is_empty() { OutputSelection::AllNumeric } else { OutputSelection::Named(args.output.clone()) };
     let mut failed = false;
     for file in &args.files {

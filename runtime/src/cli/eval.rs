@@ -20,7 +20,7 @@ use crate::wgpu_engine::WgpuEngine;
 use std::collections::HashMap;
 use mtlx::DataType;
 use std::path::{Path, PathBuf};
-use uplift_compiler::{Compiler, OutputSelection, PatternKernel};
+use uplift_compiler::{OutputSelection, PatternKernel};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Engine {
@@ -190,10 +190,7 @@ pub fn batch_from_table(kernel: &PatternKernel, graph_inputs: &[(String, DataTyp
 }
 
 pub fn run(args: EvalArgs) -> Result<(), String> {
-    let compiler = Compiler::new(&args.library);
-    if super::report(&compiler.library.diagnostics) {
-        return Err("errors in the node library".into());
-    }
+    let compiler = super::compiler(&args.library)?;
     let c = compiler.compile_file(&args.file, &OutputSelection::Named(vec![args.output.clone()]));
     super::report(&c.diagnostics);
     let Some(kernel) = c.kernel else {

@@ -7,6 +7,8 @@ pub mod compile_bench;
 pub mod eval;
 
 use mtlx::Diagnostic;
+use std::path::PathBuf;
+use uplift_compiler::Compiler;
 
 /// Prints diagnostics to stderr; returns true when any is an error.
 pub fn report(diagnostics: &[Diagnostic]) -> bool {
@@ -14,4 +16,14 @@ pub fn report(diagnostics: &[Diagnostic]) -> bool {
         eprintln!("{d}");
     }
     mtlx::has_errors(diagnostics)
+}
+
+/// A compiler over the builtin library and `library` folders; the library's diagnostics are
+/// printed, and an error among them fails.
+pub fn compiler(library: &[PathBuf]) -> Result<Compiler, String> {
+    let compiler = Compiler::new(library);
+    if report(&compiler.library.diagnostics) {
+        return Err("errors in the node library".into());
+    }
+    Ok(compiler)
 }

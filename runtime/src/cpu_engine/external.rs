@@ -10,6 +10,7 @@ use crate::batch::{Columns, PatternBatch};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
+use uplift_compiler::build_api::{fnv1a, FNV1A_START};
 
 const RUNNER_MAIN: &str = include_str!("../../kernel_runner/main.rs");
 const DRIVER: &str = include_str!("driver.rs");
@@ -63,10 +64,6 @@ pub struct ExternalKernel {
     pub texture_count: usize,
 }
 
-fn fnv(h: u64, bytes: &[u8]) -> u64 {
-    bytes.iter().fold(h, |h, b| (h ^ *b as u64).wrapping_mul(0x0000_0100_0000_01b3))
-}
-
 /// The runner crate's manifest.
 fn manifest(name: &str) -> String {
     format!(
@@ -87,10 +84,10 @@ fn manifest(name: &str) -> String {
 /// Builds (or finds in the cache) the runner of the kernel whose generated Rust is `rust`.
 pub fn build(rust: &str, input_columns: usize, output_columns: usize, texture_count: usize, options: &RunnerOptions) -> Result<ExternalKernel, String> {
     let variant = if options.vectorize { "" } else { "-novec" };
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut h = FNV1A_START;
     for part in [rust, RUNNER_MAIN, DRIVER, PROTOCOL, &manifest(""), &KERNEL_UNROLL_THRESHOLD.to_string()] {
-        h = fnv(h, part.as_bytes());
-        h = fnv(h, &[0]);
+        h = fnv1a(h, part.as_bytes());
+        h = fnv1a(h, &[0]);
     }
     let name = format!("uplift-kernel-{h:016x}{variant}");
     let kernels = options.cache_dir.join("kernels");
