@@ -39,7 +39,7 @@ fn main() {
         );
         let _ = writeln!(
             entries,
-            "    BuiltinKernel {{ name: {stem:?}, source: {:?}, fingerprint: {fingerprint:#x}, input_columns: {stem}::INPUT_COLUMNS, output_columns: {stem}::OUTPUT_COLUMNS, texture_count: {stem}::TEXTURE_COUNT, batch: cpu_batch_fn!({stem}) }},",
+            "    BuiltinKernel {{ name: {stem:?}, source: {:?}, fingerprint: {fingerprint:#x}, shape: KernelShape {{ input_columns: {stem}::INPUT_COLUMNS, output_columns: {stem}::OUTPUT_COLUMNS, texture_count: {stem}::TEXTURE_COUNT }}, batch: cpu_batch_fn!({stem}) }},",
             relative(graph, &manifest)
         );
     }

@@ -161,6 +161,20 @@ impl Geometry {
     }
 }
 
+/// A kernel's interface as a batch meets it: its input and output columns and its textures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct KernelShape {
+    pub input_columns: usize,
+    pub output_columns: usize,
+    pub texture_count: usize,
+}
+
+impl KernelShape {
+    pub fn of(kernel: &PatternKernel) -> KernelShape {
+        KernelShape { input_columns: kernel.input_stride, output_columns: kernel.output_stride, texture_count: kernel.textures.len() }
+    }
+}
+
 /// What a pattern kernel reads for a batch of points.
 #[derive(Clone, Debug, Default)]
 pub struct PatternBatch {
@@ -187,20 +201,25 @@ impl PatternBatch {
 
     /// Checks the batch against `kernel`'s interface; returns the number of points.
     pub fn check(&self, kernel: &PatternKernel) -> Result<usize, String> {
+        self.check_shape(&KernelShape::of(kernel))
+    }
+
+    /// Checks the batch against a kernel's shape; returns the number of points.
+    pub fn check_shape(&self, shape: &KernelShape) -> Result<usize, String> {
         let n = self.geometry.n();
         if self.geometry.width() != GEOMETRY_STRIDE {
             return Err(format!("the batch has {} geometry columns; kernels read {GEOMETRY_STRIDE}", self.geometry.width()));
         }
-        if self.inputs.width() != kernel.input_stride || (kernel.input_stride > 0 && self.inputs.n() != n) {
+        if self.inputs.width() != shape.input_columns || (shape.input_columns > 0 && self.inputs.n() != n) {
             return Err(format!(
                 "the batch has {} input columns of {} points; the kernel reads {} columns of {n}",
                 self.inputs.width(),
                 self.inputs.n(),
-                kernel.input_stride
+                shape.input_columns
             ));
         }
-        if self.textures.len() != kernel.textures.len() {
-            return Err(format!("the kernel reads {} textures, {} given", kernel.textures.len(), self.textures.len()));
+        if self.textures.len() != shape.texture_count {
+            return Err(format!("the kernel reads {} textures, {} given", shape.texture_count, self.textures.len()));
         }
         for t in &self.textures {
             t.check()?;

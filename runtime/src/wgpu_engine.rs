@@ -4,7 +4,7 @@
 //! `uplift_compiler::kernel`: column-major geometry, interface inputs and outputs, the point
 //! count, textures. A batch larger than one storage binding allows runs in several dispatches.
 
-use crate::batch::{Columns, PatternBatch, PatternEngine, TextureData};
+use crate::batch::{Columns, KernelShape, PatternBatch, PatternEngine, TextureData};
 use uplift_compiler::kernel::*;
 use uplift_compiler::PatternKernel;
 use wgpu::util::DeviceExt;
@@ -97,9 +97,7 @@ impl WgpuEngine {
         WgpuPipeline {
             pipeline,
             layout,
-            input_stride: kernel.input_stride,
-            output_stride: kernel.output_stride,
-            texture_count: kernel.textures.len(),
+            shape: KernelShape::of(kernel),
         }
     }
 
@@ -107,66 +105,61 @@ impl WgpuEngine {
     /// workgroups within a two-dimensional dispatch.
     pub fn max_points_per_dispatch(&self, p: &WgpuPipeline) -> usize {
         let limits = self.device.limits();
-        let widest = GEOMETRY_STRIDE.max(p.input_stride).max(p.output_stride) as u64 * 4;
+        let widest = GEOMETRY_STRIDE.max(p.shape.input_columns).max(p.shape.output_columns) as u64 * 4;
         let binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size) / widest;
         let groups = limits.max_compute_workgroups_per_dimension as u64;
         binding.min(groups * groups * WORKGROUP_SIZE as u64).max(1) as usize
     }
 
-    /// Evaluates a prepared kernel for every point of `batch` (checked with
-    /// [`PatternBatch::check`] by the caller), in as many dispatches as the limits need.
+    /// Evaluates a prepared kernel for every point of `batch` (checked against its shape), in as
+    /// many dispatches as the limits need.
     pub fn run_prepared(&self, p: &WgpuPipeline, batch: &PatternBatch) -> Result<Columns, String> {
         self.run_chunked(p, batch, self.max_points_per_dispatch(p))
     }
 
-    /// [`run_prepared`](Self::run_prepared) with at most `chunk` points per dispatch.
+    /// [`run_prepared`](Self::run_prepared) with at most `chunk` points per dispatch (textures
+    /// are uploaded once for all of them).
     pub fn run_chunked(&self, p: &WgpuPipeline, batch: &PatternBatch, chunk: usize) -> Result<Columns, String> {
-        let n = batch.n();
+        let n = batch.check_shape(&p.shape)?;
+        if n == 0 {
+            return Ok(Columns::zeros(0, p.shape.output_columns));
+        }
+        let views: Vec<wgpu::TextureView> = batch.textures.iter().map(|t| self.upload_texture(t)).collect::<Result<_, _>>()?;
         let chunk = chunk.clamp(1, self.max_points_per_dispatch(p));
         if n <= chunk {
-            return self.dispatch(p, batch);
+            return self.dispatch(p, &batch.geometry, &batch.inputs, &views);
         }
-        let mut out = Columns::zeros(n, p.output_stride);
-        let mut part = PatternBatch { geometry: Columns::default(), inputs: Columns::default(), textures: batch.textures.clone() };
+        let mut out = Columns::zeros(n, p.shape.output_columns);
         let mut start = 0;
         while start < n {
             let m = chunk.min(n - start);
-            part.geometry = batch.geometry.slice(start, m);
-            part.inputs = batch.inputs.slice(start, m);
-            out.write_at(start, &self.dispatch(p, &part)?);
+            out.write_at(start, &self.dispatch(p, &batch.geometry.slice(start, m), &batch.inputs.slice(start, m), &views)?);
             start += m;
         }
         Ok(out)
     }
 
-    /// One dispatch over the whole of `batch`.
-    fn dispatch(&self, p: &WgpuPipeline, batch: &PatternBatch) -> Result<Columns, String> {
-        let n = batch.n();
-        if n == 0 {
-            return Ok(Columns::zeros(0, p.output_stride));
-        }
-        if batch.inputs.width() != p.input_stride || batch.textures.len() != p.texture_count {
-            return Err("the batch does not match the prepared kernel".into());
-        }
+    /// One dispatch over every point of `geometry` and `inputs` (at least one point).
+    fn dispatch(&self, p: &WgpuPipeline, geometry: &Columns, inputs: &Columns, views: &[wgpu::TextureView]) -> Result<Columns, String> {
+        let n = geometry.n();
         let d = &self.device;
         let buf = |data: &[f32], usage| {
             // Storage bindings may not be empty.
             let data: &[f32] = if data.is_empty() { &[0.0] } else { data };
             d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents: bytemuck::cast_slice(data), usage })
         };
-        let geometry = buf(batch.geometry.data(), wgpu::BufferUsages::STORAGE);
-        let inputs = buf(batch.inputs.data(), wgpu::BufferUsages::STORAGE);
-        let out_len = (n * p.output_stride) as u64 * 4;
+        let geometry = buf(geometry.data(), wgpu::BufferUsages::STORAGE);
+        let inputs = buf(inputs.data(), wgpu::BufferUsages::STORAGE);
+        let out_len = (n * p.shape.output_columns) as u64 * 4;
         let outputs = d.create_buffer(&wgpu::BufferDescriptor { label: None, size: out_len, usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC, mapped_at_creation: false });
         let readback = d.create_buffer(&wgpu::BufferDescriptor { label: None, size: out_len, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
         let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents: bytemuck::cast_slice(&[n as u32, 0, 0, 0]), usage: wgpu::BufferUsages::UNIFORM });
-        let views: Vec<wgpu::TextureView> = batch.textures.iter().map(|t| self.upload_texture(t)).collect::<Result<_, _>>()?;
         let mut group_entries = vec![
             wgpu::BindGroupEntry { binding: BINDING_GEOMETRY, resource: geometry.as_entire_binding() },
             wgpu::BindGroupEntry { binding: BINDING_OUTPUTS, resource: outputs.as_entire_binding() },
             wgpu::BindGroupEntry { binding: BINDING_PARAMS, resource: params.as_entire_binding() },
         ];
-        if p.input_stride > 0 {
+        if p.shape.input_columns > 0 {
             group_entries.push(wgpu::BindGroupEntry { binding: BINDING_INPUTS, resource: inputs.as_entire_binding() });
         }
         for (k, v) in views.iter().enumerate() {
@@ -200,7 +193,7 @@ impl WgpuEngine {
         let result: Vec<f32> = bytemuck::cast_slice(&data).to_vec();
         drop(data);
         readback.unmap();
-        Columns::from_column_major(n, p.output_stride, result)
+        Columns::from_column_major(n, p.shape.output_columns, result)
     }
 
     fn upload_texture(&self, t: &TextureData) -> Result<wgpu::TextureView, String> {
@@ -229,9 +222,7 @@ impl WgpuEngine {
 pub struct WgpuPipeline {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
-    input_stride: usize,
-    output_stride: usize,
-    texture_count: usize,
+    shape: KernelShape,
 }
 
 impl PatternEngine for WgpuEngine {
@@ -240,7 +231,7 @@ impl PatternEngine for WgpuEngine {
     }
 
     fn run_pattern(&self, kernel: &PatternKernel, batch: &PatternBatch) -> Result<Columns, String> {
-        batch.check(kernel)?;
+        batch.check(kernel)?; // before compiling the shader
         let p = self.prepare(kernel);
         self.run_prepared(&p, batch)
     }

@@ -4,6 +4,7 @@
 //! generated Rust, so a document that compiles to the same code runs in-process.
 
 use super::driver::{BatchFn, TextureSet};
+use crate::batch::KernelShape;
 use crate::cpu_batch_fn;
 
 /// One shipped kernel.
@@ -14,9 +15,7 @@ pub struct BuiltinKernel {
     pub source: &'static str,
     /// `uplift_compiler::build_api::kernel_fingerprint` of its generated Rust.
     pub fingerprint: u64,
-    pub input_columns: usize,
-    pub output_columns: usize,
-    pub texture_count: usize,
+    pub shape: KernelShape,
     /// `mx_pattern_batch` behind runtime CPU dispatch.
     pub batch: BatchFn,
 }

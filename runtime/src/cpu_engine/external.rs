@@ -6,7 +6,7 @@
 //! from, so a cached one is reused until the kernel, the runner or its dependencies change.
 
 use super::runner_protocol::{decode_floats, encode_request, Request};
-use crate::batch::{Columns, PatternBatch};
+use crate::batch::{Columns, KernelShape, PatternBatch};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -59,9 +59,7 @@ pub fn default_cache_dir() -> PathBuf {
 #[derive(Clone, Debug)]
 pub struct ExternalKernel {
     pub exe: PathBuf,
-    pub input_columns: usize,
-    pub output_columns: usize,
-    pub texture_count: usize,
+    pub shape: KernelShape,
 }
 
 /// The runner crate's manifest.
@@ -82,7 +80,7 @@ fn manifest(name: &str) -> String {
 }
 
 /// Builds (or finds in the cache) the runner of the kernel whose generated Rust is `rust`.
-pub fn build(rust: &str, input_columns: usize, output_columns: usize, texture_count: usize, options: &RunnerOptions) -> Result<ExternalKernel, String> {
+pub fn build(rust: &str, shape: KernelShape, options: &RunnerOptions) -> Result<ExternalKernel, String> {
     let variant = if options.vectorize { "" } else { "-novec" };
     let mut h = FNV1A_START;
     for part in [rust, RUNNER_MAIN, DRIVER, PROTOCOL, &manifest(""), &KERNEL_UNROLL_THRESHOLD.to_string()] {
@@ -94,7 +92,7 @@ pub fn build(rust: &str, input_columns: usize, output_columns: usize, texture_co
     let crate_dir = kernels.join(&name);
     let target_dir = kernels.join(format!("target{variant}"));
     let exe = target_dir.join("release").join(format!("{name}{}", std::env::consts::EXE_SUFFIX));
-    let kernel = ExternalKernel { exe: exe.clone(), input_columns, output_columns, texture_count };
+    let kernel = ExternalKernel { exe: exe.clone(), shape };
     if exe.is_file() {
         return Ok(kernel);
     }
@@ -154,8 +152,8 @@ fn request(k: &ExternalKernel, batch: &PatternBatch, threads: usize) -> Vec<u8> 
     encode_request(&Request {
         n: batch.n(),
         geometry_columns: batch.geometry.width(),
-        input_columns: k.input_columns,
-        output_columns: k.output_columns,
+        input_columns: k.shape.input_columns,
+        output_columns: k.shape.output_columns,
         threads,
         textures: batch.textures.iter().map(|t| (t.width, t.height, t.rgba.clone())).collect(),
         geometry: batch.geometry.data().to_vec(),
@@ -191,10 +189,10 @@ fn exchange(k: &ExternalKernel, args: &[&str], input: Vec<u8>) -> Result<Vec<u8>
 pub fn run(k: &ExternalKernel, batch: &PatternBatch, threads: usize) -> Result<Columns, String> {
     let n = batch.n();
     if n == 0 {
-        return Ok(Columns::zeros(0, k.output_columns));
+        return Ok(Columns::zeros(0, k.shape.output_columns));
     }
     let out = exchange(k, &[], request(k, batch, threads))?;
-    Columns::from_column_major(n, k.output_columns, decode_floats(&out)?).map_err(|e| format!("the kernel runner's output: {e}"))
+    Columns::from_column_major(n, k.shape.output_columns, decode_floats(&out)?).map_err(|e| format!("the kernel runner's output: {e}"))
 }
 
 /// Evaluations per second of the runner over `batch` on `threads` threads (at least `seconds`

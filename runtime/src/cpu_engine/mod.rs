@@ -9,7 +9,7 @@ pub mod driver;
 pub mod external;
 pub mod runner_protocol;
 
-use crate::batch::{Columns, PatternBatch, PatternEngine};
+use crate::batch::{Columns, KernelShape, PatternBatch, PatternEngine};
 use driver::{TextureImage, TextureSet};
 use external::{ExternalKernel, RunnerOptions};
 use uplift_compiler::backend_rust::write_rust_kernel;
@@ -26,10 +26,10 @@ pub enum CpuKernel {
 }
 
 impl CpuKernel {
-    fn shape(&self) -> (usize, usize, usize) {
+    pub fn shape(&self) -> &KernelShape {
         match self {
-            CpuKernel::Builtin(k) => (k.input_columns, k.output_columns, k.texture_count),
-            CpuKernel::External(k) => (k.input_columns, k.output_columns, k.texture_count),
+            CpuKernel::Builtin(k) => &k.shape,
+            CpuKernel::External(k) => &k.shape,
         }
     }
 
@@ -95,7 +95,7 @@ impl CpuEngine {
     }
 
     fn prepare_external(&self, rust: &str, kernel: &PatternKernel, options: &RunnerOptions) -> Result<ExternalKernel, String> {
-        external::build(rust, kernel.input_stride, kernel.output_stride, kernel.textures.len(), options)
+        external::build(rust, KernelShape::of(kernel), options)
     }
 
     /// Runner options of this engine (cache folder; vectorisation on).
@@ -103,28 +103,17 @@ impl CpuEngine {
         &self.runner
     }
 
-    /// Evaluates a prepared kernel for every point of `batch`.
+    /// Evaluates a prepared kernel for every point of `batch` (checked against its shape).
     pub fn run_prepared(&self, kernel: &CpuKernel, batch: &PatternBatch) -> Result<Columns, String> {
-        let n = batch.n();
-        let (input_columns, output_columns, texture_count) = kernel.shape();
-        if batch.geometry.width() != GEOMETRY_STRIDE || batch.inputs.width() != input_columns || (input_columns > 0 && batch.inputs.n() != n) || batch.textures.len() != texture_count {
-            return Err(format!(
-                "the batch ({} geometry and {} input columns, {} textures) does not fit the kernel ({GEOMETRY_STRIDE}, {input_columns}, {texture_count})",
-                batch.geometry.width(),
-                batch.inputs.width(),
-                batch.textures.len()
-            ));
-        }
-        for t in &batch.textures {
-            t.check()?;
-        }
+        let n = batch.check_shape(kernel.shape())?;
         match kernel {
             CpuKernel::Builtin(k) => {
                 let textures = TextureSet(batch.textures.iter().map(|t| TextureImage { width: t.width, height: t.height, rgba: &t.rgba }).collect());
-                let mut out = Columns::zeros(n, output_columns);
-                let inputs: &[f32] = if input_columns == 0 { &[] } else { batch.inputs.data() };
+                let s = &k.shape;
+                let mut out = Columns::zeros(n, s.output_columns);
+                let inputs: &[f32] = if s.input_columns == 0 { &[] } else { batch.inputs.data() };
                 self.pool.install(|| {
-                    driver::run_blocks(k.batch, n, batch.geometry.data(), GEOMETRY_STRIDE, inputs, input_columns, out.data_mut(), output_columns, &textures)
+                    driver::run_blocks(k.batch, n, batch.geometry.data(), GEOMETRY_STRIDE, inputs, s.input_columns, out.data_mut(), s.output_columns, &textures)
                 });
                 Ok(out)
             }
