@@ -7,6 +7,7 @@
 
 use super::runner_protocol::{decode_floats, encode_request, Request};
 use crate::batch::{Columns, KernelShape, PatternBatch};
+use std::borrow::Cow;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -155,9 +156,9 @@ fn request(k: &ExternalKernel, batch: &PatternBatch, threads: usize) -> Vec<u8> 
         input_columns: k.shape.input_columns,
         output_columns: k.shape.output_columns,
         threads,
-        textures: batch.textures.iter().map(|t| (t.width, t.height, t.rgba.clone())).collect(),
-        geometry: batch.geometry.data().to_vec(),
-        inputs: batch.inputs.data().to_vec(),
+        textures: batch.textures.iter().map(|t| (t.width, t.height, Cow::Borrowed(t.rgba.as_slice()))).collect(),
+        geometry: Cow::Borrowed(batch.geometry.data()),
+        inputs: Cow::Borrowed(batch.inputs.data()),
     })
 }
 

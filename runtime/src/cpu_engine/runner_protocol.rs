@@ -7,24 +7,26 @@
 //! floats; then the geometry columns and the input columns (column-major f32). Response: the
 //! output columns (column-major f32).
 
+use std::borrow::Cow;
+
 pub const MAGIC: [u8; 4] = *b"UPLK";
 pub const VERSION: u32 = 1;
 
-/// A decoded request.
+/// A request: borrowed from the caller's batch when encoding, owned when decoded.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Request {
+pub struct Request<'a> {
     pub n: usize,
     pub geometry_columns: usize,
     pub input_columns: usize,
     pub output_columns: usize,
     pub threads: usize,
     /// (width, height, RGBA floats) per texture.
-    pub textures: Vec<(u32, u32, Vec<f32>)>,
-    pub geometry: Vec<f32>,
-    pub inputs: Vec<f32>,
+    pub textures: Vec<(u32, u32, Cow<'a, [f32]>)>,
+    pub geometry: Cow<'a, [f32]>,
+    pub inputs: Cow<'a, [f32]>,
 }
 
-pub fn encode_request(r: &Request) -> Vec<u8> {
+pub fn encode_request(r: &Request<'_>) -> Vec<u8> {
     let floats = r.geometry.len() + r.inputs.len() + r.textures.iter().map(|t| t.2.len()).sum::<usize>();
     let mut out = Vec::with_capacity(40 + 4 * floats);
     out.extend_from_slice(&MAGIC);
@@ -43,7 +45,7 @@ pub fn encode_request(r: &Request) -> Vec<u8> {
     out
 }
 
-pub fn decode_request(bytes: &[u8]) -> Result<Request, String> {
+pub fn decode_request(bytes: &[u8]) -> Result<Request<'static>, String> {
     let mut at = 0usize;
     let mut take = |k: usize| -> Result<&[u8], String> {
         let s = bytes.get(at..at + k).ok_or_else(|| format!("request truncated at byte {at}"))?;
@@ -68,10 +70,10 @@ pub fn decode_request(bytes: &[u8]) -> Result<Request, String> {
         let w = u32::from_le_bytes(take(4)?.try_into().unwrap());
         let h = u32::from_le_bytes(take(4)?.try_into().unwrap());
         let k = w as usize * h as usize * 4;
-        textures.push((w, h, decode_floats(take(4 * k)?)?));
+        textures.push((w, h, Cow::Owned(decode_floats(take(4 * k)?)?)));
     }
-    let geometry = decode_floats(take(4 * n * geometry_columns)?)?;
-    let inputs = decode_floats(take(4 * n * input_columns)?)?;
+    let geometry = Cow::Owned(decode_floats(take(4 * n * geometry_columns)?)?);
+    let inputs = Cow::Owned(decode_floats(take(4 * n * input_columns)?)?);
     if at != bytes.len() {
         return Err(format!("{} bytes after the request", bytes.len() - at));
     }
@@ -104,9 +106,9 @@ mod tests {
             input_columns: 2,
             output_columns: 3,
             threads: 1,
-            textures: vec![(1, 1, vec![0.5, 0.25, 0.125, 1.0])],
-            geometry: vec![1.0, 2.0],
-            inputs: vec![3.0, 4.0, 5.0, 6.0],
+            textures: vec![(1, 1, Cow::Borrowed(&[0.5, 0.25, 0.125, 1.0][..]))],
+            geometry: Cow::Borrowed(&[1.0, 2.0]),
+            inputs: Cow::Borrowed(&[3.0, 4.0, 5.0, 6.0]),
         };
         let bytes = encode_request(&r);
         assert_eq!(decode_request(&bytes).unwrap(), r);
