@@ -76,6 +76,18 @@ impl Columns {
         (0..self.width).map(|k| self.column(k)).collect()
     }
 
+    /// Every column as a mutable slice.
+    pub fn columns_mut(&mut self) -> Vec<&mut [f32]> {
+        let mut rest = self.data.as_mut_slice();
+        let mut columns = Vec::with_capacity(self.width);
+        for _ in 0..self.width {
+            let (column, tail) = std::mem::take(&mut rest).split_at_mut(self.n);
+            columns.push(column);
+            rest = tail;
+        }
+        columns
+    }
+
     /// The column-major data.
     pub fn data(&self) -> &[f32] {
         &self.data
@@ -254,6 +266,9 @@ mod tests {
         let mut z = Columns::zeros(4, 3);
         z.write_at(1, &part);
         assert_eq!(z.column(0), &[0.0, 3.0, 6.0, 0.0]);
+        z.columns_mut()[2][3] = 9.0;
+        assert_eq!(z.column(2), &[0.0, 5.0, 8.0, 9.0]);
+        assert_eq!(Columns::zeros(0, 2).columns_mut().len(), 2);
     }
 
     #[test]

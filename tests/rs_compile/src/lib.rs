@@ -63,6 +63,8 @@ impl Checker {
     }
 }
 
+use uplift::batch::Columns;
+
 /// Runs `f`, a batch over structure-of-arrays columns (a generated `mx_pattern_batch`), on
 /// row-major buffers: `geom` rows of `geometry_columns` floats, `inputs` rows of
 /// `input_columns`, `outputs` rows of `output_columns` (the number of points is
@@ -74,22 +76,11 @@ pub fn with_rows(
     (geometry_columns, input_columns, output_columns): (usize, usize, usize),
     f: impl FnOnce(&[&[f32]], &[&[f32]], &mut [&mut [f32]]),
 ) {
-    let n = outputs.len() / output_columns;
-    let columns = |rows: &[f32], width: usize| -> Vec<Vec<f32>> { (0..width).map(|c| (0..n).map(|i| rows[i * width + c]).collect()).collect() };
-    let g = columns(geom, geometry_columns);
-    let x = columns(inputs, input_columns);
-    let mut o = vec![vec![0.0f32; n]; output_columns];
-    {
-        let g: Vec<&[f32]> = g.iter().map(|c| c.as_slice()).collect();
-        let x: Vec<&[f32]> = x.iter().map(|c| c.as_slice()).collect();
-        let mut o: Vec<&mut [f32]> = o.iter_mut().map(|c| c.as_mut_slice()).collect();
-        f(&g, &x, &mut o);
-    }
-    for (c, column) in o.iter().enumerate() {
-        for (i, v) in column.iter().enumerate() {
-            outputs[i * output_columns + c] = *v;
-        }
-    }
+    let g = Columns::from_rows(geom, geometry_columns);
+    let x = if input_columns == 0 { Columns::zeros(g.n(), 0) } else { Columns::from_rows(inputs, input_columns) };
+    let mut o = Columns::zeros(outputs.len() / output_columns, output_columns);
+    f(&g.columns(), &x.columns(), &mut o.columns_mut());
+    outputs.copy_from_slice(&o.to_rows());
 }
 
 /// `$k::mx_pattern_batch` on row-major buffers (see [`with_rows`]).

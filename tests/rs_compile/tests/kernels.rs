@@ -2,30 +2,18 @@
 //! them against closed forms computed here; and runs every snapshot kernel once.
 
 use glam::{Vec2, Vec3};
-use uplift_rs_snapshots::{Checker, KERNELS};
+use uplift::batch::Geometry;
+use uplift_rs_snapshots::{Checker, Rng, KERNELS};
 
-/// A geometry row: texcoord, then position, normal and tangent in object and world space.
+/// A geometry row (the runtime's `Geometry::row`): texcoord, then position, normal and tangent
+/// in object and world space.
 fn geometry_row(uv: Vec2, p: Vec3, n: Vec3, t: Vec3) -> Vec<f32> {
-    let mut row = vec![uv.x, uv.y];
-    for v in [p, p, n, n, t, t] {
-        row.extend([v.x, v.y, v.z]);
-    }
-    assert_eq!(row.len(), uplift_rs_snapshots::math_float_ops::GEOMETRY_COLUMNS);
-    row
+    Geometry { texcoord: uv.into(), position: p.into(), normal: n.into(), tangent: t.into() }.row().to_vec()
 }
 
-/// A small deterministic generator (xorshift) of values in [lo, hi).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self, lo: f32, hi: f32) -> f32 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        lo + (hi - lo) * ((self.0 >> 40) as f32 / (1u64 << 24) as f32)
-    }
-    fn vec3(&mut self) -> Vec3 {
-        Vec3::new(self.next(-2.0, 2.0), self.next(-2.0, 2.0), self.next(-2.0, 2.0))
-    }
+/// A vector with components uniform in [-2, 2).
+fn vec3(rng: &mut Rng) -> Vec3 {
+    Vec3::new(rng.range(-2.0, 2.0), rng.range(-2.0, 2.0), rng.range(-2.0, 2.0))
 }
 
 #[test]
@@ -50,7 +38,7 @@ fn math_vector_ops_matches_glam() {
     use uplift_rs_snapshots::math_vector_ops as k;
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     // The geometry nodes normalize their vectors: use unit vectors.
-    let rows: Vec<(Vec3, Vec3)> = (0..100).map(|_| (rng.vec3().normalize(), rng.vec3().normalize())).collect();
+    let rows: Vec<(Vec3, Vec3)> = (0..100).map(|_| (vec3(&mut rng).normalize(), vec3(&mut rng).normalize())).collect();
     let geom: Vec<f32> = rows.iter().flat_map(|&(n, t)| geometry_row(Vec2::ZERO, Vec3::ONE, n, t)).collect();
     let mut out = vec![0.0; rows.len() * k::OUTPUT_COLUMNS];
     uplift_rs_snapshots::batch_rows!(k, &geom, &[], &mut out, &Checker { present: 0 });
@@ -116,12 +104,12 @@ fn every_snapshot_kernel_runs_and_writes_every_output() {
     let n = 64;
     let geom: Vec<f32> = (0..n)
         .flat_map(|_| {
-            let uv = Vec2::new(rng.next(-0.5, 1.5), rng.next(-0.5, 1.5));
-            geometry_row(uv, rng.vec3(), rng.vec3(), rng.vec3())
+            let uv = Vec2::new(rng.range(-0.5, 1.5), rng.range(-0.5, 1.5));
+            geometry_row(uv, vec3(&mut rng), vec3(&mut rng), vec3(&mut rng))
         })
         .collect();
     for k in KERNELS {
-        let inputs: Vec<f32> = (0..n * k.input_stride).map(|_| rng.next(-1.0, 2.0)).collect();
+        let inputs: Vec<f32> = (0..n * k.input_stride).map(|_| rng.range(-1.0, 2.0)).collect();
         for present in [0, 8] {
             let sentinel = -123456.78f32;
             let mut out = vec![sentinel; n * k.output_stride];
