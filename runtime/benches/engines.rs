@@ -15,6 +15,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use uplift::batch::{Geometry, PatternBatch};
+use uplift::cpu_engine::driver::evals_per_second as rate;
 use uplift::cpu_engine::external::{self, RunnerOptions};
 use uplift::cpu_engine::{CpuEngine, CpuKernel};
 use uplift::wgpu_engine::WgpuEngine;
@@ -77,19 +78,6 @@ fn batch(kernel: &PatternKernel, n: usize) -> PatternBatch {
     PatternBatch::from_rows(&points, &rows, kernel.input_stride, vec![])
 }
 
-/// Runs `f` once to warm up, then repeatedly for at least `seconds` (and 3 runs); returns
-/// evaluations per second.
-fn rate(n: usize, seconds: f64, mut f: impl FnMut()) -> f64 {
-    f();
-    let start = Instant::now();
-    let mut runs = 0;
-    while runs < 3 || start.elapsed().as_secs_f64() < seconds {
-        f();
-        runs += 1;
-    }
-    runs as f64 * n as f64 / start.elapsed().as_secs_f64()
-}
-
 fn mega(r: f64) -> String {
     format!("{:8.2} M evals/s", r / 1e6)
 }
@@ -131,22 +119,25 @@ fn main() {
     let one = CpuEngine::with_threads(1).unwrap().with_cache_dir(cache_dir());
     println!("CPU level: {}", all.cpu_level());
     let prepared = all.prepare(&kernel).unwrap();
-    let (cpu1, cpu_all) = if let CpuKernel::Builtin(_) = prepared {
-        let cpu1 = rate(o.points, o.seconds, || {
-            one.run_prepared(&prepared, &b).unwrap();
-        });
-        let cpu_all = rate(o.points, o.seconds, || {
-            all.run_prepared(&prepared, &b).unwrap();
-        });
-        println!("cpu  in-process   1 thread : {}", mega(cpu1));
-        println!("cpu  in-process {threads:2} threads: {}  ({:.2}× one thread)", mega(cpu_all), cpu_all / cpu1);
-        (cpu1, cpu_all)
-    } else {
-        let cpu1 = external::bench(match &prepared { CpuKernel::External(k) => k, _ => unreachable!() }, &b, 1, o.seconds).unwrap().0;
-        let cpu_all = external::bench(match &prepared { CpuKernel::External(k) => k, _ => unreachable!() }, &b, threads, o.seconds).unwrap().0;
-        println!("cpu  runner       1 thread : {}  (not shipped: no in-process kernel)", mega(cpu1));
-        println!("cpu  runner     {threads:2} threads: {}  ({:.2}× one thread)", mega(cpu_all), cpu_all / cpu1);
-        (cpu1, cpu_all)
+    let (cpu1, cpu_all) = match &prepared {
+        CpuKernel::Builtin(_) => {
+            let cpu1 = rate(o.points, o.seconds, || {
+                one.run_prepared(&prepared, &b).unwrap();
+            });
+            let cpu_all = rate(o.points, o.seconds, || {
+                all.run_prepared(&prepared, &b).unwrap();
+            });
+            println!("cpu  in-process   1 thread : {}", mega(cpu1));
+            println!("cpu  in-process {threads:2} threads: {}  ({:.2}× one thread)", mega(cpu_all), cpu_all / cpu1);
+            (cpu1, cpu_all)
+        }
+        CpuKernel::External(runner) => {
+            let cpu1 = external::bench(runner, &b, 1, o.seconds).unwrap().0;
+            let cpu_all = external::bench(runner, &b, threads, o.seconds).unwrap().0;
+            println!("cpu  runner       1 thread : {}  (not shipped: no in-process kernel)", mega(cpu1));
+            println!("cpu  runner     {threads:2} threads: {}  ({:.2}× one thread)", mega(cpu_all), cpu_all / cpu1);
+            (cpu1, cpu_all)
+        }
     };
 
     // CPU, runners with and without vectorisation (1 thread).

@@ -59,14 +59,7 @@ fn main() {
             std::io::stdout().write_all(&out).unwrap_or_else(|e| fail(format!("writing stdout: {e}")));
         }
         Some(seconds) => {
-            run(&mut outputs); // warm-up
-            let start = std::time::Instant::now();
-            let mut runs = 0u64;
-            while runs < 3 || start.elapsed().as_secs_f64() < seconds {
-                run(&mut outputs);
-                runs += 1;
-            }
-            let rate = (runs as f64 * r.n as f64) / start.elapsed().as_secs_f64();
+            let rate = driver::evals_per_second(r.n, seconds, || run(&mut outputs));
             println!("evals_per_second={rate} level={}", driver::cpu_level());
         }
     }

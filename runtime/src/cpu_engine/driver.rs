@@ -145,3 +145,17 @@ pub fn run_blocks(batch: BatchFn, n: usize, geometry: &[f32], geometry_columns: 
         batch(&g, &x, &mut out, tex);
     });
 }
+
+/// Evaluations per second of `run`, which evaluates `points` points: one warm-up run, then
+/// repeated runs for at least `seconds` (and at least three). The runners' bench mode and the
+/// engines benchmark both measure this way.
+pub fn evals_per_second(points: usize, seconds: f64, mut run: impl FnMut()) -> f64 {
+    run();
+    let start = std::time::Instant::now();
+    let mut runs = 0u64;
+    while runs < 3 || start.elapsed().as_secs_f64() < seconds {
+        run();
+        runs += 1;
+    }
+    runs as f64 * points as f64 / start.elapsed().as_secs_f64()
+}
