@@ -80,27 +80,17 @@ impl CpuEngine {
     /// Finds `kernel` among the shipped ones (by the fingerprint of its generated Rust), or
     /// builds its runner (the first time for a given kernel: a cargo build).
     pub fn prepare(&self, kernel: &PatternKernel) -> Result<CpuKernel, String> {
-        let rust = write_rust_kernel(kernel).map_err(|e| format!("the kernel cannot be written as Rust: {e}"))?;
-        if let Some(k) = builtin::find(kernel_fingerprint(&rust)) {
-            return Ok(CpuKernel::Builtin(k));
+        let rust = rust_of(kernel)?;
+        match builtin::find(kernel_fingerprint(&rust)) {
+            Some(k) => Ok(CpuKernel::Builtin(k)),
+            None => external::build(&rust, KernelShape::of(kernel), &self.runner).map(CpuKernel::External),
         }
-        self.prepare_external(&rust, kernel, &self.runner).map(CpuKernel::External)
     }
 
     /// Builds `kernel`'s runner even when it is shipped, with `options` (the benchmark builds
     /// one with vectorisation off).
     pub fn prepare_runner(&self, kernel: &PatternKernel, options: &RunnerOptions) -> Result<ExternalKernel, String> {
-        let rust = write_rust_kernel(kernel).map_err(|e| format!("the kernel cannot be written as Rust: {e}"))?;
-        self.prepare_external(&rust, kernel, options)
-    }
-
-    fn prepare_external(&self, rust: &str, kernel: &PatternKernel, options: &RunnerOptions) -> Result<ExternalKernel, String> {
-        external::build(rust, KernelShape::of(kernel), options)
-    }
-
-    /// Runner options of this engine (cache folder; vectorisation on).
-    pub fn runner_options(&self) -> &RunnerOptions {
-        &self.runner
+        external::build(&rust_of(kernel)?, KernelShape::of(kernel), options)
     }
 
     /// Evaluates a prepared kernel for every point of `batch` (checked against its shape).
@@ -120,6 +110,11 @@ impl CpuEngine {
             CpuKernel::External(k) => external::run(k, batch, self.threads),
         }
     }
+}
+
+/// The kernel's generated Rust (what both the shipped table and the runners are built from).
+fn rust_of(kernel: &PatternKernel) -> Result<String, String> {
+    write_rust_kernel(kernel).map_err(|e| format!("the kernel cannot be written as Rust: {e}"))
 }
 
 impl PatternEngine for CpuEngine {
