@@ -24,11 +24,28 @@ fn main() {
     for g in &graphs {
         builder = builder.graph(g);
     }
+    // BSDF graphs (`graphs/bsdf/`): one kernel per closure context.
+    let bsdf_dir = graphs_dir.join("bsdf");
+    println!("cargo:rerun-if-changed={}", bsdf_dir.display());
+    let mut bsdf: Vec<PathBuf> = std::fs::read_dir(&bsdf_dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", bsdf_dir.display()))
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "mtlx"))
+        .collect();
+    bsdf.sort();
+    let mut contexts: Vec<Option<&str>> = vec![None; graphs.len()];
+    for g in &bsdf {
+        for c in uplift_compiler::ClosureContext::ALL {
+            builder = builder.closure_graph(g, c);
+            graphs.push(g.clone());
+            contexts.push(Some(c.name()));
+        }
+    }
     let files = builder.compile(&out_dir).unwrap_or_else(|e| panic!("compiling the runtime's graphs:\n{e}"));
 
     let mut table = String::from("// Written by runtime/build.rs: the CPU kernels the runtime ships.\n\n");
     let mut entries = String::new();
-    for (graph, file) in graphs.iter().zip(&files) {
+    for ((graph, file), context) in graphs.iter().zip(&files).zip(&contexts) {
         let stem = file.file_stem().unwrap().to_string_lossy().to_string();
         let text = std::fs::read_to_string(file).unwrap();
         let fingerprint = uplift_compiler::build_api::kernel_fingerprint(&text);
@@ -39,7 +56,7 @@ fn main() {
         );
         let _ = writeln!(
             entries,
-            "    BuiltinKernel {{ name: {stem:?}, source: {:?}, fingerprint: {fingerprint:#x}, shape: KernelShape {{ input_columns: {stem}::INPUT_COLUMNS, output_columns: {stem}::OUTPUT_COLUMNS, texture_count: {stem}::TEXTURE_COUNT }}, batch: cpu_batch_fn!({stem}) }},",
+            "    BuiltinKernel {{ name: {stem:?}, source: {:?}, context: {context:?}, fingerprint: {fingerprint:#x}, shape: KernelShape {{ input_columns: {stem}::INPUT_COLUMNS, output_columns: {stem}::OUTPUT_COLUMNS, texture_count: {stem}::TEXTURE_COUNT }}, batch: cpu_batch_fn!({stem}) }},",
             relative(graph, &manifest)
         );
     }

@@ -32,6 +32,10 @@ struct MxOutputs {
 {%- for t in textures %}
 @group(0) @binding({{ t.binding }}) var {{ t.name }}: texture_2d<f32>;  // {{ t.file }}
 {%- endfor %}
+{%- if let Some(b) = albedo_table_binding %}
+// The pbrlib albedo tables (mx_albedo_table_data of albedo_tables.wgsl), bound by the engine.
+@group(0) @binding({{ b }}) var<storage, read> mx_albedo_table_buffer: array<f32>;
+{%- endif %}
 
 // The graph: one `let` per IR value, in topological order.
 fn mx_pattern(geom: mx_geometry{% if !inputs.is_empty() %}, inputs: MxInputs{% endif %}) -> MxOutputs {

@@ -1795,8 +1795,12 @@ pub fn write_rust_kernel(kernel: &PatternKernel) -> Result<String, RustError> {
 
 /// [`write_rust_kernel`] with options (for instance a shared texture trait).
 pub fn write_rust_kernel_with(kernel: &PatternKernel, options: &RustOptions) -> Result<String, RustError> {
-    let module = &kernel.module;
-    let (body, facts) = write_module(module, &kernel.info, options, true)?;
+    // Kernels that read the albedo tables have a CPU form reading them as a constant array.
+    let (module, info) = match &kernel.cpu_module {
+        Some((m, i)) => (m, i),
+        None => (&kernel.module, &kernel.info),
+    };
+    let (body, facts) = write_module(module, info, options, true)?;
     let kernel_err = |what: String| RustError { construct: what, function: Some("mx_pattern".into()) };
     let (ph, pf) = module
         .functions

@@ -14,13 +14,14 @@
 
 use crate::backend_rust::write_rust_kernel;
 use crate::compile::{Compiler, OutputSelection};
+use crate::kernel::ClosureContext;
 use std::path::{Path, PathBuf};
 
 /// Which graphs to compile and where their nodes come from.
 #[derive(Clone, Debug, Default)]
 pub struct Builder {
     libraries: Vec<PathBuf>,
-    graphs: Vec<(PathBuf, OutputSelection)>,
+    graphs: Vec<(PathBuf, OutputSelection, Option<ClosureContext>)>,
 }
 
 impl Builder {
@@ -36,13 +37,20 @@ impl Builder {
 
     /// Adds a document; every numeric output becomes part of its kernel.
     pub fn graph(mut self, path: impl Into<PathBuf>) -> Builder {
-        self.graphs.push((path.into(), OutputSelection::AllNumeric));
+        self.graphs.push((path.into(), OutputSelection::AllNumeric, None));
+        self
+    }
+
+    /// Adds a document whose one BSDF-typed output is compiled in closure `context`; the
+    /// module is `<stem>_<context>.rs`.
+    pub fn closure_graph(mut self, path: impl Into<PathBuf>, context: ClosureContext) -> Builder {
+        self.graphs.push((path.into(), OutputSelection::AllNumeric, Some(context)));
         self
     }
 
     /// Adds a document, compiling only the named outputs.
     pub fn graph_outputs(mut self, path: impl Into<PathBuf>, outputs: &[&str]) -> Builder {
-        self.graphs.push((path.into(), OutputSelection::Named(outputs.iter().map(|s| s.to_string()).collect())));
+        self.graphs.push((path.into(), OutputSelection::Named(outputs.iter().map(|s| s.to_string()).collect()), None));
         self
     }
 
@@ -58,9 +66,9 @@ impl Builder {
             println!("cargo:rerun-if-changed={}", dir.display());
         }
         let mut written = Vec::new();
-        for (path, selection) in &self.graphs {
+        for (path, selection, context) in &self.graphs {
             println!("cargo:rerun-if-changed={}", path.display());
-            let c = compiler.compile_file(path, selection);
+            let c = compiler.compile_file_in(path, selection, *context);
             let Some(kernel) = c.kernel.filter(|_| !mtlx::has_errors(&c.diagnostics)) else {
                 let mut msg = lines(&c.diagnostics);
                 if msg.is_empty() {
@@ -69,7 +77,10 @@ impl Builder {
                 return Err(msg);
             };
             let rust = write_rust_kernel(&kernel).map_err(|e| format!("{}: {e}", path.display()))?;
-            let stem = path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "kernel".into());
+            let mut stem = path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "kernel".into());
+            if let Some(c) = context {
+                stem = format!("{stem}_{}", c.name());
+            }
             let out = out_dir.join(format!("{stem}.rs"));
             std::fs::write(&out, rust).map_err(|e| format!("{}: {e}", out.display()))?;
             written.push(out);

@@ -3,7 +3,7 @@
 
 use crate::graph_builder::{document_outputs, GraphBuilder, OutputRef};
 use crate::ir::Graph;
-use crate::kernel::PatternKernel;
+use crate::kernel::{ClosureContext, PatternKernel};
 use crate::lower::lower;
 use crate::node_library::NodeLibrary;
 use mtlx::{has_errors, Diagnostic, Document, Library};
@@ -51,20 +51,35 @@ impl Compiler {
     }
 
     pub fn compile_file(&self, path: &Path, selection: &OutputSelection) -> Compilation {
+        self.compile_file_in(path, selection, None)
+    }
+
+    /// Compiles a document's pattern outputs (`context` None) or its one selected BSDF-typed
+    /// output in a closure context.
+    pub fn compile_file_in(&self, path: &Path, selection: &OutputSelection, context: Option<ClosureContext>) -> Compilation {
         let (doc, diags) = mtlx::read_file(path);
-        self.compile_document(doc, diags, &path.display().to_string(), selection)
+        self.compile_document_in(doc, diags, &path.display().to_string(), selection, context)
     }
 
     /// Compiles an already-read document. `read_diags` are the reader's diagnostics.
     pub fn compile_document(&self, doc: Document, read_diags: Vec<Diagnostic>, source: &str, selection: &OutputSelection) -> Compilation {
+        self.compile_document_in(doc, read_diags, source, selection, None)
+    }
+
+    /// [`Compiler::compile_document`] in an optional closure context.
+    pub fn compile_document_in(&self, doc: Document, read_diags: Vec<Diagnostic>, source: &str, selection: &OutputSelection, context: Option<ClosureContext>) -> Compilation {
         let mut diagnostics = read_diags;
         let fail = |diagnostics| Compilation { kernel: None, graph: None, diagnostics, skipped_closures: Vec::new() };
         if has_errors(&diagnostics) {
             return fail(diagnostics);
         }
         let all = document_outputs(&doc);
+        let wanted = |o: &OutputRef| match context {
+            None => o.ty.is_numeric(),
+            Some(_) => crate::wgsl_types::wgsl_type(&o.ty, false) == Some("BSDF"),
+        };
         let chosen: Vec<OutputRef> = match selection {
-            OutputSelection::AllNumeric => all.iter().filter(|o| o.ty.is_numeric()).cloned().collect(),
+            OutputSelection::AllNumeric => all.iter().filter(|o| wanted(o)).cloned().collect(),
             OutputSelection::Named(names) => {
                 let mut v = Vec::new();
                 for n in names {
@@ -84,17 +99,29 @@ impl Compiler {
                 diagnostics.push(Diagnostic::error(o.pos.clone(), format!("<output> `{}` has no type", e.name())));
             }
         }
-        let skipped_closures: Vec<String> = all.iter().filter(|o| !o.ty.is_numeric()).map(|o| o.name.clone()).collect();
+        let skipped_closures: Vec<String> = all.iter().filter(|o| !wanted(o)).map(|o| o.name.clone()).collect();
         if chosen.is_empty() {
             if !has_errors(&diagnostics) {
-                diagnostics.push(Diagnostic::warning(doc.get(doc.root()).pos.clone(), "nothing to compile: the document has no pattern (non-closure) output"));
+                let what = match context {
+                    None => "no pattern (non-closure) output",
+                    Some(_) => "no BSDF, surfaceshader or material output",
+                };
+                diagnostics.push(Diagnostic::warning(doc.get(doc.root()).pos.clone(), format!("nothing to compile: the document has {what}")));
             }
             return Compilation { kernel: None, graph: None, diagnostics, skipped_closures };
         }
         for o in &chosen {
-            if !o.ty.is_numeric() {
-                diagnostics.push(Diagnostic::error(o.pos.clone(), format!("output `{}` is {}, not a pattern value", o.name, o.ty)));
+            if !wanted(o) {
+                let msg = match context {
+                    None => format!("output `{}` is {}, not a pattern value (compile it with a closure context)", o.name, o.ty),
+                    Some(c) => format!("output `{}` is {}, not a BSDF, surfaceshader or material for the {} context", o.name, o.ty, c.name()),
+                };
+                diagnostics.push(Diagnostic::error(o.pos.clone(), msg));
             }
+        }
+        if context.is_some() && chosen.len() > 1 && !has_errors(&diagnostics) {
+            let names: Vec<&str> = chosen.iter().map(|o| o.name.as_str()).collect();
+            diagnostics.push(Diagnostic::error(doc.get(doc.root()).pos.clone(), format!("a closure kernel evaluates one output; choose one of: {}", names.join(", "))));
         }
         let builder = GraphBuilder::new(&self.library, Arc::new(doc));
         let (graph, build_diags) = builder.build(&chosen);
@@ -102,7 +129,7 @@ impl Compiler {
         if has_errors(&diagnostics) {
             return Compilation { kernel: None, graph: Some(graph), diagnostics, skipped_closures };
         }
-        match lower(&self.library, graph.clone(), source) {
+        match lower(&self.library, graph.clone(), source, context) {
             Ok(k) => Compilation { kernel: Some(k), graph: Some(graph), diagnostics, skipped_closures },
             Err(e) => {
                 let pos = graph.outputs.first().map(|o| o.pos.clone()).unwrap_or_else(|| mtlx::SourcePos::synthetic(source));

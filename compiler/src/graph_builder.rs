@@ -253,6 +253,13 @@ impl<'a> GraphBuilder<'a> {
     }
 
     fn constant(&mut self, ty: &DataType, text: &str, pos: &SourcePos, origin: &str) -> Result<H, Fail> {
+        if ty.is_closure() {
+            // A closure's only literal is the empty one (`value=""`).
+            if !text.trim().is_empty() {
+                return Err(self.error(pos, format!("a {ty} input takes a connection or the empty value, not `{text}`")));
+            }
+            return self.zero(ty, pos, origin);
+        }
         match Literal::parse(ty, text) {
             Ok(v) => Ok(self.add(ValueKind::Constant(v), ty.clone(), origin.to_string(), pos.clone())),
             Err(m) => Err(self.error(pos, m)),
@@ -265,6 +272,7 @@ impl<'a> GraphBuilder<'a> {
             DataType::Integer => Literal::Integer(0),
             DataType::String | DataType::Filename => Literal::String(String::new()),
             t if t.is_numeric() => Literal::Floats(vec![0.0; t.components().unwrap()]),
+            t if crate::wgsl_types::wgsl_type(t, false).is_some() => Literal::String(String::new()),
             t => return Err(self.error(pos, format!("no default value for type {t}"))),
         };
         Ok(self.add(ValueKind::Constant(lit), ty.clone(), origin.to_string(), pos.clone()))
@@ -550,7 +558,7 @@ impl<'a> GraphBuilder<'a> {
         if nd.node_type() != ty {
             return Err(self.error(&pos, format!("type mismatch: node is {ty} but nodedef `{}` produces {}", nd.name, nd.node_type())));
         }
-        if nd.outputs.iter().any(|o| !o.ty.is_numeric() && !matches!(o.ty, DataType::String | DataType::Filename)) {
+        if nd.outputs.iter().any(|o| !o.ty.is_numeric() && !matches!(o.ty, DataType::String | DataType::Filename) && crate::wgsl_types::wgsl_type(&o.ty, false).is_none()) {
             return Err(self.error(&pos, format!("node `{}` produces {}, a closure/shader type that a pattern kernel cannot evaluate", e.name(), nd.node_type())));
         }
         // Bind every nodedef input: authored connection/value, or default.
@@ -565,7 +573,7 @@ impl<'a> GraphBuilder<'a> {
         // String and filename nodes (`dot`, `constant` of a filename) pass their
         // `defaultinput` through at compile time.
         if let [out] = nd.outputs.as_slice() {
-            if !out.ty.is_numeric() {
+            if matches!(out.ty, DataType::String | DataType::Filename) {
                 let through = out.defaultinput.as_deref().and_then(|d| bound.iter().find(|(p, _)| p.name == d));
                 return match through {
                     Some((_, h)) => Ok(NodeResult::Single(*h)),
@@ -635,6 +643,7 @@ impl<'a> GraphBuilder<'a> {
         }
         let sig = self.lib.wgsl.items[&fname].signature.clone().unwrap();
         let geometry = sig.params.first().is_some_and(|(_, t)| t == "mx_geometry");
+        let closure = sig.params.get(usize::from(geometry)).is_some_and(|(_, t)| t == "mx_closure");
         let mut args = Vec::new();
         let mut missing_file = None;
         for (p, h) in &bound {
@@ -666,20 +675,20 @@ impl<'a> GraphBuilder<'a> {
             };
         }
         if let (Some(k), [out]) = (sig.identity_of, nd.outputs.as_slice()) {
-            let k = k - usize::from(geometry);
+            let k = k.wrapping_sub(usize::from(geometry) + usize::from(closure));
             if let Some(&a) = args.get(k) {
                 if self.graph.values[a].ty == out.ty {
                     return Ok(NodeResult::Single(a));
                 }
             }
         }
-        if !geometry {
+        if !geometry && !closure {
             if let Some(folded) = self.fold(&fname, nd, &args, origin, pos) {
                 return Ok(folded);
             }
         }
         let ty = nd.node_type();
-        let h = self.add(ValueKind::Call { function: fname, args, geometry }, ty, origin.to_string(), pos.clone());
+        let h = self.add(ValueKind::Call { function: fname, args, geometry, closure }, ty, origin.to_string(), pos.clone());
         if nd.outputs.len() == 1 {
             return Ok(NodeResult::Single(h));
         }

@@ -65,8 +65,9 @@ pub enum ValueKind {
     Input(usize),
     /// The kernel's texture binding with this index.
     Texture(usize),
-    /// A call of a library function. `geometry` says it receives `mx_geometry` first.
-    Call { function: String, args: Vec<Handle<Value>>, geometry: bool },
+    /// A call of a library function. `geometry` says it receives `mx_geometry` first,
+    /// `closure` that it receives the closure context (`mx_closure`, after the geometry).
+    Call { function: String, args: Vec<Handle<Value>>, geometry: bool, closure: bool },
     /// One output of a multi-output call.
     Field { base: Handle<Value>, field: String },
 }
@@ -209,8 +210,11 @@ impl Graph {
                 ValueKind::Geometry(g) => format!("geom {}", g.name()),
                 ValueKind::Input(i) => format!("input #{i}"),
                 ValueKind::Texture(t) => format!("texture #{t}"),
-                ValueKind::Call { function, args, geometry } => {
+                ValueKind::Call { function, args, geometry, closure } => {
                     let mut a: Vec<String> = args.iter().map(|a| format!("{a:?}")).collect();
+                    if *closure {
+                        a.insert(0, "cl".into());
+                    }
                     if *geometry {
                         a.insert(0, "geom".into());
                     }

@@ -18,4 +18,4 @@ pub mod wgsl_items;
 pub mod wgsl_types;
 
 pub use compile::{Compilation, Compiler, OutputSelection};
-pub use kernel::PatternKernel;
+pub use kernel::{ClosureContext, PatternKernel};

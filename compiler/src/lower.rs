@@ -2,7 +2,7 @@
 //! concatenated with exactly the library items it calls; parsed once by naga, validated,
 //! compacted, validated again, and written by naga's WGSL writer.
 
-use crate::ir::{GeomProp, Graph, ValueKind};
+use crate::ir::{GeomProp, Graph, InterfaceInput, ValueKind};
 use crate::kernel::*;
 use crate::node_library::NodeLibrary;
 use crate::wgsl_types::{constant_expr, wgsl_type};
@@ -26,6 +26,7 @@ struct TextureSlot {
 struct PatternKernelTemplate<'a> {
     source: &'a str,
     items: Vec<&'a str>,
+    albedo_table_binding: Option<u32>,
     inputs: Vec<Field>,
     outputs: Vec<Field>,
     textures: Vec<TextureSlot>,
@@ -94,14 +95,26 @@ fn store_stmts(ty: &DataType, value: &str, offset: usize) -> Vec<String> {
 }
 
 /// Lowers `graph` to a validated naga module and WGSL text. `source` names the document.
-pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str) -> Result<PatternKernel, LowerError> {
+/// With a closure `context`, the graph's one output must be BSDF-typed; the kernel then reads
+/// the context's directions first and writes the context's outputs.
+pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<ClosureContext>) -> Result<PatternKernel, LowerError> {
     let mut used = HashSet::new();
     // Interface inputs and outputs.
     let mut inputs = Vec::new();
     let mut input_fields = Vec::new();
     let mut input_loads = Vec::new();
     let mut offset = 0;
-    for inp in &graph.inputs {
+    let direction_inputs: Vec<InterfaceInput> = context
+        .map(|c| c.direction_inputs())
+        .unwrap_or_default()
+        .iter()
+        .map(|name| InterfaceInput { name: name.to_string(), ty: DataType::Vector3, default: vec![0.0, 0.0, 1.0], pos: mtlx::SourcePos::synthetic(source) })
+        .collect();
+    if let Some(clash) = graph.inputs.iter().find(|i| direction_inputs.iter().any(|d| d.name == i.name)) {
+        return Err(LowerError(format!("interface input `{}` has the name of a closure-context input ({}); rename it", clash.name, direction_inputs.iter().map(|d| d.name.as_str()).collect::<Vec<_>>().join(", "))));
+    }
+    let directions = direction_inputs.len();
+    for inp in direction_inputs.iter().chain(&graph.inputs) {
         let t = wgsl_type(&inp.ty, false).ok_or_else(|| LowerError(format!("input `{}` has unsupported type {}", inp.name, inp.ty)))?;
         input_fields.push(Field { field: identifier(&inp.name, "", &mut used), wgsl_type: t.into() });
         input_loads.push(load_expr(&inp.ty, "mx_input_buffer", offset));
@@ -113,13 +126,23 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str) -> Result<PatternKer
     let mut output_fields = Vec::new();
     let mut output_stores = Vec::new();
     let mut offset = 0;
-    for out in &graph.outputs {
-        let t = wgsl_type(&out.ty, false).ok_or_else(|| LowerError(format!("output `{}` has unsupported type {}", out.name, out.ty)))?;
-        let field = identifier(&out.name, "", &mut used);
-        output_stores.extend(store_stmts(&out.ty, &format!("out.{field}"), offset));
+    let output_list: Vec<(String, DataType)> = match context {
+        None => graph.outputs.iter().map(|o| (o.name.clone(), o.ty.clone())).collect(),
+        Some(c) => {
+            match graph.outputs.as_slice() {
+                [one] if one.ty.is_closure() && wgsl_type(&one.ty, false) == Some("BSDF") => {}
+                _ => return Err(LowerError(format!("the {} context needs exactly one BSDF, surfaceshader or material output", c.name()))),
+            }
+            c.outputs().into_iter().map(|(n, t)| (n.to_string(), t)).collect()
+        }
+    };
+    for (name, ty) in &output_list {
+        let t = wgsl_type(ty, false).filter(|_| ty.is_numeric()).ok_or_else(|| LowerError(format!("output `{name}` has type {ty}, which is not a pattern value (compile it with a closure context)")))?;
+        let field = identifier(name, "", &mut used);
+        output_stores.extend(store_stmts(ty, &format!("out.{field}"), offset));
         output_fields.push(Field { field, wgsl_type: t.into() });
-        outputs.push(KernelOutput { name: out.name.clone(), ty: out.ty.clone(), offset });
-        offset += out.ty.components().unwrap();
+        outputs.push(KernelOutput { name: name.clone(), ty: ty.clone(), offset });
+        offset += ty.components().unwrap();
     }
     let output_stride = offset;
     if outputs.is_empty() {
@@ -139,45 +162,132 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str) -> Result<PatternKer
     // Body.
     let mut body = Vec::new();
     let mut roots: Vec<&str> = vec!["mx_geometry"];
+    // Values that depend on the closure context are emitted once per pass (the sample context
+    // runs the closure tree twice: choose a direction, then evaluate its pdf and response).
+    let mut per_pass = vec![false; graph.values.len()];
+    for (h, v) in graph.values.iter() {
+        per_pass[h.index()] = match &v.kind {
+            ValueKind::Call { args, closure, .. } => *closure || args.iter().any(|a| per_pass[a.index()]),
+            ValueKind::Field { base, .. } => per_pass[base.index()],
+            _ => false,
+        };
+    }
+    let passes: &[i32] = match context {
+        None => &[],
+        Some(ClosureContext::Eval) => &[CONTEXT_EVAL],
+        Some(ClosureContext::Albedo) => &[CONTEXT_ALBEDO],
+        Some(ClosureContext::Sample) => &[CONTEXT_SAMPLE, CONTEXT_PDF],
+        Some(ClosureContext::Pdf) => &[CONTEXT_PDF],
+    };
+    if context.is_some() {
+        roots.extend(["mx_closure_new", "mx_closure_for_lobe", "mx_closure_pdf"]);
+        let field = |k: usize| format!("inputs.{}", input_fields[k].field);
+        let (wv, second) = (field(0), field(1.min(directions - 1)));
+        let (wl, u) = match context {
+            Some(ClosureContext::Sample) => ("vec3<f32>(0.0, 0.0, 1.0)".to_string(), second),
+            Some(ClosureContext::Eval | ClosureContext::Pdf) => (second, "vec3<f32>(0.0)".to_string()),
+            _ => ("vec3<f32>(0.0, 0.0, 1.0)".to_string(), "vec3<f32>(0.0)".to_string()),
+        };
+        body.push(format!("let cl{} = mx_closure_new({}, {wv}, {wl}, {u});", passes[0], passes[0]));
+    }
     // Leaves (constants, geometry, inputs, textures) are written inline where they are used;
     // every call gets one `let` (naga's parse time grows with the statements it reads).
-    let mut operand: Vec<String> = Vec::with_capacity(graph.values.len());
-    for (h, v) in graph.values.iter() {
+    // operand[h][p] is value h's expression in pass p (one entry for pass-independent values).
+    let mut operand: Vec<Vec<String>> = vec![Vec::new(); graph.values.len()];
+    let pick = |operand: &Vec<Vec<String>>, x: usize, p: usize| -> String {
+        let o = &operand[x];
+        o.get(p).or_else(|| o.first()).cloned().unwrap_or_default()
+    };
+    // Pass-independent values first (in order), then each pass's values (in order): every
+    // value still follows what it uses.
+    let order: Vec<(usize, Option<usize>)> = (0..graph.values.len())
+        .filter(|&h| !per_pass[h])
+        .map(|h| (h, None))
+        .chain((0..passes.len()).flat_map(|p| (0..graph.values.len()).filter(|&h| per_pass[h]).map(move |h| (h, Some(p)))))
+        .collect();
+    for (h, pass) in order {
+        let v = &graph.values[crate::arena::Handle::from_index(h)];
+        let p = pass.unwrap_or(0);
+        if pass == Some(1) && operand.iter().all(|o| o.len() < 2) {
+            // First value of the pdf pass: its context, at the direction the sample pass chose.
+            let chosen = pick(&operand, graph.outputs[0].value.index(), 0);
+            body.push(format!("let cl{} = mx_closure_new({}, cl{}.wv, {chosen}.lobe.xyz, cl{}.u);", passes[1], passes[1], passes[0], passes[0]));
+        }
         let rhs = match &v.kind {
             // Strings and filenames exist only at compile time (enum strings are already
             // integers, filenames texture bindings): they have no WGSL expression.
             ValueKind::Constant(lit) => {
-                operand.push(constant_expr(&v.ty, lit).unwrap_or_default());
+                if let DataType::Closure(name) = &v.ty {
+                    if let Some((ty, _)) = crate::wgsl_types::closure_type(name) {
+                        roots.extend([ty, "mx_bsdf_empty"]);
+                    }
+                }
+                operand[h].push(constant_expr(&v.ty, lit).unwrap_or_default());
                 continue;
             }
             ValueKind::Geometry(g) => {
-                operand.push(format!("geom.{}", g.field()));
+                operand[h].push(format!("geom.{}", g.field()));
                 continue;
             }
             ValueKind::Input(i) => {
-                operand.push(format!("inputs.{}", input_fields[*i].field));
+                operand[h].push(format!("inputs.{}", input_fields[*i + directions].field));
                 continue;
             }
             ValueKind::Texture(t) => {
-                operand.push(textures[*t].name.clone());
+                operand[h].push(textures[*t].name.clone());
                 continue;
             }
-            ValueKind::Call { function, args, geometry } => {
+            ValueKind::Call { function, args, geometry, closure } => {
                 roots.push(function);
-                let mut a: Vec<String> = args.iter().map(|&x| operand[x.index()].clone()).collect();
+                let mut a: Vec<String> = args.iter().map(|&x| pick(&operand, x.index(), p)).collect();
+                if *closure {
+                    let Some(k) = pass.map(|p| passes[p]) else {
+                        return Err(LowerError(format!("`{function}` evaluates a closure: compile its output with a closure context (eval, albedo or sample)")));
+                    };
+                    a.insert(0, format!("mx_closure_for_lobe(cl{k}, {h}u)"));
+                }
                 if *geometry {
                     a.insert(0, "geom".into());
                 }
                 format!("{function}({})", a.join(", "))
             }
-            ValueKind::Field { base, field } => format!("{}.{field}", operand[base.index()]),
+            ValueKind::Field { base, field } => format!("{}.{field}", pick(&operand, base.index(), p)),
         };
-        let name = format!("v{}", h.index());
+        let name = match pass {
+            Some(p) if passes.len() > 1 => format!("v{h}_{p}"),
+            _ => format!("v{h}"),
+        };
         body.push(format!("let {name} = {rhs};"));
-        operand.push(name);
+        operand[h].push(name);
     }
-    let result: Vec<String> = graph.outputs.iter().map(|o| operand[o.value.index()].clone()).collect();
-    let items: Vec<&str> = lib.wgsl.closure(&roots).into_iter().map(|i| i.text.as_str()).collect();
+    let result: Vec<String> = match context {
+        None => graph.outputs.iter().map(|o| pick(&operand, o.value.index(), 0)).collect(),
+        Some(c) => {
+            let last = pick(&operand, graph.outputs[0].value.index(), passes.len() - 1);
+            match c {
+                ClosureContext::Eval | ClosureContext::Albedo => vec![format!("{last}.response"), format!("{last}.throughput")],
+                ClosureContext::Pdf => vec![format!("mx_closure_pdf({last})"), format!("{last}.response"), format!("{last}.throughput")],
+                ClosureContext::Sample => {
+                    if operand.iter().all(|o| o.len() < 2) {
+                        // A closure tree with no lobe (an empty closure): nothing to choose.
+                        body.push(format!("let cl{} = mx_closure_new({}, cl{}.wv, vec3<f32>(0.0, 0.0, 1.0), cl{}.u);", passes[1], passes[1], passes[0], passes[0]));
+                    }
+                    vec![format!("cl{}.wl", passes[1]), format!("mx_closure_pdf({last})"), format!("{last}.response"), format!("{last}.throughput")]
+                }
+            }
+        }
+    };
+    let closure_items = lib.wgsl.closure(&roots);
+    // Albedo tables: CPU kernels read the library's constant array (a Rust static); GPU kernels
+    // read the same data from a storage buffer, since a shader indexing a large constant array
+    // copies it at every access (naga's SPIR-V writer; lavapipe then never finishes compiling).
+    let uses_tables = closure_items.iter().any(|i| i.name == TABLE_ACCESSOR);
+    let cpu_items: Vec<&str> = closure_items.iter().map(|i| i.text.as_str()).collect();
+    let items: Vec<&str> = closure_items
+        .iter()
+        .filter(|i| i.name != TABLE_DATA)
+        .map(|i| if i.name == TABLE_ACCESSOR { GPU_TABLE_ACCESSOR } else { i.text.as_str() })
+        .collect();
     if !lib.wgsl.items.contains_key("mx_geometry") {
         return Err(LowerError("the library defines no `mx_geometry` struct (stdlib/wgsl/geometric.wgsl)".into()));
     }
@@ -206,9 +316,10 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str) -> Result<PatternKer
             geometry_loads.push(format!("geom.{} = cross(geom.{}, geom.{});", b.field(), n.field(), t.field()));
         }
     }
-    let template = PatternKernelTemplate {
+    let mut template = PatternKernelTemplate {
         source,
         items,
+        albedo_table_binding: uses_tables.then_some(BINDING_ALBEDO_TABLES),
         inputs: input_fields,
         outputs: output_fields,
         textures,
@@ -224,6 +335,15 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str) -> Result<PatternKer
     };
     let text = template.render().map_err(|e| LowerError(format!("template: {e}")))?;
     let (module, info) = to_naga(&text)?;
+    let (cpu_module, albedo_tables) = if uses_tables {
+        template.items = cpu_items;
+        template.albedo_table_binding = None;
+        let cpu_text = template.render().map_err(|e| LowerError(format!("template: {e}")))?;
+        let data = lib.albedo_table_data.clone().ok_or_else(|| LowerError(format!("the library's `{TABLE_DATA}` is not a constant f32 array")))?;
+        (Some(to_naga(&cpu_text)?), Some(data))
+    } else {
+        (None, None)
+    };
     let wgsl = naga::back::wgsl::write_string(&module, &info, naga::back::wgsl::WriterFlags::empty())
         .map_err(|e| LowerError(format!("naga WGSL writer: {e}")))?;
     let header = format!("// Generated by uplift (template: templates/pattern_kernel.wgsl; writer: naga {}) from {source}. Do not edit.\n", naga_version());
@@ -237,8 +357,23 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str) -> Result<PatternKer
         input_stride,
         outputs,
         output_stride,
+        context,
+        cpu_module,
+        albedo_tables,
     })
 }
+
+/// The library function every albedo-table read goes through, the constant array it reads on
+/// the CPU, and its GPU form (reading the storage buffer the kernel template declares).
+pub const TABLE_ACCESSOR: &str = "mx_albedo_table";
+pub const TABLE_DATA: &str = "mx_albedo_table_data";
+const GPU_TABLE_ACCESSOR: &str = "fn mx_albedo_table(i: i32) -> f32 {\n    return mx_albedo_table_buffer[i];\n}";
+
+/// The context numbers of closure.wgsl (MX_CONTEXT_*).
+const CONTEXT_EVAL: i32 = 0;
+const CONTEXT_ALBEDO: i32 = 1;
+const CONTEXT_SAMPLE: i32 = 2;
+const CONTEXT_PDF: i32 = 3;
 
 fn naga_version() -> &'static str {
     "30.0.1"

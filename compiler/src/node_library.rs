@@ -119,6 +119,9 @@ pub struct NodeLibrary {
     /// Interprets library functions on constant arguments (constant folding); `None` when the
     /// library's WGSL does not parse as one module (reported in `diagnostics`).
     pub evaluator: Option<ConstEvaluator>,
+    /// The values of the library's albedo-table array (`mx_albedo_table_data`), which GPU
+    /// kernels receive as a storage buffer.
+    pub albedo_table_data: Option<std::sync::Arc<[f32]>>,
 }
 
 /// What a node's authored element says, for matching.
@@ -149,7 +152,8 @@ impl NodeLibrary {
                 None
             }
         };
-        let mut lib = NodeLibrary { defs, wgsl, diagnostics, signatures: HashMap::new(), evaluator };
+        let albedo_table_data = wgsl.items.get(crate::lower::TABLE_DATA).and_then(|i| const_f32_array(&i.text)).map(std::sync::Arc::from);
+        let mut lib = NodeLibrary { defs, wgsl, diagnostics, signatures: HashMap::new(), evaluator, albedo_table_data };
         let checked: HashMap<String, Result<(), String>> = lib
             .defs
             .nodedefs
@@ -199,6 +203,10 @@ impl NodeLibrary {
             Some(&"mx_geometry") => &params[1..],
             _ => &params[..],
         };
+        let params = match params.first() {
+            Some(&"mx_closure") => &params[1..],
+            _ => params,
+        };
         if params != expected.iter().map(String::as_str).collect::<Vec<_>>().as_slice() {
             return Err(format!(
                 "`{name}` ({}:{}) takes ({}) but nodedef `{}` implies ({})",
@@ -228,6 +236,24 @@ impl NodeLibrary {
     pub fn atomic_nodedefs(&self) -> impl Iterator<Item = &NodeDef> {
         self.defs.nodedefs.iter().filter(|nd| !self.defs.graphs.contains_key(&nd.name))
     }
+}
+
+/// The values of `const name = array<f32, N>(v0, v1, …);` (comments already stripped or not).
+fn const_f32_array(text: &str) -> Option<Vec<f32>> {
+    let open = text.find("array<f32")?;
+    let body = &text[open..];
+    let start = body.find('(')? + 1;
+    let end = body.rfind(')')?;
+    let values: Vec<f32> = body[start..end]
+        .lines()
+        .map(|l| l.split("//").next().unwrap_or(""))
+        .flat_map(|l| l.split(','))
+        .map(str::trim)
+        .filter(|t| !t.is_empty())
+        .map(|t| t.trim_end_matches('f').parse::<f32>())
+        .collect::<Result<_, _>>()
+        .ok()?;
+    Some(values)
 }
 
 /// Finds the nodedef for a node among `layers` (searched in order: a document's own

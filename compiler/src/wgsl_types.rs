@@ -17,6 +17,21 @@ pub fn wgsl_type(ty: &DataType, has_enum: bool) -> Option<&'static str> {
         DataType::Matrix44 => "mat4x4<f32>",
         DataType::String if has_enum => "i32",
         DataType::Filename => "texture_2d<f32>",
+        DataType::Closure(name) => closure_type(name)?.0,
+        _ => return None,
+    })
+}
+
+/// (WGSL type, WGSL expression of the empty value) of a closure or shader type
+/// (pbrlib/wgsl/closure.wgsl): BSDFs, surface shaders and materials are all `BSDF` values.
+pub fn closure_type(name: &str) -> Option<(&'static str, &'static str)> {
+    Some(match name {
+        "BSDF" | "surfaceshader" | "material" => ("BSDF", "mx_bsdf_empty()"),
+        "EDF" => ("EDF", "EDF(vec3<f32>(0.0))"),
+        "VDF" => ("VDF", "VDF(vec3<f32>(0.0), vec3<f32>(0.0))"),
+        "volumeshader" => ("mx_volumeshader", "mx_volumeshader(VDF(vec3<f32>(0.0), vec3<f32>(0.0)))"),
+        "displacementshader" => ("mx_displacementshader", "mx_displacementshader(vec3<f32>(0.0))"),
+        "lightshader" => ("mx_lightshader", "mx_lightshader(vec3<f32>(0.0))"),
         _ => return None,
     })
 }
@@ -45,6 +60,7 @@ pub fn constant_expr(ty: &DataType, value: &Value) -> Option<String> {
         (DataType::Integer, Value::Integer(i)) => format!("i32({i})"),
         (DataType::Float, _) => float_literal(*comps.first()?),
         (t, _) if t.is_numeric() => format!("{}({})", wgsl_type(t, false)?, list(&comps)),
+        (DataType::Closure(name), _) => closure_type(name)?.1.to_string(),
         _ => return None,
     })
 }

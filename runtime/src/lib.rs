@@ -2,6 +2,7 @@
 //! engine (generated Rust, `cpu_engine`) and the wgpu engine (generated WGSL, `wgpu_engine`) —
 //! and the `uplift` CLI's subcommands.
 
+pub mod albedo_tables;
 pub mod atomic_write;
 pub mod batch;
 pub mod cli;

@@ -80,6 +80,9 @@ impl WgpuEngine {
                 },
             ));
         }
+        if kernel.albedo_tables.is_some() {
+            entries.push((BINDING_ALBEDO_TABLES, storage(true)));
+        }
         let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = entries
             .iter()
             .map(|(b, ty)| wgpu::BindGroupLayoutEntry { binding: *b, visibility: wgpu::ShaderStages::COMPUTE, ty: *ty, count: None })
@@ -94,10 +97,15 @@ impl WgpuEngine {
             compilation_options: Default::default(),
             cache: None,
         });
+        // The albedo tables, uploaded once per pipeline.
+        let albedo_tables = kernel.albedo_tables.as_ref().map(|data| {
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("albedo tables"), contents: bytemuck::cast_slice(data), usage: wgpu::BufferUsages::STORAGE })
+        });
         WgpuPipeline {
             pipeline,
             layout,
             shape: KernelShape::of(kernel),
+            albedo_tables,
         }
     }
 
@@ -165,6 +173,9 @@ impl WgpuEngine {
         for (k, v) in views.iter().enumerate() {
             group_entries.push(wgpu::BindGroupEntry { binding: BINDING_FIRST_TEXTURE + k as u32, resource: wgpu::BindingResource::TextureView(v) });
         }
+        if let Some(t) = &p.albedo_tables {
+            group_entries.push(wgpu::BindGroupEntry { binding: BINDING_ALBEDO_TABLES, resource: t.as_entire_binding() });
+        }
         let group = d.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &p.layout, entries: &group_entries });
         let mut encoder = d.create_command_encoder(&Default::default());
         {
@@ -223,6 +234,7 @@ pub struct WgpuPipeline {
     pipeline: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     shape: KernelShape,
+    albedo_tables: Option<wgpu::Buffer>,
 }
 
 impl PatternEngine for WgpuEngine {

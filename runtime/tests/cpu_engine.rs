@@ -86,7 +86,11 @@ fn shipped_kernels_run_in_process_and_agree_with_wgpu() {
     let (one, all) = (cpu(1), cpu(2));
     assert!(BUILTIN_KERNELS.iter().any(|k| k.name == "triplanar_mask"));
     for (ki, shipped) in BUILTIN_KERNELS.iter().enumerate() {
-        let kernel = compile_file(&compiler, &Path::new(env!("CARGO_MANIFEST_DIR")).join(shipped.source));
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(shipped.source);
+        let kernel = match shipped.context {
+            None => compile_file(&compiler, &path),
+            Some(c) => compiler.compile_file_in(&path, &OutputSelection::AllNumeric, uplift_compiler::ClosureContext::from_name(c)).kernel.unwrap(),
+        };
         let prepared = all.prepare(&kernel).unwrap();
         assert!(matches!(prepared, CpuKernel::Builtin(k) if k.name == shipped.name), "{}: not found among the shipped kernels", shipped.name);
         let mut rng = Rng::new(0x5eed ^ ki as u64);

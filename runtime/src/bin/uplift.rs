@@ -19,6 +19,8 @@ enum Command {
     Compile(uplift::cli::compile::CompileArgs),
     /// Evaluate one output for every row of a CSV file of inputs; write a CSV of results.
     Eval(uplift::cli::eval::EvalArgs),
+    /// Regenerate the pbrlib albedo tables by quasi-Monte-Carlo integration.
+    Tables(uplift::cli::tables::TablesArgs),
 }
 
 fn main() -> ExitCode {
@@ -27,6 +29,7 @@ fn main() -> ExitCode {
         Command::Check(a) => uplift::cli::check::run(a),
         Command::Compile(a) => uplift::cli::compile::run(a),
         Command::Eval(a) => uplift::cli::eval::run(a),
+        Command::Tables(a) => uplift::cli::tables::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -112,6 +112,10 @@ pub struct CompileArgs {
     /// Time library loading and per-document compilation instead of writing files.
     #[arg(long)]
     pub bench: bool,
+    /// Compile the BSDF, surfaceshader or material output in this closure context (its
+    /// directions become the first inputs) instead of the pattern outputs.
+    #[arg(long, value_enum)]
+    pub context: Option<super::ContextArg>,
 }
 
 /// Metal argument slots for the kernel's resources: buffers in `[[buffer(k)]]` in binding order,
@@ -146,7 +150,7 @@ pub fn run(args: CompileArgs) -> Result<(), String> {
     let selection = if args.output.is_empty() { OutputSelection::AllNumeric } else { OutputSelection::Named(args.output.clone()) };
     let mut failed = false;
     for file in &args.files {
-        let c = compiler.compile_file(file, &selection);
+        let c = compiler.compile_file_in(file, &selection, args.context.map(|c| c.context()));
         failed |= super::report(&c.diagnostics);
         let Some(kernel) = c.kernel else { continue };
         let stem = file.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "kernel".into());

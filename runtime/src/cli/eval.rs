@@ -52,6 +52,12 @@ pub struct EvalArgs {
     /// returns its `default`, as MaterialX does (without this flag, a missing file is an error).
     #[arg(long)]
     pub allow_missing_textures: bool,
+    /// For a BSDF, surfaceshader or material output: the closure context. Its inputs are
+    /// `wv_x,wv_y,wv_z` and `wl_*` (eval) or `u_*` (sample: three uniforms in [0, 1)), local
+    /// frame (normal +z, tangent +x) unless geometry columns say otherwise; its outputs
+    /// `response_*`/`albedo_*`, `throughput_*` (sample: also `wl_*` and `pdf`).
+    #[arg(long, value_enum)]
+    pub context: Option<super::ContextArg>,
 }
 
 /// The geometric input columns and their defaults: texcoord (0, 0), position (0, 0, 0),
@@ -191,7 +197,7 @@ pub fn batch_from_table(kernel: &PatternKernel, graph_inputs: &[(String, DataTyp
 
 pub fn run(args: EvalArgs) -> Result<(), String> {
     let compiler = super::compiler(&args.library)?;
-    let c = compiler.compile_file(&args.file, &OutputSelection::Named(vec![args.output.clone()]));
+    let c = compiler.compile_file_in(&args.file, &OutputSelection::Named(vec![args.output.clone()]), args.context.map(|c| c.context()));
     super::report(&c.diagnostics);
     let Some(kernel) = c.kernel else {
         return Err(format!("{}: cannot evaluate output `{}` (see the errors above)", args.file.display(), args.output));

@@ -5,10 +5,36 @@ pub mod check;
 pub mod compile;
 pub mod compile_bench;
 pub mod eval;
+pub mod tables;
 
 use mtlx::Diagnostic;
 use std::path::PathBuf;
 use uplift_compiler::Compiler;
+
+/// The closure context of a BSDF-typed output on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum ContextArg {
+    /// f·cos θl and throughput for directions wv, wl.
+    Eval,
+    /// Directional albedo and throughput for direction wv.
+    Albedo,
+    /// A direction wl drawn for wv from three uniforms u, with its pdf, response and throughput.
+    Sample,
+    /// The pdf with which `sample` draws wl for wv, with response and throughput.
+    Pdf,
+}
+
+impl ContextArg {
+    pub fn context(self) -> uplift_compiler::ClosureContext {
+        use uplift_compiler::ClosureContext as C;
+        match self {
+            ContextArg::Eval => C::Eval,
+            ContextArg::Albedo => C::Albedo,
+            ContextArg::Sample => C::Sample,
+            ContextArg::Pdf => C::Pdf,
+        }
+    }
+}
 
 /// Prints diagnostics to stderr; returns true when any is an error.
 pub fn report(diagnostics: &[Diagnostic]) -> bool {

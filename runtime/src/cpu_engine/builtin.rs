@@ -13,6 +13,8 @@ pub struct BuiltinKernel {
     pub name: &'static str,
     /// The document, relative to the runtime crate.
     pub source: &'static str,
+    /// The closure context (`eval`, `albedo`, `sample`) of a BSDF graph's kernel.
+    pub context: Option<&'static str>,
     /// `uplift_compiler::build_api::kernel_fingerprint` of its generated Rust.
     pub fingerprint: u64,
     pub shape: KernelShape,

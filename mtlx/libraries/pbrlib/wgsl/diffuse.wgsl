@@ -1,0 +1,78 @@
+// diffuse.wgsl: ND_oren_nayar_diffuse_bsdf (MaterialX's qualitative Oren–Nayar; roughness 0 is
+// Lambert) and ND_burley_diffuse_bsdf. Both opaque (throughput 0), cosine sampled, albedo from
+// the project's tables. `energy_compensation` (EON) is not implemented yet: the uncompensated
+// lobe is evaluated.
+
+fn mx_oren_nayar_factor(v: vec3<f32>, l: vec3<f32>, sigma: f32) -> f32 {
+    let mv = clamp(v.z, 1.0e-8, 1.0);
+    let s = dot(l, v) - l.z * mv;
+    let stinv = select(0.0, s / max(max(l.z, mv), 1.0e-8), s > 0.0);
+    let s2 = sigma * sigma;
+    let a = 1.0 - 0.5 * (s2 / (s2 + 0.33));
+    let b = 0.45 * s2 / (s2 + 0.09);
+    return a + b * stinv;
+}
+
+fn mx_burley_factor(v: vec3<f32>, l: vec3<f32>, r: f32) -> f32 {
+    let h = mx_half_vector(v, l);
+    let ldoth = dot(l, h);
+    let f90 = 0.5 + 2.0 * r * ldoth * ldoth;
+    let ml = 1.0 - clamp(l.z, 0.0, 1.0);
+    let mv = 1.0 - clamp(v.z, 0.0, 1.0);
+    let ml2 = ml * ml;
+    let mv2 = mv * mv;
+    return (1.0 + (f90 - 1.0) * ml2 * ml2 * ml) * (1.0 + (f90 - 1.0) * mv2 * mv2 * mv);
+}
+
+// The contexts of an opaque diffuse lobe: `kind` 0 Oren–Nayar, 1 Burley.
+fn mx_diffuse_lobe(cl: mx_closure, weight: f32, color: vec3<f32>, roughness: f32, normal: vec3<f32>, kind: i32) -> BSDF {
+    let w = mx_lobe_weight(weight);
+    let opaque = vec3<f32>(0.0);
+    if (w <= 0.0) {
+        return BSDF(vec3<f32>(0.0), opaque, mx_bsdf_empty().lobe);
+    }
+    let frame = mx_frame_new(normal, vec3<f32>(0.0), cl.wv);
+    let v = mx_to_local(frame, cl.wv);
+    let c = max(color, vec3<f32>(0.0));
+    let r = max(roughness, 0.0);
+    if (cl.context == MX_CONTEXT_EVAL || cl.context == MX_CONTEXT_PDF) {
+        let l = mx_to_local(frame, cl.wl);
+        var f = 0.0;
+        if (l.z > 0.0) {
+            var shape: f32;
+            if (kind == 1) {
+                shape = mx_burley_factor(v, l, r);
+            } else {
+                shape = mx_oren_nayar_factor(v, l, r);
+            }
+            f = shape * l.z * MX_INV_PI;
+        }
+        let response = (w * f) * c;
+        if (cl.context == MX_CONTEXT_EVAL) {
+            return BSDF(response, opaque, mx_bsdf_empty().lobe);
+        }
+        return mx_lobe_with_pdf(response, opaque, mx_luminance_rgb(w * c * mx_diffuse_albedo(v.z, r, kind)), mx_pdf_cosine(l));
+    }
+    let albedo = w * c * mx_diffuse_albedo(v.z, r, kind);
+    if (cl.context == MX_CONTEXT_ALBEDO) {
+        return BSDF(albedo, opaque, mx_bsdf_empty().lobe);
+    }
+    return mx_lobe_sampled(cl, opaque, mx_to_world(frame, mx_sample_cosine(cl.u.xy)), mx_luminance_rgb(albedo));
+}
+
+fn mx_diffuse_albedo(mu: f32, r: f32, kind: i32) -> f32 {
+    if (kind == 1) {
+        return mx_albedo_burley(mu, r);
+    }
+    return mx_albedo_oren_nayar(mu, r);
+}
+
+// ND_oren_nayar_diffuse_bsdf
+fn mx_oren_nayar_diffuse_bsdf(cl: mx_closure, weight: f32, color: vec3<f32>, roughness: f32, normal: vec3<f32>, energy_compensation: bool) -> BSDF {
+    return mx_diffuse_lobe(cl, weight, color, roughness, normal, 0);
+}
+
+// ND_burley_diffuse_bsdf
+fn mx_burley_diffuse_bsdf(cl: mx_closure, weight: f32, color: vec3<f32>, roughness: f32, normal: vec3<f32>) -> BSDF {
+    return mx_diffuse_lobe(cl, weight, color, roughness, normal, 1);
+}

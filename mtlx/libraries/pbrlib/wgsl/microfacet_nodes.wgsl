@@ -1,0 +1,115 @@
+// microfacet_nodes.wgsl: the three GGX BSDF nodes — dielectric_bsdf (reflection; scatter_mode T
+// contributes nothing to reflection, as MaterialX's REFLECTION context), conductor_bsdf
+// (opaque: throughput 0, even at weight 0) and generalized_schlick_bsdf — in every closure
+// context. Albedos come from the project's Monte Carlo tables (albedo_tables.wgsl), so
+// albedo + throughput of a white lobe is exactly 1. Thin film replaces the Fresnel curve by
+// the Airy reflectance (not implemented yet: `thinfilm_*` inputs are accepted and ignored).
+
+// A GGX lobe with its Fresnel curve evaluated at v·h, given everything the contexts share:
+// `scale` (weight·tint·compensation, RGB), the throughput, and the albedo luminance `c`.
+fn mx_ggx_lobe_sample(cl: mx_closure, s: mx_ggx_setup, throughput: vec3<f32>, c: f32) -> BSDF {
+    let h = mx_ggx_sample_vndf(s.v, s.a, cl.u.xy);
+    var l = mx_reflect_about(s.v, h);
+    return mx_lobe_sampled(cl, throughput, mx_to_world(s.frame, l), c);
+}
+
+// The local light direction of the eval and pdf contexts (mirrored back for retroreflection,
+// whose view direction was mirrored).
+fn mx_ggx_light(cl: mx_closure, s: mx_ggx_setup) -> vec3<f32> {
+    return mx_to_local(s.frame, cl.wl);
+}
+
+// ND_dielectric_bsdf
+fn mx_dielectric_bsdf(cl: mx_closure, weight: f32, tint: vec3<f32>, ior: f32, roughness: vec2<f32>, retroreflective: bool, thinfilm_thickness: f32, thinfilm_ior: f32, normal: vec3<f32>, tangent: vec3<f32>, distribution: i32, scatter_mode: i32) -> BSDF {
+    let w = mx_lobe_weight(weight);
+    if (w <= 0.0 || scatter_mode == 1) {
+        return mx_bsdf_empty();
+    }
+    let s = mx_ggx_setup_new(cl, roughness, retroreflective, normal, tangent);
+    let eta = max(ior, 0.0);
+    let t = max(tint, vec3<f32>(0.0));
+    let favg = mx_fresnel_average(vec3<f32>(mx_fresnel_dielectric(1.0, eta)), vec3<f32>(1.0));
+    let comp = mx_ggx_energy_compensation(s.mu, s.abar, favg);
+    // Untinted albedo (tint stays out of the throughput, as in MaterialX).
+    let albedo = comp * mx_albedo_ggx_dielectric(s.mu, s.abar, eta);
+    let throughput = vec3<f32>(1.0) - w * albedo;
+    let tinted = w * t * albedo;
+    if (cl.context == MX_CONTEXT_ALBEDO) {
+        return BSDF(tinted, throughput, mx_bsdf_empty().lobe);
+    }
+    if (cl.context == MX_CONTEXT_SAMPLE) {
+        return mx_ggx_lobe_sample(cl, s, throughput, mx_luminance_rgb(tinted));
+    }
+    let l = mx_ggx_light(cl, s);
+    let h = mx_half_vector(s.v, l);
+    let f = vec3<f32>(mx_fresnel_dielectric(dot(s.v, h), eta));
+    let response = (w * mx_ggx_reflection(s.v, l, h, s.a)) * f * comp * t;
+    if (cl.context == MX_CONTEXT_EVAL) {
+        return BSDF(response, throughput, mx_bsdf_empty().lobe);
+    }
+    return mx_lobe_with_pdf(response, throughput, mx_luminance_rgb(tinted), mx_ggx_pdf(s.v, h, s.a));
+}
+
+// ND_conductor_bsdf
+fn mx_conductor_bsdf(cl: mx_closure, weight: f32, ior: vec3<f32>, extinction: vec3<f32>, roughness: vec2<f32>, retroreflective: bool, thinfilm_thickness: f32, thinfilm_ior: f32, normal: vec3<f32>, tangent: vec3<f32>, distribution: i32) -> BSDF {
+    let w = mx_lobe_weight(weight);
+    let opaque = vec3<f32>(0.0);
+    if (w <= 0.0) {
+        return BSDF(vec3<f32>(0.0), opaque, mx_bsdf_empty().lobe);
+    }
+    let s = mx_ggx_setup_new(cl, roughness, retroreflective, normal, tangent);
+    let n = max(ior, vec3<f32>(0.0));
+    let k = max(extinction, vec3<f32>(0.0));
+    let f1 = mx_fresnel_conductor(1.0, n, k);
+    let comp = mx_ggx_energy_compensation(s.mu, s.abar, mx_fresnel_average(f1, vec3<f32>(1.0)));
+    if (cl.context == MX_CONTEXT_EVAL) {
+        let l = mx_ggx_light(cl, s);
+        let h = mx_half_vector(s.v, l);
+        let f = mx_fresnel_conductor(dot(s.v, h), n, k);
+        return BSDF((w * mx_ggx_reflection(s.v, l, h, s.a)) * f * comp, opaque, mx_bsdf_empty().lobe);
+    }
+    let albedo = w * comp * mx_albedo_ggx_conductor(s.mu, s.abar, n, k);
+    if (cl.context == MX_CONTEXT_ALBEDO) {
+        return BSDF(albedo, opaque, mx_bsdf_empty().lobe);
+    }
+    if (cl.context == MX_CONTEXT_SAMPLE) {
+        return mx_ggx_lobe_sample(cl, s, opaque, mx_luminance_rgb(albedo));
+    }
+    let l = mx_ggx_light(cl, s);
+    let h = mx_half_vector(s.v, l);
+    let f = mx_fresnel_conductor(dot(s.v, h), n, k);
+    let response = (w * mx_ggx_reflection(s.v, l, h, s.a)) * f * comp;
+    return mx_lobe_with_pdf(response, opaque, mx_luminance_rgb(albedo), mx_ggx_pdf(s.v, h, s.a));
+}
+
+// ND_generalized_schlick_bsdf: throughput 1 − w·mean(albedo) (scalar, as MaterialX), with the
+// albedo of the full curve (F82 and exponent included) so that white lobes conserve energy.
+fn mx_generalized_schlick_bsdf(cl: mx_closure, weight: f32, color0: vec3<f32>, color82: vec3<f32>, color90: vec3<f32>, exponent: f32, roughness: vec2<f32>, retroreflective: bool, thinfilm_thickness: f32, thinfilm_ior: f32, normal: vec3<f32>, tangent: vec3<f32>, distribution: i32, scatter_mode: i32) -> BSDF {
+    let w = mx_lobe_weight(weight);
+    if (w <= 0.0 || scatter_mode == 1) {
+        return mx_bsdf_empty();
+    }
+    let s = mx_ggx_setup_new(cl, roughness, retroreflective, normal, tangent);
+    let r0 = max(color0, vec3<f32>(0.0));
+    let r82 = max(color82, vec3<f32>(0.0));
+    let r90 = max(color90, vec3<f32>(0.0));
+    let q = max(exponent, 0.0);
+    let favg = mx_fresnel_average(mx_fresnel_schlick_f82(1.0, r0, r82, r90, q), r90);
+    let comp = mx_ggx_energy_compensation(s.mu, s.abar, favg);
+    let albedo = w * comp * mx_albedo_ggx_schlick(s.mu, s.abar, r0, r82, r90, q);
+    let throughput = vec3<f32>(1.0 - (albedo.x + albedo.y + albedo.z) * (1.0 / 3.0));
+    if (cl.context == MX_CONTEXT_ALBEDO) {
+        return BSDF(albedo, throughput, mx_bsdf_empty().lobe);
+    }
+    if (cl.context == MX_CONTEXT_SAMPLE) {
+        return mx_ggx_lobe_sample(cl, s, throughput, mx_luminance_rgb(albedo));
+    }
+    let l = mx_ggx_light(cl, s);
+    let h = mx_half_vector(s.v, l);
+    let f = mx_fresnel_schlick_f82(dot(s.v, h), r0, r82, r90, q);
+    let response = (w * mx_ggx_reflection(s.v, l, h, s.a)) * f * comp;
+    if (cl.context == MX_CONTEXT_EVAL) {
+        return BSDF(response, throughput, mx_bsdf_empty().lobe);
+    }
+    return mx_lobe_with_pdf(response, throughput, mx_luminance_rgb(albedo), mx_ggx_pdf(s.v, h, s.a));
+}
