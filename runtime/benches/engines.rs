@@ -10,7 +10,11 @@
 //!
 //! `cargo bench -p uplift --bench engines` (options after `--`: `--points N`, `--seconds S`,
 //! `--graph FILE.mtlx` to measure another document's numeric outputs; a graph the runtime does
-//! not ship has no in-process figures).
+//! not ship has no in-process figures; `--context eval|albedo|sample|pdf` for a BSDF graph's
+//! closure kernel, on random direction pairs in the local frame). The closure library's
+//! figures (paths relative to runtime/, where cargo runs benchmarks): `--graph
+//! graphs/bsdf/bsdf_conductor.mtlx --context eval` (one conductor)
+//! and `--graph graphs/bsdf/bsdf_stack.mtlx --context eval` (the layered stack).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -19,17 +23,18 @@ use uplift::cpu_engine::driver::evals_per_second as rate;
 use uplift::cpu_engine::external::{self, RunnerOptions};
 use uplift::cpu_engine::{CpuEngine, CpuKernel};
 use uplift::wgpu_engine::WgpuEngine;
-use uplift_compiler::{Compiler, OutputSelection, PatternKernel};
+use uplift_compiler::{ClosureContext, Compiler, OutputSelection, PatternKernel};
 
 struct Options {
     graph: Option<PathBuf>,
+    context: Option<ClosureContext>,
     points: usize,
     seconds: f64,
     wgpu_child: bool,
 }
 
 fn options() -> Options {
-    let mut o = Options { graph: None, points: 1 << 20, seconds: 2.0, wgpu_child: false };
+    let mut o = Options { graph: None, context: None, points: 1 << 20, seconds: 2.0, wgpu_child: false };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
@@ -45,6 +50,10 @@ fn options() -> Options {
             "--graph" => {
                 i += 1;
                 o.graph = Some(PathBuf::from(&args[i]));
+            }
+            "--context" => {
+                i += 1;
+                o.context = Some(ClosureContext::from_name(&args[i]).expect("--context eval|albedo|sample|pdf"));
             }
             "--wgpu-child" => o.wgpu_child = true,
             _ => {} // `--bench` and libtest's options
@@ -74,8 +83,28 @@ fn batch(kernel: &PatternKernel, n: usize) -> PatternBatch {
         })
         .collect();
     let defaults: Vec<f32> = kernel.inputs.iter().flat_map(|i| i.input.default.clone()).collect();
-    let rows: Vec<f32> = (0..n).flat_map(|_| defaults.iter().copied()).collect();
-    PatternBatch::from_rows(&points, &rows, kernel.input_stride, vec![])
+    let mut rows: Vec<f32> = (0..n).flat_map(|_| defaults.iter().copied()).collect();
+    let Some(context) = kernel.context else {
+        return PatternBatch::from_rows(&points, &rows, kernel.input_stride, vec![]);
+    };
+    // Closure kernels: the local frame, and random upper-hemisphere directions (uniforms for
+    // the sample context's `u`).
+    let local = Geometry { texcoord: [0.0; 2], position: [0.0; 3], normal: [0.0, 0.0, 1.0], tangent: [1.0, 0.0, 0.0] };
+    let directions = context.direction_inputs().len();
+    for row in rows.chunks_mut(kernel.input_stride) {
+        for d in 0..directions {
+            let (u1, u2) = (next(), next());
+            let v = if kernel.inputs[d].input.name == "u" {
+                [u1, u2, next()]
+            } else {
+                let r = u1.sqrt();
+                let phi = std::f32::consts::TAU * u2;
+                [r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt()]
+            };
+            row[kernel.inputs[d].offset..kernel.inputs[d].offset + 3].copy_from_slice(&v);
+        }
+    }
+    PatternBatch::from_rows(&vec![local; n], &rows, kernel.input_stride, vec![])
 }
 
 fn mega(r: f64) -> String {
@@ -100,8 +129,8 @@ fn main() {
     let o = options();
     let graph = o.graph.clone().unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("graphs/triplanar_mask.mtlx"));
     let compiler = Compiler::builtin();
-    let c = compiler.compile_file(&graph, &OutputSelection::AllNumeric);
-    let kernel = c.kernel.expect("triplanar_mask compiles");
+    let c = compiler.compile_file_in(&graph, &OutputSelection::AllNumeric, o.context);
+    let kernel = c.kernel.unwrap_or_else(|| panic!("{}: {:?}", graph.display(), c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>()));
     let b = batch(&kernel, o.points);
     if o.wgpu_child {
         match wgpu_rate(&kernel, &b, o.seconds) {
@@ -111,7 +140,10 @@ fn main() {
         return;
     }
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let name = graph.file_stem().unwrap_or_default().to_string_lossy().to_string();
+    let mut name = graph.file_stem().unwrap_or_default().to_string_lossy().to_string();
+    if let Some(c) = o.context {
+        name = format!("{name} ({} context)", c.name());
+    }
     println!("{name}: {} IR values, {} points per batch, {} output columns", kernel.graph.values.len(), o.points, kernel.output_stride);
 
     // CPU, in-process (a shipped kernel).
@@ -171,8 +203,12 @@ fn main() {
         Err(e) => println!("wgpu: {e}"),
     }
     let exe = std::env::current_exe().unwrap();
+    let mut child_args = vec!["--wgpu-child".to_string(), "--points".into(), o.points.to_string(), "--seconds".into(), o.seconds.to_string(), "--graph".into(), graph.display().to_string()];
+    if let Some(c) = o.context {
+        child_args.extend(["--context".to_string(), c.name().to_string()]);
+    }
     let child = std::process::Command::new(exe)
-        .args(["--wgpu-child", "--points", &o.points.to_string(), "--seconds", &o.seconds.to_string(), "--graph", &graph.display().to_string()])
+        .args(&child_args)
         .env("LP_NUM_THREADS", "1")
         .output();
     match child {

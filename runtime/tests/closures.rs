@@ -94,8 +94,8 @@ fn view(mu: f64) -> [f32; 3] {
 struct Lobe {
     graph: &'static str,
     name: &'static str,
-    /// GGX alpha of the lobe for the Monte Carlo sampler (None: cosine only).
-    alpha: fn(&Params) -> Option<f64>,
+    /// GGX alphas of the lobe's specular parts for the Monte Carlo sampler (empty: none).
+    alpha: fn(&Params) -> Vec<f64>,
     random: fn(&mut Rng) -> Params,
 }
 
@@ -112,11 +112,11 @@ fn roughness(rng: &mut Rng) -> Vec<f32> {
 /// Anisotropic roughness (aspect ratio up to 1.5): the albedo tables are indexed by one
 /// roughness, exact for isotropic lobes only: up to ~4e-2 measured (an open gap; see the issue
 /// note), bounded here so that a regression still fails.
-const ANISOTROPIC_SETS: usize = 50;
+const ANISOTROPIC_SETS: usize = 20;
 const ANISOTROPIC_BOUND: f64 = 0.05;
 
-fn alpha_of(key: &'static str) -> impl Fn(&Params) -> Option<f64> {
-    move |p| p.get(key).map(|r| ((r[0] * r[1]) as f64).sqrt())
+fn alpha_of(key: &'static str) -> impl Fn(&Params) -> Vec<f64> {
+    move |p| p.get(key).map(|r| ((r[0] * r[1]) as f64).sqrt()).into_iter().collect()
 }
 
 fn lobes() -> Vec<Lobe> {
@@ -145,13 +145,13 @@ fn lobes() -> Vec<Lobe> {
         Lobe {
             graph: "bsdf_transparent_lobes",
             name: "sheen_bsdf conty_kulla",
-            alpha: |_| None,
+            alpha: |_| Vec::new(),
             random: |r| Params::from([("k_weight", vec![r.range(0.3, 1.0)]), ("k_color", c3(r, 0.2, 1.0)), ("k_roughness", vec![r.range(0.1, 1.0)])]),
         },
         Lobe {
             graph: "bsdf_transparent_lobes",
             name: "sheen_bsdf zeltner",
-            alpha: |_| None,
+            alpha: |_| Vec::new(),
             random: |r| Params::from([("z_weight", vec![r.range(0.3, 1.0)]), ("z_color", c3(r, 0.2, 1.0)), ("z_roughness", vec![r.range(0.1, 1.0)])]),
         },
         Lobe {
@@ -163,19 +163,19 @@ fn lobes() -> Vec<Lobe> {
         Lobe {
             graph: "bsdf_opaque_lobes",
             name: "oren_nayar_diffuse_bsdf",
-            alpha: |_| None,
+            alpha: |_| Vec::new(),
             random: |r| Params::from([("o_weight", vec![r.range(0.3, 1.0)]), ("o_color", c3(r, 0.2, 1.0)), ("o_roughness", vec![r.range(0.0, 1.0)])]),
         },
         Lobe {
             graph: "bsdf_opaque_lobes",
             name: "burley_diffuse_bsdf",
-            alpha: |_| None,
+            alpha: |_| Vec::new(),
             random: |r| Params::from([("b_weight", vec![r.range(0.3, 1.0)]), ("b_color", c3(r, 0.2, 1.0)), ("b_roughness", vec![r.range(0.0, 1.0)])]),
         },
         Lobe {
             graph: "bsdf_stack",
             name: "layered stack (layer, mix, artistic_ior, sheen, dielectric, conductor, oren_nayar)",
-            alpha: |p| alpha_of("core_roughness")(p),
+            alpha: |p| ["core_roughness", "haze_roughness", "coat_roughness"].iter().flat_map(|k| alpha_of(k)(p)).collect(),
             random: random_stack,
         },
     ]
@@ -183,7 +183,8 @@ fn lobes() -> Vec<Lobe> {
 
 fn random_stack(r: &mut Rng) -> Params {
     let core = roughness(r);
-    let haze: Vec<f32> = core.iter().map(|a| (a * r.range(2.0, 8.0)).min(1.0)).collect();
+    let scale = r.range(2.0, 8.0);
+    let haze: Vec<f32> = core.iter().map(|a| (a * scale).min(1.0)).collect();
     Params::from([
         ("sheen_weight", vec![r.range(0.0, 1.0)]),
         ("sheen_color", c3(r, 0.3, 1.0)),
@@ -221,36 +222,44 @@ fn ggx_d(h: [f64; 3], a: f64) -> f64 {
     a2 / (PI * t * t)
 }
 
-/// The brute-force sampler: half the strata cosine-weighted, half from the GGX normal
-/// distribution (when the lobe has a GGX alpha); returns directions and mixture pdfs.
-fn mc_directions(v: [f32; 3], alpha: Option<f64>, side: usize, rng: &mut Rng) -> (Vec<[f32; 3]>, Vec<f64>) {
+/// The brute-force sampler: a stratified mixture of three distributions — cosine-weighted,
+/// uniform over the hemisphere (dense near the horizon, where grazing sheen lobes live), and,
+/// for GGX lobes, the distribution of normals (D cos θh); returns directions and mixture pdfs.
+fn mc_directions(v: [f32; 3], alphas: &[f64], side: usize, rng: &mut Rng) -> (Vec<[f32; 3]>, Vec<f64>) {
     let v = [v[0] as f64, v[1] as f64, v[2] as f64];
     let mut dirs = Vec::with_capacity(side * side);
     let mut pdfs = Vec::with_capacity(side * side);
-    let ggx_share = if alpha.is_some() { 0.5 } else { 0.0 };
+    // Shares of the strata: GGX, uniform, cosine.
+    let (ggx, uniform) = if alphas.is_empty() { (0.0, 0.5) } else { (0.5, 0.15) };
+    let each = ggx / alphas.len().max(1) as f64;
     for i in 0..side {
         for j in 0..side {
             let u1 = (i as f64 + rng.range(0.0, 1.0) as f64) / side as f64;
             let u2 = (j as f64 + rng.range(0.0, 1.0) as f64) / side as f64;
-            let l = if u1 < ggx_share {
-                let h = ggx_half(alpha.unwrap(), u1 / ggx_share, u2);
+            let phi = 2.0 * PI * u2;
+            let l = if u1 < ggx {
+                let k = ((u1 / each) as usize).min(alphas.len() - 1);
+                let h = ggx_half(alphas[k], (u1 - k as f64 * each) / each, u2);
                 let c = 2.0 * (v[0] * h[0] + v[1] * h[1] + v[2] * h[2]);
                 [c * h[0] - v[0], c * h[1] - v[1], c * h[2] - v[2]]
+            } else if u1 < ggx + uniform {
+                let z = (u1 - ggx) / uniform;
+                let s = (1.0 - z * z).max(0.0).sqrt();
+                [s * phi.cos(), s * phi.sin(), z]
             } else {
-                let uu = (u1 - ggx_share) / (1.0 - ggx_share);
+                let uu = (u1 - ggx - uniform) / (1.0 - ggx - uniform);
                 let r = uu.sqrt();
-                let phi = 2.0 * PI * u2;
                 [r * phi.cos(), r * phi.sin(), (1.0 - uu).max(0.0).sqrt()]
             };
-            let mut pdf = (1.0 - ggx_share) * l[2].max(0.0) / PI;
-            if let Some(a) = alpha {
+            let mut pdf = if l[2] > 0.0 { (1.0 - ggx - uniform) * l[2] / PI + uniform / (2.0 * PI) } else { 0.0 };
+            for &a in alphas {
                 let h = [v[0] + l[0], v[1] + l[1], v[2] + l[2]];
                 let n = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2]).sqrt();
                 if n > 1e-12 {
                     let h = [h[0] / n, h[1] / n, h[2] / n];
                     let vh = v[0] * h[0] + v[1] * h[1] + v[2] * h[2];
                     if h[2] > 0.0 && vh > 0.0 {
-                        pdf += ggx_share * ggx_d(h, a) * h[2] / (4.0 * vh);
+                        pdf += each * ggx_d(h, a) * h[2] / (4.0 * vh);
                     }
                 }
             }
@@ -268,7 +277,7 @@ fn albedo_matches_monte_carlo_integral_of_eval() {
     const SIDE: usize = 256; // 65,536 stratified directions
     let mut report = Vec::new();
     for (li, lobe) in lobes().iter().enumerate() {
-        if std::env::var("UPLIFT_TEST_LOBE").is_ok_and(|l| !lobe.name.contains(&l)) {
+        if std::env::var("UPLIFT_TEST_LOBE").is_ok_and(|l| !lobe.name.starts_with(&l)) {
             continue;
         }
         let eval = bsdf(lobe.graph, ClosureContext::Eval);
@@ -291,7 +300,7 @@ fn albedo_matches_monte_carlo_integral_of_eval() {
             let mut wl = Vec::new();
             let mut pdfs = Vec::new();
             for &mu in &VIEWS {
-                let (d, pdf) = mc_directions(view(mu), alpha, SIDE, &mut rng);
+                let (d, pdf) = mc_directions(view(mu), &alpha, SIDE, &mut rng);
                 wv.extend(std::iter::repeat_n(view(mu), d.len()));
                 wl.extend(d);
                 pdfs.extend(pdf);

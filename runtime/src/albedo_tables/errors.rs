@@ -34,6 +34,28 @@ pub fn summarize(errs: &[CellError], mu_floor: f64) -> TableError {
     e
 }
 
+/// Brute-force GGX albedo for a conductor (one channel) with `n` Hammersley points.
+pub fn conductor_albedo(mu: f64, alpha: f64, n_ior: f64, k: f64, n: u32) -> f64 {
+    ggx_with(mu, alpha, n, |c| fresnel_conductor(c, n_ior, k))
+}
+
+/// Brute-force GGX albedo for a dielectric with `n` Hammersley points.
+pub fn dielectric_albedo(mu: f64, alpha: f64, eta: f64, n: u32) -> f64 {
+    ggx_with(mu, alpha, n, |c| fresnel_dielectric(c, eta))
+}
+
+fn ggx_with(mu: f64, alpha: f64, n: u32, f: impl Fn(f64) -> f64) -> f64 {
+    let v = view(mu);
+    (0..n)
+        .map(|k| {
+            let (u1, u2) = qmc::hammersley(k, n);
+            let (c, w) = ggx_albedo_sample(v, alpha, u1, u2);
+            w * f(c)
+        })
+        .sum::<f64>()
+        / n as f64
+}
+
 fn centre(i: usize, n: usize) -> f64 {
     (i as f64 + 0.5) / (n - 1) as f64
 }

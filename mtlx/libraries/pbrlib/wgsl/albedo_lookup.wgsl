@@ -13,7 +13,7 @@ fn mx_table_axis(t: f32, n: i32) -> vec2<f32> {
 }
 
 fn mx_table_log_coordinate(v: f32) -> f32 {
-    return log(1.0 + 100.0 * clamp(v, 0.0, 1.0)) * (1.0 / log(101.0));
+    return mx_fast_log2(1.0 + 100.0 * clamp(v, 0.0, 1.0)) * (1.0 / 6.65821148);
 }
 
 fn mx_table_angle_coordinate(mu: f32) -> f32 {

@@ -73,10 +73,8 @@ const MX_INV_PI: f32 = 0.318309886183791;
 // normalize() with a fallback for zero-length (or non-finite-length) vectors.
 fn mx_normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
     let len2 = dot(v, v);
-    if (len2 > 1.0e-30 && len2 < 1.0e30) {
-        return v * inverseSqrt(len2);
-    }
-    return fallback;
+    let ok = (len2 > 1.0e-30) & (len2 < 1.0e30);
+    return select(fallback, v * inverseSqrt(clamp(len2, 1.0e-30, 1.0e30)), ok);
 }
 
 // The context for one evaluation: directions normalized (a zero direction reads as the normal).
@@ -115,10 +113,8 @@ struct mx_frame {
 }
 
 fn mx_frame_new(normal: vec3<f32>, tangent: vec3<f32>, wv: vec3<f32>) -> mx_frame {
-    var n = mx_normalize_or(normal, vec3<f32>(0.0, 0.0, 1.0));
-    if (dot(n, wv) < 0.0) {
-        n = -n;
-    }
+    let n0 = mx_normalize_or(normal, vec3<f32>(0.0, 0.0, 1.0));
+    let n = select(n0, -n0, dot(n0, wv) < 0.0);
     // Duff et al. 2017 branchless basis as the fallback tangent.
     let s = select(-1.0, 1.0, n.z >= 0.0);
     let a = -1.0 / (s + n.z);
@@ -148,7 +144,7 @@ fn mx_race_uniform(cl: mx_closure) -> f32 {
 // A leaf's BSDF in the sample context: its candidate (world space) and its race key for
 // albedo luminance `c`.
 fn mx_lobe_sampled(cl: mx_closure, throughput: vec3<f32>, wl: vec3<f32>, c: f32) -> BSDF {
-    let e = -log(mx_race_uniform(cl));
+    let e = -0.693147181 * mx_fast_log2(mx_race_uniform(cl));
     let key = select(MX_LOBE_NEVER, e / c, c > 1.0e-30);
     return BSDF(vec3<f32>(0.0), throughput, vec4<f32>(wl, min(key, MX_LOBE_NEVER)));
 }
@@ -165,10 +161,8 @@ fn mx_lobe_combine(cl: mx_closure, a: vec4<f32>, wa: f32, b: vec4<f32>, wb: f32)
     if (cl.context == MX_CONTEXT_SAMPLE) {
         let ka = select(MX_LOBE_NEVER, a.w / wa, wa > 1.0e-30);
         let kb = select(MX_LOBE_NEVER, b.w / wb, wb > 1.0e-30);
-        if (kb < ka) {
-            return vec4<f32>(b.xyz, min(kb, MX_LOBE_NEVER));
-        }
-        return vec4<f32>(a.xyz, min(ka, MX_LOBE_NEVER));
+        let pick_b = kb < ka;
+        return vec4<f32>(select(a.xyz, b.xyz, pick_b), min(select(ka, kb, pick_b), MX_LOBE_NEVER));
     }
     return vec4<f32>(max(wa, 0.0) * a.xy + max(wb, 0.0) * b.xy, 0.0, 0.0);
 }
@@ -188,4 +182,37 @@ fn mx_pdf_cosine(l: vec3<f32>) -> f32 {
 // could be chosen).
 fn mx_closure_pdf(b: BSDF) -> f32 {
     return select(0.0, b.lobe.x / b.lobe.y, b.lobe.y > 0.0);
+}
+
+// log2, exp2 and pow without library calls, so that the CPU backend's batch loops vectorise
+// (a call to the math library per lane keeps LLVM from vectorising the loop; see
+// ARCHITECTURE.md, "CPU kernel shape"). Relative error below 2e-7 (log2 absolute 2e-7).
+fn mx_fast_log2(x: f32) -> f32 {
+    let bits = bitcast<u32>(max(x, 1.0e-37));
+    var e = f32(i32((bits >> 23u) & 0xffu) - 127);
+    var m = bitcast<f32>((bits & 0x007fffffu) | 0x3f800000u);
+    let big = m > 1.41421356;
+    m = select(m, 0.5 * m, big);
+    e = select(e, e + 1.0, big);
+    // ln(m) = 2·atanh(s), s = (m − 1)/(m + 1) in [−0.172, 0.172].
+    let s = (m - 1.0) / (m + 1.0);
+    let s2 = s * s;
+    let ln_m = 2.0 * s * (1.0 + s2 * (0.333333333 + s2 * (0.2 + s2 * (0.142857143 + s2 * 0.111111111))));
+    return e + ln_m * 1.44269504;
+}
+
+fn mx_fast_exp2(x: f32) -> f32 {
+    let y = clamp(x, -126.0, 127.0);
+    let e = floor(y);
+    let f = y - e;
+    // 2^f on [0, 1): Taylor series of exp(f·ln 2) to degree 7 (error < 2e-7 relative).
+    let t = f * 0.693147181;
+    let p = 1.0 + t * (1.0 + t * (0.5 + t * (0.166666667 + t * (0.0416666667 + t * (0.00833333333 + t * (0.00138888889 + t * 0.000198412698))))));
+    return bitcast<f32>(u32(i32(e) + 127) << 23u) * p;
+}
+
+// x^q for x > 0 (0 for x ≤ 0 and q > 0, 1 for q = 0).
+fn mx_fast_pow(x: f32, q: f32) -> f32 {
+    let r = mx_fast_exp2(q * mx_fast_log2(x));
+    return select(select(0.0, 1.0, q <= 0.0), r, x > 0.0);
 }

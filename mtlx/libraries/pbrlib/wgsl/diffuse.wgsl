@@ -28,25 +28,19 @@ fn mx_burley_factor(v: vec3<f32>, l: vec3<f32>, r: f32) -> f32 {
 fn mx_diffuse_lobe(cl: mx_closure, weight: f32, color: vec3<f32>, roughness: f32, normal: vec3<f32>, kind: i32) -> BSDF {
     let w = mx_lobe_weight(weight);
     let opaque = vec3<f32>(0.0);
-    if (w <= 0.0) {
-        return BSDF(vec3<f32>(0.0), opaque, mx_bsdf_empty().lobe);
-    }
     let frame = mx_frame_new(normal, vec3<f32>(0.0), cl.wv);
     let v = mx_to_local(frame, cl.wv);
     let c = max(color, vec3<f32>(0.0));
     let r = max(roughness, 0.0);
     if (cl.context == MX_CONTEXT_EVAL || cl.context == MX_CONTEXT_PDF) {
         let l = mx_to_local(frame, cl.wl);
-        var f = 0.0;
-        if (l.z > 0.0) {
-            var shape: f32;
-            if (kind == 1) {
-                shape = mx_burley_factor(v, l, r);
-            } else {
-                shape = mx_oren_nayar_factor(v, l, r);
-            }
-            f = shape * l.z * MX_INV_PI;
+        var shape: f32;
+        if (kind == 1) {
+            shape = mx_burley_factor(v, l, r);
+        } else {
+            shape = mx_oren_nayar_factor(v, l, r);
         }
+        let f = select(shape * l.z * MX_INV_PI, 0.0, l.z <= 0.0);
         let response = (w * f) * c;
         if (cl.context == MX_CONTEXT_EVAL) {
             return BSDF(response, opaque, mx_bsdf_empty().lobe);

@@ -26,12 +26,10 @@ fn mx_ggx_smith_s(w: vec3<f32>, a: vec2<f32>) -> f32 {
 
 // D·G2·μl / (4μv), i.e. f·cos θl for F = 1 (height-correlated G2); 0 below the horizon.
 fn mx_ggx_reflection(v: vec3<f32>, l: vec3<f32>, h: vec3<f32>, a: vec2<f32>) -> f32 {
-    if (l.z <= 0.0) {
-        return 0.0;
-    }
     let mv = max(v.z, 1.0e-8);
-    let denom = 2.0 * (l.z * mx_ggx_smith_s(v, a) + mv * mx_ggx_smith_s(l, a));
-    return mx_ggx_d(h, a) * l.z / denom;
+    let ml = max(l.z, 1.0e-8);
+    let denom = 2.0 * (ml * mx_ggx_smith_s(v, a) + mv * mx_ggx_smith_s(l, a));
+    return select(mx_ggx_d(h, a) * ml / denom, 0.0, l.z <= 0.0);
 }
 
 // The half vector of v and l (the normal when they cancel).
@@ -52,11 +50,9 @@ fn mx_ggx_sample_vndf(v: vec3<f32>, a: vec2<f32>, u: vec2<f32>) -> vec3<f32> {
 
 // The pdf of wl = reflect(−v, h) under visible-normal sampling: G1(v)·D(h) / (4μv).
 fn mx_ggx_pdf(v: vec3<f32>, h: vec3<f32>, a: vec2<f32>) -> f32 {
-    if (dot(v, h) <= 0.0 || h.z <= 0.0) {
-        return 0.0;
-    }
     let mv = max(v.z, 1.0e-8);
-    return mx_ggx_d(h, a) / (2.0 * (mv + mx_ggx_smith_s(v, a)));
+    let pdf = mx_ggx_d(h, a) / (2.0 * (mv + mx_ggx_smith_s(v, a)));
+    return select(pdf, 0.0, (dot(v, h) <= 0.0) | (h.z <= 0.0));
 }
 
 fn mx_reflect_about(v: vec3<f32>, h: vec3<f32>) -> vec3<f32> {
@@ -66,20 +62,14 @@ fn mx_reflect_about(v: vec3<f32>, h: vec3<f32>) -> vec3<f32> {
 // Exact unpolarised dielectric Fresnel (Lagarde form); 1 under total internal reflection.
 // `eta` ≤ 0 disables the curve (F = 1), as MaterialX's `ior = 0`.
 fn mx_fresnel_dielectric(cos_theta: f32, eta: f32) -> f32 {
-    if (eta <= 0.0) {
-        return 1.0;
-    }
     let c = clamp(cos_theta, 0.0, 1.0);
     let g2 = eta * eta + c * c - 1.0;
-    if (g2 < 0.0) {
-        return 1.0;
-    }
-    let g = sqrt(g2);
+    let g = sqrt(max(g2, 0.0));
     let gpc = g + c;
     let gmc = g - c;
     let x = gmc / max(gpc, 1.0e-30);
     let y = (c * gpc - 1.0) / max(c * gmc + 1.0, 1.0e-30);
-    return 0.5 * x * x * (1.0 + y * y);
+    return select(0.5 * x * x * (1.0 + y * y), 1.0, (eta <= 0.0) | (g2 < 0.0));
 }
 
 // Exact conductor Fresnel for complex IOR n + ik per channel (average of s and p).
@@ -103,10 +93,7 @@ fn mx_fresnel_conductor(cos_theta: f32, n: vec3<f32>, k: vec3<f32>) -> vec3<f32>
 
 // x^q for x in [0, 1] and q ≥ 0 without pow(0, ·) corner cases.
 fn mx_pow_unit(x: f32, q: f32) -> f32 {
-    if (x <= 0.0) {
-        return select(0.0, 1.0, q <= 0.0);
-    }
-    return pow(x, q);
+    return mx_fast_pow(x, q);
 }
 
 // Hoffman's generalized Schlick with the F82 multiplier (MaterialX mx_fresnel_hoffman_schlick).

@@ -22,7 +22,7 @@ fn mx_ggx_light(cl: mx_closure, s: mx_ggx_setup) -> vec3<f32> {
 // ND_dielectric_bsdf
 fn mx_dielectric_bsdf(cl: mx_closure, weight: f32, tint: vec3<f32>, ior: f32, roughness: vec2<f32>, retroreflective: bool, thinfilm_thickness: f32, thinfilm_ior: f32, normal: vec3<f32>, tangent: vec3<f32>, distribution: i32, scatter_mode: i32) -> BSDF {
     let w = mx_lobe_weight(weight);
-    if (w <= 0.0 || scatter_mode == 1) {
+    if (scatter_mode == 1) {
         return mx_bsdf_empty();
     }
     let s = mx_ggx_setup_new(cl, roughness, retroreflective, normal, tangent);
@@ -54,9 +54,6 @@ fn mx_dielectric_bsdf(cl: mx_closure, weight: f32, tint: vec3<f32>, ior: f32, ro
 fn mx_conductor_bsdf(cl: mx_closure, weight: f32, ior: vec3<f32>, extinction: vec3<f32>, roughness: vec2<f32>, retroreflective: bool, thinfilm_thickness: f32, thinfilm_ior: f32, normal: vec3<f32>, tangent: vec3<f32>, distribution: i32) -> BSDF {
     let w = mx_lobe_weight(weight);
     let opaque = vec3<f32>(0.0);
-    if (w <= 0.0) {
-        return BSDF(vec3<f32>(0.0), opaque, mx_bsdf_empty().lobe);
-    }
     let s = mx_ggx_setup_new(cl, roughness, retroreflective, normal, tangent);
     let n = max(ior, vec3<f32>(0.0));
     let k = max(extinction, vec3<f32>(0.0));
@@ -86,7 +83,7 @@ fn mx_conductor_bsdf(cl: mx_closure, weight: f32, ior: vec3<f32>, extinction: ve
 // albedo of the full curve (F82 and exponent included) so that white lobes conserve energy.
 fn mx_generalized_schlick_bsdf(cl: mx_closure, weight: f32, color0: vec3<f32>, color82: vec3<f32>, color90: vec3<f32>, exponent: f32, roughness: vec2<f32>, retroreflective: bool, thinfilm_thickness: f32, thinfilm_ior: f32, normal: vec3<f32>, tangent: vec3<f32>, distribution: i32, scatter_mode: i32) -> BSDF {
     let w = mx_lobe_weight(weight);
-    if (w <= 0.0 || scatter_mode == 1) {
+    if (scatter_mode == 1) {
         return mx_bsdf_empty();
     }
     let s = mx_ggx_setup_new(cl, roughness, retroreflective, normal, tangent);

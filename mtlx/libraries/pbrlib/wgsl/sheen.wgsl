@@ -7,7 +7,7 @@
 fn mx_sheen_conty_kulla_d(cos_h: f32, r: f32) -> f32 {
     let inv_r = 1.0 / max(r, 0.005);
     let sin2 = max(1.0 - cos_h * cos_h, 0.0);
-    return (2.0 + inv_r) * mx_pow_unit(sin2, 0.5 * inv_r) / (2.0 * MX_PI);
+    return (2.0 + inv_r) * mx_fast_pow(sin2, 0.5 * inv_r) / (2.0 * MX_PI);
 }
 
 // Zeltner's LTC coefficients (1/a, b of the inverse transform) and albedo fit, x = μv, y = r.
@@ -36,9 +36,6 @@ fn mx_sheen_zeltner_density(l_ltc: vec3<f32>, ltc: vec2<f32>) -> f32 {
 // ND_sheen_bsdf
 fn mx_sheen_bsdf(cl: mx_closure, weight: f32, color: vec3<f32>, roughness: f32, normal: vec3<f32>, mode: i32) -> BSDF {
     let w = mx_lobe_weight(weight);
-    if (w <= 0.0) {
-        return mx_bsdf_empty();
-    }
     let frame = mx_frame_new(normal, vec3<f32>(0.0), cl.wv);
     let v = mx_to_local(frame, cl.wv);
     let mu = clamp(v.z, 1.0e-8, 1.0);
@@ -85,10 +82,9 @@ fn mx_sheen_bsdf(cl: mx_closure, weight: f32, color: vec3<f32>, roughness: f32, 
         f = e * density;
         pdf = density;
     } else {
-        if (l.z > 0.0) {
-            let h = mx_half_vector(v, l);
-            f = norm * mx_sheen_conty_kulla_d(h.z, roughness) * l.z / (4.0 * (l.z + mu - l.z * mu));
-        }
+        let h = mx_half_vector(v, l);
+        let ml = max(l.z, 0.0);
+        f = select(norm * mx_sheen_conty_kulla_d(h.z, roughness) * ml / (4.0 * (ml + mu - ml * mu)), 0.0, l.z <= 0.0);
         pdf = mx_pdf_cosine(l);
     }
     let response = (w * f) * c;
