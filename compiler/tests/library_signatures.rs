@@ -32,6 +32,14 @@ const WITHOUT_WGSL: &[(&str, &str)] = &[
     ("ND_dot_displacementshader", "shader type"),
     ("ND_dot_volumeshader", "shader type"),
     ("ND_dot_lightshader", "shader type"),
+    ("ND_mix_edf", "EDF: uplift's kernels evaluate surface scattering only"),
+    ("ND_mix_vdf", "VDF: uplift's kernels evaluate surface scattering only"),
+    ("ND_add_edf", "EDF: uplift's kernels evaluate surface scattering only"),
+    ("ND_add_vdf", "VDF: uplift's kernels evaluate surface scattering only"),
+    ("ND_multiply_edfC", "EDF: uplift's kernels evaluate surface scattering only"),
+    ("ND_multiply_edfF", "EDF: uplift's kernels evaluate surface scattering only"),
+    ("ND_multiply_vdfC", "VDF: uplift's kernels evaluate surface scattering only"),
+    ("ND_multiply_vdfF", "VDF: uplift's kernels evaluate surface scattering only"),
 ];
 
 #[test]
