@@ -26,6 +26,11 @@ pub const OUTPUTS: &[(&str, usize, usize)] = &[{% for s in outputs %}({{ s.name 
 /// kernel. Inlined so that the caller's loop is compiled (and vectorised) for the caller's CPU
 /// level.
 ///
+/// Points run in chunks of `MX_CHUNK`: each chunk reads sub-slices of the columns (so that LLVM
+/// sees every index in bounds) and writes a stack buffer that is copied out afterwards (so that
+/// no output can alias an input: with one slice per column LLVM would need a run-time overlap
+/// check per input–output pair and gives up vectorising — "too many memory checks").
+///
 /// Panics when a column count or a column length is wrong.
 #[inline(always)]
 pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut [f32]], tex: &(impl MxTextures + ?Sized)) {
@@ -51,22 +56,42 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
 {%- if !uses_tex %}
     let _ = tex;
 {%- endif %}
-    for mx_i in 0..mx_n {
-        let mx_geom = {{ geometry_struct }} {
+    const MX_CHUNK: usize = 64;
+    let mut mx_start = 0usize;
+    while mx_start < mx_n {
+        let mx_len = MX_CHUNK.min(mx_n - mx_start);
+        let mx_end = mx_start + mx_len;
+{%- for c in geometry_columns %}
+        let mx_g{{ c }} = &mx_g{{ c }}[mx_start..mx_end];
+{%- endfor %}
+{%- for c in input_columns %}
+        let mx_x{{ c }} = &mx_x{{ c }}[mx_start..mx_end];
+{%- endfor %}
+        let mut mx_chunk = [[0.0f32; MX_CHUNK]; OUTPUT_COLUMNS];
+        {
+            let [{{ output_columns|join(", ") }}] = &mut mx_chunk;
+            for mx_i in 0..mx_len {
+                let mx_geom = {{ geometry_struct }} {
 {%- for f in geometry_fields %}
-            {{ f.name }}: {{ f.expr }},
+                    {{ f.name }}: {{ f.expr }},
 {%- endfor %}
-        };
+                };
 {%- if let Some(inputs_struct) = inputs_struct %}
-        let mx_inputs = {{ inputs_struct }} {
+                let mx_inputs = {{ inputs_struct }} {
 {%- for f in input_fields %}
-            {{ f.name }}: {{ f.expr }},
+                    {{ f.name }}: {{ f.expr }},
 {%- endfor %}
-        };
+                };
 {%- endif %}
-        let mx_out = {{ call }};
+                let mx_out = {{ call }};
 {%- for s in output_stores %}
-        {{ s }}
+                {{ s }}
 {%- endfor %}
+            }
+        }
+{%- for c in output_columns %}
+        {{ c }}[mx_start..mx_end].copy_from_slice(&mx_chunk[{{ loop.index0 }}][..mx_len]);
+{%- endfor %}
+        mx_start = mx_end;
     }
 }

@@ -258,6 +258,18 @@ fn block_breaks(block: &naga::Block) -> bool {
     })
 }
 
+/// Whether a `Statement::Continue` of the enclosing loop occurs in `block` (inside ifs, blocks
+/// and switches; a nested loop's own `continue`s do not count).
+fn block_continues(block: &naga::Block) -> bool {
+    block.iter().any(|s| match s {
+        S::Continue => true,
+        S::Block(b) => block_continues(b),
+        S::If { accept, reject, .. } => block_continues(accept) || block_continues(reject),
+        S::Switch { cases, .. } => cases.iter().any(|c| block_continues(&c.body)),
+        _ => false,
+    })
+}
+
 /// One entry of the breakable-construct stack while writing a function body.
 enum Breakable {
     /// A loop; `label` is set once a `break`/`continue` inside a labelled switch needs it.
@@ -844,7 +856,13 @@ impl<'m> Writer<'m> {
                 let pad1 = "    ".repeat(indent + 1);
                 let pad2 = "    ".repeat(indent + 2);
                 let simple = continuing.is_empty() && break_if.is_none();
-                let flag = if simple { None } else { Some(self.namer.call("loop_init")) };
+                // Without a `continue` in the body, the continuing block runs at the end of the
+                // body: `loop { body; continuing; if break_if { break } }`, the rotated shape
+                // whose trip count LLVM computes, so that it fully unrolls a library's constant
+                // loops and vectorises the batch loop around them. Otherwise a flag runs the
+                // continuing block at the top of every iteration but the first.
+                let at_end = !simple && !block_continues(body);
+                let flag = if simple || at_end { None } else { Some(self.namer.call("loop_init")) };
                 if let Some(flag) = &flag {
                     let _ = writeln!(out, "{pad}let mut {flag} = true;");
                 }
@@ -878,6 +896,25 @@ impl<'m> Writer<'m> {
                     let _ = writeln!(out, "{pad1}}}\n{pad1}{flag} = false;");
                 }
                 self.block(ctx, body, indent + 1, out)?;
+                if at_end {
+                    ctx.scopes.push(Vec::new());
+                    let mut r = Ok(());
+                    for s in continuing.iter() {
+                        r = self.statement(ctx, s, indent + 1, out);
+                        if r.is_err() {
+                            break;
+                        }
+                    }
+                    if let (Ok(()), Some(b)) = (&r, break_if) {
+                        r = self.expr(ctx, *b).map(|c| {
+                            let _ = writeln!(out, "{pad1}if {} {{\n{pad1}    break;\n{pad1}}}", c.s);
+                        });
+                    }
+                    for h in ctx.scopes.pop().unwrap_or_default() {
+                        ctx.baked.remove(&h);
+                    }
+                    r?;
+                }
                 let _ = writeln!(out, "{pad}}}");
                 if let Some(Breakable::Loop { label, used: true }) = ctx.breakables.pop() {
                     out.insert_str(loop_at + pad.len(), &format!("'{label}: "));
@@ -1125,10 +1162,12 @@ impl<'m> Writer<'m> {
         })
     }
 
-    /// `base[index]` with a runtime index, clamped into range (never panics).
+    /// `base[index]` with a runtime index, clamped into range (never panics). WGSL indices are
+    /// i32 or u32; clamping as u32 (a negative index wraps past the end, as `as usize` would)
+    /// lets LLVM gather with 32-bit lane indices when it vectorises a batch loop.
     fn access_dynamic(&mut self, base: &Ex, base_ty: &TypeInner, index: &Ex, place: bool) -> R<Ex> {
         let b = base.at(Prec::Atom);
-        let clamp = |n: usize| format!("({} as usize).min({})", index.at(Prec::Unary), n - 1);
+        let clamp = |n: usize| format!("({} as u32).min({}) as usize", index.at(Prec::Unary), n - 1);
         Ok(match *base_ty {
             TypeInner::Vector { size, scalar } if scalar.kind == ScalarKind::Bool => {
                 if place {
@@ -1550,7 +1589,9 @@ impl<'m> Writer<'m> {
         };
         match t {
             TypeInner::Scalar(_) => {
-                let (s, p) = lane(&a.at(Prec::Atom));
+                // `f32::from_bits(x)` takes any expression; the other forms need an atom.
+                let need = if (from_name, to_name, convert.is_some()) == ("u32", "f32", false) { Prec::Lowest } else { Prec::Atom };
+                let (s, p) = lane(&a.at(need));
                 Ok(Ex::new(s, p))
             }
             TypeInner::Vector { .. } => {

@@ -175,7 +175,7 @@ pub fn mx_noise2d_vector3_(amplitude: Vec3, pivot: f32, texcoord: Vec2) -> Vec3 
 
 #[inline(always)]
 pub fn mx_extract_vector3_(in_: Vec3, index: i32) -> f32 {
-    in_[(index.max(0i32).min(2i32) as usize).min(2)]
+    in_[(index.max(0i32).min(2i32) as u32).min(2) as usize]
 }
 
 #[inline(always)]
@@ -292,6 +292,11 @@ pub const OUTPUTS: &[(&str, usize, usize)] = &[("out", 0, 3), ("out_f", 3, 1)];
 /// kernel. Inlined so that the caller's loop is compiled (and vectorised) for the caller's CPU
 /// level.
 ///
+/// Points run in chunks of `MX_CHUNK`: each chunk reads sub-slices of the columns (so that LLVM
+/// sees every index in bounds) and writes a stack buffer that is copied out afterwards (so that
+/// no output can alias an input: with one slice per column LLVM would need a run-time overlap
+/// check per input–output pair and gives up vectorising — "too many memory checks").
+///
 /// Panics when a column count or a column length is wrong.
 #[inline(always)]
 pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut [f32]], tex: &(impl MxTextures + ?Sized)) {
@@ -330,22 +335,57 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
     let mx_o2 = &mut mx_o2[..mx_n];
     let mx_o3 = &mut mx_o3[..mx_n];
     let _ = tex;
-    for mx_i in 0..mx_n {
-        let mx_geom = mx_geometry {
-            texcoord: Vec2::new(mx_g0[mx_i], mx_g1[mx_i]),
-            position_object: Vec3::new(mx_g2[mx_i], mx_g3[mx_i], mx_g4[mx_i]),
-            position_world: Vec3::new(mx_g5[mx_i], mx_g6[mx_i], mx_g7[mx_i]),
-            normal_object: Vec3::new(mx_g8[mx_i], mx_g9[mx_i], mx_g10[mx_i]),
-            normal_world: Vec3::new(mx_g11[mx_i], mx_g12[mx_i], mx_g13[mx_i]),
-            tangent_object: Vec3::new(mx_g14[mx_i], mx_g15[mx_i], mx_g16[mx_i]),
-            tangent_world: Vec3::new(mx_g17[mx_i], mx_g18[mx_i], mx_g19[mx_i]),
-            bitangent_object: Vec3::new(mx_g8[mx_i], mx_g9[mx_i], mx_g10[mx_i]).cross(Vec3::new(mx_g14[mx_i], mx_g15[mx_i], mx_g16[mx_i])),
-            bitangent_world: Vec3::new(mx_g11[mx_i], mx_g12[mx_i], mx_g13[mx_i]).cross(Vec3::new(mx_g17[mx_i], mx_g18[mx_i], mx_g19[mx_i])),
-        };
-        let mx_out = mx_pattern(mx_geom);
-        mx_o0[mx_i] = mx_out.out.x;
-        mx_o1[mx_i] = mx_out.out.y;
-        mx_o2[mx_i] = mx_out.out.z;
-        mx_o3[mx_i] = mx_out.out_f;
+    const MX_CHUNK: usize = 64;
+    let mut mx_start = 0usize;
+    while mx_start < mx_n {
+        let mx_len = MX_CHUNK.min(mx_n - mx_start);
+        let mx_end = mx_start + mx_len;
+        let mx_g0 = &mx_g0[mx_start..mx_end];
+        let mx_g1 = &mx_g1[mx_start..mx_end];
+        let mx_g2 = &mx_g2[mx_start..mx_end];
+        let mx_g3 = &mx_g3[mx_start..mx_end];
+        let mx_g4 = &mx_g4[mx_start..mx_end];
+        let mx_g5 = &mx_g5[mx_start..mx_end];
+        let mx_g6 = &mx_g6[mx_start..mx_end];
+        let mx_g7 = &mx_g7[mx_start..mx_end];
+        let mx_g8 = &mx_g8[mx_start..mx_end];
+        let mx_g9 = &mx_g9[mx_start..mx_end];
+        let mx_g10 = &mx_g10[mx_start..mx_end];
+        let mx_g11 = &mx_g11[mx_start..mx_end];
+        let mx_g12 = &mx_g12[mx_start..mx_end];
+        let mx_g13 = &mx_g13[mx_start..mx_end];
+        let mx_g14 = &mx_g14[mx_start..mx_end];
+        let mx_g15 = &mx_g15[mx_start..mx_end];
+        let mx_g16 = &mx_g16[mx_start..mx_end];
+        let mx_g17 = &mx_g17[mx_start..mx_end];
+        let mx_g18 = &mx_g18[mx_start..mx_end];
+        let mx_g19 = &mx_g19[mx_start..mx_end];
+        let mut mx_chunk = [[0.0f32; MX_CHUNK]; OUTPUT_COLUMNS];
+        {
+            let [mx_o0, mx_o1, mx_o2, mx_o3] = &mut mx_chunk;
+            for mx_i in 0..mx_len {
+                let mx_geom = mx_geometry {
+                    texcoord: Vec2::new(mx_g0[mx_i], mx_g1[mx_i]),
+                    position_object: Vec3::new(mx_g2[mx_i], mx_g3[mx_i], mx_g4[mx_i]),
+                    position_world: Vec3::new(mx_g5[mx_i], mx_g6[mx_i], mx_g7[mx_i]),
+                    normal_object: Vec3::new(mx_g8[mx_i], mx_g9[mx_i], mx_g10[mx_i]),
+                    normal_world: Vec3::new(mx_g11[mx_i], mx_g12[mx_i], mx_g13[mx_i]),
+                    tangent_object: Vec3::new(mx_g14[mx_i], mx_g15[mx_i], mx_g16[mx_i]),
+                    tangent_world: Vec3::new(mx_g17[mx_i], mx_g18[mx_i], mx_g19[mx_i]),
+                    bitangent_object: Vec3::new(mx_g8[mx_i], mx_g9[mx_i], mx_g10[mx_i]).cross(Vec3::new(mx_g14[mx_i], mx_g15[mx_i], mx_g16[mx_i])),
+                    bitangent_world: Vec3::new(mx_g11[mx_i], mx_g12[mx_i], mx_g13[mx_i]).cross(Vec3::new(mx_g17[mx_i], mx_g18[mx_i], mx_g19[mx_i])),
+                };
+                let mx_out = mx_pattern(mx_geom);
+                mx_o0[mx_i] = mx_out.out.x;
+                mx_o1[mx_i] = mx_out.out.y;
+                mx_o2[mx_i] = mx_out.out.z;
+                mx_o3[mx_i] = mx_out.out_f;
+            }
+        }
+        mx_o0[mx_start..mx_end].copy_from_slice(&mx_chunk[0][..mx_len]);
+        mx_o1[mx_start..mx_end].copy_from_slice(&mx_chunk[1][..mx_len]);
+        mx_o2[mx_start..mx_end].copy_from_slice(&mx_chunk[2][..mx_len]);
+        mx_o3[mx_start..mx_end].copy_from_slice(&mx_chunk[3][..mx_len]);
+        mx_start = mx_end;
     }
 }

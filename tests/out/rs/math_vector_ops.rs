@@ -134,6 +134,11 @@ pub const OUTPUTS: &[(&str, usize, usize)] = &[("ndotl_out", 0, 1), ("len_out", 
 /// kernel. Inlined so that the caller's loop is compiled (and vectorised) for the caller's CPU
 /// level.
 ///
+/// Points run in chunks of `MX_CHUNK`: each chunk reads sub-slices of the columns (so that LLVM
+/// sees every index in bounds) and writes a stack buffer that is copied out afterwards (so that
+/// no output can alias an input: with one slice per column LLVM would need a run-time overlap
+/// check per input–output pair and gives up vectorising — "too many memory checks").
+///
 /// Panics when a column count or a column length is wrong.
 #[inline(always)]
 pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut [f32]], tex: &(impl MxTextures + ?Sized)) {
@@ -171,21 +176,55 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
     let mx_o1 = &mut mx_o1[..mx_n];
     let mx_o2 = &mut mx_o2[..mx_n];
     let _ = tex;
-    for mx_i in 0..mx_n {
-        let mx_geom = mx_geometry {
-            texcoord: Vec2::new(mx_g0[mx_i], mx_g1[mx_i]),
-            position_object: Vec3::new(mx_g2[mx_i], mx_g3[mx_i], mx_g4[mx_i]),
-            position_world: Vec3::new(mx_g5[mx_i], mx_g6[mx_i], mx_g7[mx_i]),
-            normal_object: Vec3::new(mx_g8[mx_i], mx_g9[mx_i], mx_g10[mx_i]),
-            normal_world: Vec3::new(mx_g11[mx_i], mx_g12[mx_i], mx_g13[mx_i]),
-            tangent_object: Vec3::new(mx_g14[mx_i], mx_g15[mx_i], mx_g16[mx_i]),
-            tangent_world: Vec3::new(mx_g17[mx_i], mx_g18[mx_i], mx_g19[mx_i]),
-            bitangent_object: Vec3::new(mx_g8[mx_i], mx_g9[mx_i], mx_g10[mx_i]).cross(Vec3::new(mx_g14[mx_i], mx_g15[mx_i], mx_g16[mx_i])),
-            bitangent_world: Vec3::new(mx_g11[mx_i], mx_g12[mx_i], mx_g13[mx_i]).cross(Vec3::new(mx_g17[mx_i], mx_g18[mx_i], mx_g19[mx_i])),
-        };
-        let mx_out = mx_pattern(mx_geom);
-        mx_o0[mx_i] = mx_out.ndotl_out;
-        mx_o1[mx_i] = mx_out.len_out;
-        mx_o2[mx_i] = mx_out.dist_out;
+    const MX_CHUNK: usize = 64;
+    let mut mx_start = 0usize;
+    while mx_start < mx_n {
+        let mx_len = MX_CHUNK.min(mx_n - mx_start);
+        let mx_end = mx_start + mx_len;
+        let mx_g0 = &mx_g0[mx_start..mx_end];
+        let mx_g1 = &mx_g1[mx_start..mx_end];
+        let mx_g2 = &mx_g2[mx_start..mx_end];
+        let mx_g3 = &mx_g3[mx_start..mx_end];
+        let mx_g4 = &mx_g4[mx_start..mx_end];
+        let mx_g5 = &mx_g5[mx_start..mx_end];
+        let mx_g6 = &mx_g6[mx_start..mx_end];
+        let mx_g7 = &mx_g7[mx_start..mx_end];
+        let mx_g8 = &mx_g8[mx_start..mx_end];
+        let mx_g9 = &mx_g9[mx_start..mx_end];
+        let mx_g10 = &mx_g10[mx_start..mx_end];
+        let mx_g11 = &mx_g11[mx_start..mx_end];
+        let mx_g12 = &mx_g12[mx_start..mx_end];
+        let mx_g13 = &mx_g13[mx_start..mx_end];
+        let mx_g14 = &mx_g14[mx_start..mx_end];
+        let mx_g15 = &mx_g15[mx_start..mx_end];
+        let mx_g16 = &mx_g16[mx_start..mx_end];
+        let mx_g17 = &mx_g17[mx_start..mx_end];
+        let mx_g18 = &mx_g18[mx_start..mx_end];
+        let mx_g19 = &mx_g19[mx_start..mx_end];
+        let mut mx_chunk = [[0.0f32; MX_CHUNK]; OUTPUT_COLUMNS];
+        {
+            let [mx_o0, mx_o1, mx_o2] = &mut mx_chunk;
+            for mx_i in 0..mx_len {
+                let mx_geom = mx_geometry {
+                    texcoord: Vec2::new(mx_g0[mx_i], mx_g1[mx_i]),
+                    position_object: Vec3::new(mx_g2[mx_i], mx_g3[mx_i], mx_g4[mx_i]),
+                    position_world: Vec3::new(mx_g5[mx_i], mx_g6[mx_i], mx_g7[mx_i]),
+                    normal_object: Vec3::new(mx_g8[mx_i], mx_g9[mx_i], mx_g10[mx_i]),
+                    normal_world: Vec3::new(mx_g11[mx_i], mx_g12[mx_i], mx_g13[mx_i]),
+                    tangent_object: Vec3::new(mx_g14[mx_i], mx_g15[mx_i], mx_g16[mx_i]),
+                    tangent_world: Vec3::new(mx_g17[mx_i], mx_g18[mx_i], mx_g19[mx_i]),
+                    bitangent_object: Vec3::new(mx_g8[mx_i], mx_g9[mx_i], mx_g10[mx_i]).cross(Vec3::new(mx_g14[mx_i], mx_g15[mx_i], mx_g16[mx_i])),
+                    bitangent_world: Vec3::new(mx_g11[mx_i], mx_g12[mx_i], mx_g13[mx_i]).cross(Vec3::new(mx_g17[mx_i], mx_g18[mx_i], mx_g19[mx_i])),
+                };
+                let mx_out = mx_pattern(mx_geom);
+                mx_o0[mx_i] = mx_out.ndotl_out;
+                mx_o1[mx_i] = mx_out.len_out;
+                mx_o2[mx_i] = mx_out.dist_out;
+            }
+        }
+        mx_o0[mx_start..mx_end].copy_from_slice(&mx_chunk[0][..mx_len]);
+        mx_o1[mx_start..mx_end].copy_from_slice(&mx_chunk[1][..mx_len]);
+        mx_o2[mx_start..mx_end].copy_from_slice(&mx_chunk[2][..mx_len]);
+        mx_start = mx_end;
     }
 }

@@ -175,13 +175,7 @@ pub fn mx_worley_noise_vec2_2d(p_1: Vec2, jitter_1: f32, style: i32, metric_1: i
     let X = mx_noise_floor(p_1.x);
     let Y = mx_noise_floor(p_1.y);
     let localpos = Vec2::new(p_1.x - X as f32, p_1.y - Y as f32);
-    let mut loop_init = true;
     loop {
-        if !loop_init {
-            let _e53 = x_4;
-            x_4 = _e53.wrapping_add(1i32);
-        }
-        loop_init = false;
         let _e25 = x_4;
         if _e25 <= 1i32 {
         } else {
@@ -189,13 +183,7 @@ pub fn mx_worley_noise_vec2_2d(p_1: Vec2, jitter_1: f32, style: i32, metric_1: i
         }
         {
             y_2 = -1i32;
-            let mut loop_init_1 = true;
             loop {
-                if !loop_init_1 {
-                    let _e50 = y_2;
-                    y_2 = _e50.wrapping_add(1i32);
-                }
-                loop_init_1 = false;
                 let _e30 = y_2;
                 if _e30 <= 1i32 {
                 } else {
@@ -220,8 +208,12 @@ pub fn mx_worley_noise_vec2_2d(p_1: Vec2, jitter_1: f32, style: i32, metric_1: i
                         }
                     }
                 }
+                let _e50 = y_2;
+                y_2 = _e50.wrapping_add(1i32);
             }
         }
+        let _e53 = x_4;
+        x_4 = _e53.wrapping_add(1i32);
     }
     if style == 1i32 {
         let _e57 = minpos;
@@ -384,13 +376,7 @@ pub fn mx_worley_noise_float_3d(p_3: Vec3, jitter_4: f32, style_2: i32, metric_3
     let Y_1 = mx_noise_floor(p_3.y);
     let Z = mx_noise_floor(p_3.z);
     let localpos_1 = Vec3::new(p_3.x - X_1 as f32, p_3.y - Y_1 as f32, p_3.z - Z as f32);
-    let mut loop_init_2 = true;
     loop {
-        if !loop_init_2 {
-            let _e57 = x_7;
-            x_7 = _e57.wrapping_add(1i32);
-        }
-        loop_init_2 = false;
         let _e29 = x_7;
         if _e29 <= 1i32 {
         } else {
@@ -398,13 +384,7 @@ pub fn mx_worley_noise_float_3d(p_3: Vec3, jitter_4: f32, style_2: i32, metric_3
         }
         {
             y_5 = -1i32;
-            let mut loop_init_3 = true;
             loop {
-                if !loop_init_3 {
-                    let _e54 = y_5;
-                    y_5 = _e54.wrapping_add(1i32);
-                }
-                loop_init_3 = false;
                 let _e34 = y_5;
                 if _e34 <= 1i32 {
                 } else {
@@ -412,13 +392,7 @@ pub fn mx_worley_noise_float_3d(p_3: Vec3, jitter_4: f32, style_2: i32, metric_3
                 }
                 {
                     z_3 = -1i32;
-                    let mut loop_init_4 = true;
                     loop {
-                        if !loop_init_4 {
-                            let _e51 = z_3;
-                            z_3 = _e51.wrapping_add(1i32);
-                        }
-                        loop_init_4 = false;
                         let _e39 = z_3;
                         if _e39 <= 1i32 {
                         } else {
@@ -437,10 +411,16 @@ pub fn mx_worley_noise_float_3d(p_3: Vec3, jitter_4: f32, style_2: i32, metric_3
                                 minpos_1 = cellpos_1;
                             }
                         }
+                        let _e51 = z_3;
+                        z_3 = _e51.wrapping_add(1i32);
                     }
                 }
+                let _e54 = y_5;
+                y_5 = _e54.wrapping_add(1i32);
             }
         }
+        let _e57 = x_7;
+        x_7 = _e57.wrapping_add(1i32);
     }
     if style_2 == 1i32 {
         let _e61 = minpos_1;
@@ -482,13 +462,7 @@ pub fn mx_worley_noise_vec3_3d(p_5: Vec3, jitter_6: f32, style_4: i32, metric_4:
     let Y_2 = mx_noise_floor(p_5.y);
     let Z_1 = mx_noise_floor(p_5.z);
     let localpos_2 = Vec3::new(p_5.x - X_2 as f32, p_5.y - Y_2 as f32, p_5.z - Z_1 as f32);
-    let mut loop_init_5 = true;
     loop {
-        if !loop_init_5 {
-            let _e79 = x_8;
-            x_8 = _e79.wrapping_add(1i32);
-        }
-        loop_init_5 = false;
         let _e32 = x_8;
         if _e32 <= 1i32 {
         } else {
@@ -496,13 +470,7 @@ pub fn mx_worley_noise_vec3_3d(p_5: Vec3, jitter_6: f32, style_4: i32, metric_4:
         }
         {
             y_6 = -1i32;
-            let mut loop_init_6 = true;
             loop {
-                if !loop_init_6 {
-                    let _e76 = y_6;
-                    y_6 = _e76.wrapping_add(1i32);
-                }
-                loop_init_6 = false;
                 let _e37 = y_6;
                 if _e37 <= 1i32 {
                 } else {
@@ -510,13 +478,7 @@ pub fn mx_worley_noise_vec3_3d(p_5: Vec3, jitter_6: f32, style_4: i32, metric_4:
                 }
                 {
                     z_4 = -1i32;
-                    let mut loop_init_7 = true;
                     loop {
-                        if !loop_init_7 {
-                            let _e73 = z_4;
-                            z_4 = _e73.wrapping_add(1i32);
-                        }
-                        loop_init_7 = false;
                         let _e42 = z_4;
                         if _e42 <= 1i32 {
                         } else {
@@ -551,10 +513,16 @@ pub fn mx_worley_noise_vec3_3d(p_5: Vec3, jitter_6: f32, style_4: i32, metric_4:
                                 }
                             }
                         }
+                        let _e73 = z_4;
+                        z_4 = _e73.wrapping_add(1i32);
                     }
                 }
+                let _e76 = y_6;
+                y_6 = _e76.wrapping_add(1i32);
             }
         }
+        let _e79 = x_8;
+        x_8 = _e79.wrapping_add(1i32);
     }
     if style_4 == 1i32 {
         let _e83 = minpos_2;
@@ -614,6 +582,11 @@ pub const OUTPUTS: &[(&str, usize, usize)] = &[("w2_out", 0, 2), ("w3_out", 2, 1
 /// kernel. Inlined so that the caller's loop is compiled (and vectorised) for the caller's CPU
 /// level.
 ///
+/// Points run in chunks of `MX_CHUNK`: each chunk reads sub-slices of the columns (so that LLVM
+/// sees every index in bounds) and writes a stack buffer that is copied out afterwards (so that
+/// no output can alias an input: with one slice per column LLVM would need a run-time overlap
+/// check per input–output pair and gives up vectorising — "too many memory checks").
+///
 /// Panics when a column count or a column length is wrong.
 #[inline(always)]
 pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut [f32]], tex: &(impl MxTextures + ?Sized)) {
@@ -654,24 +627,61 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
     let mx_o4 = &mut mx_o4[..mx_n];
     let mx_o5 = &mut mx_o5[..mx_n];
     let _ = tex;
-    for mx_i in 0..mx_n {
-        let mx_geom = mx_geometry {
-            texcoord: Vec2::new(mx_g0[mx_i], mx_g1[mx_i]),
-            position_object: Vec3::new(mx_g2[mx_i], mx_g3[mx_i], mx_g4[mx_i]),
-            position_world: Vec3::new(mx_g5[mx_i], mx_g6[mx_i], mx_g7[mx_i]),
-            normal_object: Vec3::new(mx_g8[mx_i], mx_g9[mx_i], mx_g10[mx_i]),
-            normal_world: Vec3::new(mx_g11[mx_i], mx_g12[mx_i], mx_g13[mx_i]),
-            tangent_object: Vec3::new(mx_g14[mx_i], mx_g15[mx_i], mx_g16[mx_i]),
-            tangent_world: Vec3::new(mx_g17[mx_i], mx_g18[mx_i], mx_g19[mx_i]),
-            bitangent_object: Vec3::new(mx_g8[mx_i], mx_g9[mx_i], mx_g10[mx_i]).cross(Vec3::new(mx_g14[mx_i], mx_g15[mx_i], mx_g16[mx_i])),
-            bitangent_world: Vec3::new(mx_g11[mx_i], mx_g12[mx_i], mx_g13[mx_i]).cross(Vec3::new(mx_g17[mx_i], mx_g18[mx_i], mx_g19[mx_i])),
-        };
-        let mx_out = mx_pattern(mx_geom);
-        mx_o0[mx_i] = mx_out.w2_out.x;
-        mx_o1[mx_i] = mx_out.w2_out.y;
-        mx_o2[mx_i] = mx_out.w3_out;
-        mx_o3[mx_i] = mx_out.w3v_out.x;
-        mx_o4[mx_i] = mx_out.w3v_out.y;
-        mx_o5[mx_i] = mx_out.w3v_out.z;
+    const MX_CHUNK: usize = 64;
+    let mut mx_start = 0usize;
+    while mx_start < mx_n {
+        let mx_len = MX_CHUNK.min(mx_n - mx_start);
+        let mx_end = mx_start + mx_len;
+        let mx_g0 = &mx_g0[mx_start..mx_end];
+        let mx_g1 = &mx_g1[mx_start..mx_end];
+        let mx_g2 = &mx_g2[mx_start..mx_end];
+        let mx_g3 = &mx_g3[mx_start..mx_end];
+        let mx_g4 = &mx_g4[mx_start..mx_end];
+        let mx_g5 = &mx_g5[mx_start..mx_end];
+        let mx_g6 = &mx_g6[mx_start..mx_end];
+        let mx_g7 = &mx_g7[mx_start..mx_end];
+        let mx_g8 = &mx_g8[mx_start..mx_end];
+        let mx_g9 = &mx_g9[mx_start..mx_end];
+        let mx_g10 = &mx_g10[mx_start..mx_end];
+        let mx_g11 = &mx_g11[mx_start..mx_end];
+        let mx_g12 = &mx_g12[mx_start..mx_end];
+        let mx_g13 = &mx_g13[mx_start..mx_end];
+        let mx_g14 = &mx_g14[mx_start..mx_end];
+        let mx_g15 = &mx_g15[mx_start..mx_end];
+        let mx_g16 = &mx_g16[mx_start..mx_end];
+        let mx_g17 = &mx_g17[mx_start..mx_end];
+        let mx_g18 = &mx_g18[mx_start..mx_end];
+        let mx_g19 = &mx_g19[mx_start..mx_end];
+        let mut mx_chunk = [[0.0f32; MX_CHUNK]; OUTPUT_COLUMNS];
+        {
+            let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5] = &mut mx_chunk;
+            for mx_i in 0..mx_len {
+                let mx_geom = mx_geometry {
+                    texcoord: Vec2::new(mx_g0[mx_i], mx_g1[mx_i]),
+                    position_object: Vec3::new(mx_g2[mx_i], mx_g3[mx_i], mx_g4[mx_i]),
+                    position_world: Vec3::new(mx_g5[mx_i], mx_g6[mx_i], mx_g7[mx_i]),
+                    normal_object: Vec3::new(mx_g8[mx_i], mx_g9[mx_i], mx_g10[mx_i]),
+                    normal_world: Vec3::new(mx_g11[mx_i], mx_g12[mx_i], mx_g13[mx_i]),
+                    tangent_object: Vec3::new(mx_g14[mx_i], mx_g15[mx_i], mx_g16[mx_i]),
+                    tangent_world: Vec3::new(mx_g17[mx_i], mx_g18[mx_i], mx_g19[mx_i]),
+                    bitangent_object: Vec3::new(mx_g8[mx_i], mx_g9[mx_i], mx_g10[mx_i]).cross(Vec3::new(mx_g14[mx_i], mx_g15[mx_i], mx_g16[mx_i])),
+                    bitangent_world: Vec3::new(mx_g11[mx_i], mx_g12[mx_i], mx_g13[mx_i]).cross(Vec3::new(mx_g17[mx_i], mx_g18[mx_i], mx_g19[mx_i])),
+                };
+                let mx_out = mx_pattern(mx_geom);
+                mx_o0[mx_i] = mx_out.w2_out.x;
+                mx_o1[mx_i] = mx_out.w2_out.y;
+                mx_o2[mx_i] = mx_out.w3_out;
+                mx_o3[mx_i] = mx_out.w3v_out.x;
+                mx_o4[mx_i] = mx_out.w3v_out.y;
+                mx_o5[mx_i] = mx_out.w3v_out.z;
+            }
+        }
+        mx_o0[mx_start..mx_end].copy_from_slice(&mx_chunk[0][..mx_len]);
+        mx_o1[mx_start..mx_end].copy_from_slice(&mx_chunk[1][..mx_len]);
+        mx_o2[mx_start..mx_end].copy_from_slice(&mx_chunk[2][..mx_len]);
+        mx_o3[mx_start..mx_end].copy_from_slice(&mx_chunk[3][..mx_len]);
+        mx_o4[mx_start..mx_end].copy_from_slice(&mx_chunk[4][..mx_len]);
+        mx_o5[mx_start..mx_end].copy_from_slice(&mx_chunk[5][..mx_len]);
+        mx_start = mx_end;
     }
 }

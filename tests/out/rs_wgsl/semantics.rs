@@ -196,14 +196,14 @@ pub fn vec_to_ivec(a_28: Vec3) -> IVec3 {
 
 #[inline(always)]
 pub fn index_vec3_(v_3: Vec3, i: i32) -> f32 {
-    v_3[(i as usize).min(2)]
+    v_3[(i as u32).min(2) as usize]
 }
 
 #[inline(always)]
 #[allow(unused_assignments)]
 pub fn index_store(i_1: i32) -> Vec3 {
     let mut v_4: Vec3 = Vec3::new(1.0f32, 2.0f32, 3.0f32);
-    v_4[(i_1 as usize).min(2)] = 9.0f32;
+    v_4[(i_1 as u32).min(2) as usize] = 9.0f32;
     let _e8 = v_4;
     _e8
 }
@@ -248,17 +248,13 @@ pub fn sum_loop(n: i32) -> i32 {
 #[allow(unused_assignments)]
 pub fn loop_break_if(n_1: i32) -> i32 {
     let mut i_3: i32 = 0i32;
-    let mut loop_init_1 = true;
     loop {
-        if !loop_init_1 {
-            let _e6 = i_3;
-            if _e6 >= n_1 {
-                break;
-            }
-        }
-        loop_init_1 = false;
         let _e3 = i_3;
         i_3 = _e3.wrapping_add(2i32);
+        let _e6 = i_3;
+        if _e6 >= n_1 {
+            break;
+        }
     }
     let _e8 = i_3;
     _e8
@@ -284,13 +280,13 @@ pub fn classify(x_5: i32) -> i32 {
 pub fn switch_in_loop(n_2: i32) -> i32 {
     let mut s_2: i32 = 0i32;
     let mut i_4: i32 = 0i32;
-    let mut loop_init_2 = true;
+    let mut loop_init_1 = true;
     'l: loop {
-        if !loop_init_2 {
+        if !loop_init_1 {
             let _e23 = i_4;
             i_4 = _e23.wrapping_add(1i32);
         }
-        loop_init_2 = false;
+        loop_init_1 = false;
         let _e5 = i_4;
         if _e5 < n_2 {
         } else {
