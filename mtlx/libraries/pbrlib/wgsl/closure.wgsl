@@ -170,8 +170,8 @@ fn mx_lobe_combine(cl: mx_closure, a: vec4<f32>, wa: f32, b: vec4<f32>, wb: f32)
 // Cosine-weighted hemisphere sampling (local frame) and its pdf.
 fn mx_sample_cosine(u: vec2<f32>) -> vec3<f32> {
     let r = sqrt(u.x);
-    let phi = 2.0 * MX_PI * u.y;
-    return vec3<f32>(r * cos(phi), r * sin(phi), sqrt(max(1.0 - u.x, 0.0)));
+    let cs = mx_fast_cos_sin(2.0 * MX_PI * u.y);
+    return vec3<f32>(r * cs.x, r * cs.y, sqrt(max(1.0 - u.x, 0.0)));
 }
 
 fn mx_pdf_cosine(l: vec3<f32>) -> f32 {
@@ -184,9 +184,9 @@ fn mx_closure_pdf(b: BSDF) -> f32 {
     return select(0.0, b.lobe.x / b.lobe.y, b.lobe.y > 0.0);
 }
 
-// log2, exp2 and pow without library calls, so that the CPU backend's batch loops vectorise
-// (a call to the math library per lane keeps LLVM from vectorising the loop; see
-// ARCHITECTURE.md, "CPU kernel shape"). Relative error below 2e-7 (log2 absolute 2e-7).
+// log2, exp2, pow, exp, acos and cos/sin without library calls, so that the CPU backend's batch
+// loops vectorise (a call to the math library per lane keeps LLVM from vectorising the loop;
+// see ARCHITECTURE.md, "CPU kernel shape"). Relative error below 2e-7 (log2 absolute 2e-7).
 fn mx_fast_log2(x: f32) -> f32 {
     let bits = bitcast<u32>(max(x, 1.0e-37));
     var e = f32(i32((bits >> 23u) & 0xffu) - 127);
@@ -209,6 +209,33 @@ fn mx_fast_exp2(x: f32) -> f32 {
     let t = f * 0.693147181;
     let p = 1.0 + t * (1.0 + t * (0.5 + t * (0.166666667 + t * (0.0416666667 + t * (0.00833333333 + t * (0.00138888889 + t * 0.000198412698))))));
     return bitcast<f32>(u32(i32(e) + 127) << 23u) * p;
+}
+
+// e^x (error < 3e-7 relative, as mx_fast_exp2).
+fn mx_fast_exp(x: f32) -> f32 {
+    return mx_fast_exp2(x * 1.44269504);
+}
+
+// acos on [−1, 1] (inputs clamped): Abramowitz & Stegun 4.4.46, √(1 − |x|) times a degree-7
+// polynomial (absolute error 2e-8, below 3e-7 in f32).
+fn mx_fast_acos(x: f32) -> f32 {
+    let a = min(abs(x), 1.0);
+    let p = sqrt(1.0 - a) * (1.5707963050 + a * (-0.2145988016 + a * (0.0889789874 + a * (-0.0501743046 + a * (0.0308918810 + a * (-0.0170881256 + a * (0.0066700901 + a * -0.0012624911)))))));
+    return select(p, MX_PI - p, x < 0.0);
+}
+
+// (cos φ, sin φ): φ reduced to r in [−π/4, π/4] around the nearest multiple q of π/2, Taylor
+// series of degree 8 and 9 there (error below 3e-8 before rounding), rotated by q quarter
+// turns. Exact to f32 rounding for |φ| up to a few hundred radians.
+fn mx_fast_cos_sin(phi: f32) -> vec2<f32> {
+    let q = round(phi * (2.0 / MX_PI));
+    let r = (phi - q * 1.5703125) - q * 4.83826795e-4;
+    let r2 = r * r;
+    let s = r * (1.0 + r2 * (-0.166666667 + r2 * (0.00833333333 + r2 * (-0.000198412698 + r2 * 2.75573192e-6))));
+    let c = 1.0 + r2 * (-0.5 + r2 * (0.0416666667 + r2 * (-0.00138888889 + r2 * 2.48015873e-5)));
+    let k = i32(q) & 3;
+    let cs = select(vec2<f32>(c, s), vec2<f32>(-s, c), k == 1);
+    return select(cs, select(vec2<f32>(-c, -s), vec2<f32>(s, -c), k == 3), k >= 2);
 }
 
 // x^q for x > 0 (0 for x ≤ 0 and q > 0, 1 for q = 0).

@@ -14,8 +14,11 @@ fn mx_ggx_alpha(roughness: vec2<f32>) -> vec2<f32> {
 
 // The distribution of normals D(h).
 fn mx_ggx_d(h: vec3<f32>, a: vec2<f32>) -> f32 {
-    let t = h.x * h.x / (a.x * a.x) + h.y * h.y / (a.y * a.y) + h.z * h.z;
-    return 1.0 / (MX_PI * a.x * a.y * t * t);
+    let ia = 1.0 / (a.x * a.y);
+    let hx = h.x * a.y * ia;
+    let hy = h.y * a.x * ia;
+    let t = hx * hx + hy * hy + h.z * h.z;
+    return ia / (MX_PI * t * t);
 }
 
 // μ·(1 + 2Λ(w)) = √(μ² + αx²wx² + αy²wy²), the stable building block of Smith's G.
@@ -40,10 +43,10 @@ fn mx_half_vector(v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
 // Visible-normal sampling (Dupuy & Benyoub 2023, spherical caps) of a microfacet normal.
 fn mx_ggx_sample_vndf(v: vec3<f32>, a: vec2<f32>, u: vec2<f32>) -> vec3<f32> {
     let vh = mx_normalize_or(vec3<f32>(a.x * v.x, a.y * v.y, max(v.z, 0.0)), vec3<f32>(0.0, 0.0, 1.0));
-    let phi = 2.0 * MX_PI * u.x;
+    let cs = mx_fast_cos_sin(2.0 * MX_PI * u.x);
     let z = (1.0 - u.y) * (1.0 + vh.z) - vh.z;
     let sin_t = sqrt(clamp(1.0 - z * z, 0.0, 1.0));
-    let c = vec3<f32>(sin_t * cos(phi), sin_t * sin(phi), z);
+    let c = vec3<f32>(sin_t * cs.x, sin_t * cs.y, z);
     let hh = c + vh;
     return mx_normalize_or(vec3<f32>(a.x * hh.x, a.y * hh.y, max(hh.z, 0.0)), vec3<f32>(0.0, 0.0, 1.0));
 }
@@ -84,11 +87,18 @@ fn mx_fresnel_conductor(cos_theta: f32, n: vec3<f32>, k: vec3<f32>) -> vec3<f32>
     let t1 = a2b2 + vec3<f32>(c2);
     let a = sqrt(max(0.5 * (a2b2 + t0), vec3<f32>(0.0)));
     let t2 = 2.0 * c * a;
-    let rs = (t1 - t2) / max(t1 + t2, vec3<f32>(1.0e-30));
     let t3 = c2 * a2b2 + vec3<f32>(s2 * s2);
     let t4 = t2 * s2;
-    let rp = rs * (t3 - t4) / max(t3 + t4, vec3<f32>(1.0e-30));
-    return 0.5 * (rp + rs);
+    // rs = (t1 − t2)/(t1 + t2), rp = rs·(t3 − t4)/(t3 + t4); ½(rs + rp) with one division.
+    let b = max(t1 + t2, vec3<f32>(1.0e-30));
+    let d = max(t3 + t4, vec3<f32>(1.0e-30));
+    return 0.5 * (t1 - t2) * (d + t3 - t4) / (b * d);
+}
+
+// mx_fresnel_conductor(1, n, k) in closed form: ((n − 1)² + k²) / ((n + 1)² + k²).
+fn mx_fresnel_conductor_normal(n: vec3<f32>, k: vec3<f32>) -> vec3<f32> {
+    let k2 = k * k;
+    return ((n - 1.0) * (n - 1.0) + k2) / max((n + 1.0) * (n + 1.0) + k2, vec3<f32>(1.0e-30));
 }
 
 // x^q for x in [0, 1] and q ≥ 0 without pow(0, ·) corner cases.

@@ -55,9 +55,11 @@ fn mx_conductor_bsdf(cl: mx_closure, weight: f32, ior: vec3<f32>, extinction: ve
     let w = mx_lobe_weight(weight);
     let opaque = vec3<f32>(0.0);
     let s = mx_ggx_setup_new(cl, roughness, retroreflective, normal, tangent);
-    let n = max(ior, vec3<f32>(0.0));
-    let k = max(extinction, vec3<f32>(0.0));
-    let f1 = mx_fresnel_conductor(1.0, n, k);
+    // Beyond 10⁶ a conductor reflects 1 − 4·10⁻⁶ at normal incidence; the bound keeps the
+    // Fresnel products inside f32.
+    let n = clamp(ior, vec3<f32>(0.0), vec3<f32>(1.0e6));
+    let k = clamp(extinction, vec3<f32>(0.0), vec3<f32>(1.0e6));
+    let f1 = mx_fresnel_conductor_normal(n, k);
     let comp = mx_ggx_energy_compensation(s.mu, s.abar, mx_fresnel_average(f1, vec3<f32>(1.0)));
     if (cl.context == MX_CONTEXT_EVAL) {
         let l = mx_ggx_light(cl, s);

@@ -22,7 +22,7 @@ fn mx_sheen_zeltner_albedo(x: f32, y: f32) -> f32 {
     let m = y * (-0.193854 + y * (-1.14885 + y * (1.7932 - 0.95943 * y * y))) / (0.046391 + y);
     let o = y * (0.000654023 + (-0.0207818 + 0.119681 * y) * y) / (1.26264 + y * (-1.92021 + y));
     let q = (x - m) / s;
-    return exp(-0.5 * q * q) / (s * sqrt(2.0 * MX_PI)) + o;
+    return mx_fast_exp(-0.5 * q * q) / (s * sqrt(2.0 * MX_PI)) + o;
 }
 
 // The LTC density of local direction l (already "f·cos" per unit albedo).
