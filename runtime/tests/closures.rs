@@ -173,6 +173,18 @@ fn lobes() -> Vec<Lobe> {
             random: |r| Params::from([("b_weight", vec![r.range(0.3, 1.0)]), ("b_color", c3(r, 0.2, 1.0)), ("b_roughness", vec![r.range(0.0, 1.0)])]),
         },
         Lobe {
+            graph: "bsdf_opaque_lobes",
+            name: "subsurface_bsdf",
+            alpha: |_| Vec::new(),
+            random: |r| Params::from([("u_weight", vec![r.range(0.3, 1.0)]), ("u_color", c3(r, 0.2, 1.0)), ("u_radius", c3(r, 0.01, 5.0))]),
+        },
+        Lobe {
+            graph: "bsdf_opaque_lobes",
+            name: "translucent_bsdf",
+            alpha: |_| Vec::new(),
+            random: |r| Params::from([("t_weight", vec![r.range(0.3, 1.0)]), ("t_color", c3(r, 0.2, 1.0))]),
+        },
+        Lobe {
             graph: "bsdf_stack",
             name: "layered stack (layer, mix, artistic_ior, sheen, dielectric, conductor, oren_nayar)",
             alpha: |p| ["core_roughness", "haze_roughness", "coat_roughness"].iter().flat_map(|k| alpha_of(k)(p)).collect(),

@@ -1,7 +1,7 @@
 // diffuse.wgsl: ND_oren_nayar_diffuse_bsdf (MaterialX's qualitative Oren–Nayar; roughness 0 is
-// Lambert) and ND_burley_diffuse_bsdf. Both opaque (throughput 0), cosine sampled, albedo from
-// the project's tables. `energy_compensation` (EON) is not implemented yet: the uncompensated
-// lobe is evaluated.
+// Lambert), ND_burley_diffuse_bsdf, ND_subsurface_bsdf and ND_translucent_bsdf. All opaque
+// (throughput 0, as MaterialX sets it), cosine sampled, albedo from the project's tables.
+// `energy_compensation` (EON) is not implemented yet: the uncompensated lobe is evaluated.
 
 fn mx_oren_nayar_factor(v: vec3<f32>, l: vec3<f32>, sigma: f32) -> f32 {
     let mv = clamp(v.z, 1.0e-8, 1.0);
@@ -24,7 +24,7 @@ fn mx_burley_factor(v: vec3<f32>, l: vec3<f32>, r: f32) -> f32 {
     return (1.0 + (f90 - 1.0) * ml2 * ml2 * ml) * (1.0 + (f90 - 1.0) * mv2 * mv2 * mv);
 }
 
-// The contexts of an opaque diffuse lobe: `kind` 0 Oren–Nayar, 1 Burley.
+// The contexts of an opaque diffuse lobe: `kind` 0 Oren–Nayar, 1 Burley, 2 Lambert.
 fn mx_diffuse_lobe(cl: mx_closure, weight: f32, color: vec3<f32>, roughness: f32, normal: vec3<f32>, kind: i32) -> BSDF {
     let w = mx_lobe_weight(weight);
     let opaque = vec3<f32>(0.0);
@@ -34,10 +34,10 @@ fn mx_diffuse_lobe(cl: mx_closure, weight: f32, color: vec3<f32>, roughness: f32
     let r = max(roughness, 0.0);
     if (cl.context == MX_CONTEXT_EVAL || cl.context == MX_CONTEXT_PDF) {
         let l = mx_to_local(frame, cl.wl);
-        var shape: f32;
+        var shape: f32 = 1.0;
         if (kind == 1) {
             shape = mx_burley_factor(v, l, r);
-        } else {
+        } else if (kind == 0) {
             shape = mx_oren_nayar_factor(v, l, r);
         }
         let f = select(shape * l.z * MX_INV_PI, 0.0, l.z <= 0.0);
@@ -54,7 +54,11 @@ fn mx_diffuse_lobe(cl: mx_closure, weight: f32, color: vec3<f32>, roughness: f32
     return mx_lobe_sampled(cl, opaque, mx_to_world(frame, mx_sample_cosine(cl.u.xy)), mx_luminance_rgb(albedo));
 }
 
+// `kind` 0 Oren–Nayar, 1 Burley, 2 Lambert (albedo 1).
 fn mx_diffuse_albedo(mu: f32, r: f32, kind: i32) -> f32 {
+    if (kind == 2) {
+        return 1.0;
+    }
     if (kind == 1) {
         return mx_albedo_burley(mu, r);
     }
@@ -69,4 +73,20 @@ fn mx_oren_nayar_diffuse_bsdf(cl: mx_closure, weight: f32, color: vec3<f32>, rou
 // ND_burley_diffuse_bsdf
 fn mx_burley_diffuse_bsdf(cl: mx_closure, weight: f32, color: vec3<f32>, roughness: f32, normal: vec3<f32>) -> BSDF {
     return mx_diffuse_lobe(cl, weight, color, roughness, normal, 1);
+}
+
+// ND_subsurface_bsdf. MaterialX's GLSL approximates subsurface transport from the screen-space
+// curvature |∇N|/|∇P| (mx_subsurface_scattering_approx): the diffusion profile integrated over
+// the curved neighbourhood. A BSDF kernel sees one point and no screen, so it evaluates the
+// flat-surface limit (curvature → 0), where the integrated profile is Lambert's cosine:
+// f·cos = weight·color·μl/π. `radius` and `anisotropy` only shape the curved case.
+fn mx_subsurface_bsdf(cl: mx_closure, weight: f32, color: vec3<f32>, radius: vec3<f32>, anisotropy: f32, normal: vec3<f32>) -> BSDF {
+    return mx_diffuse_lobe(cl, weight, color, 0.0, normal, 2);
+}
+
+// ND_translucent_bsdf: pure diffuse transmission. It scatters into the lower hemisphere only,
+// so in uplift's reflection contexts it contributes no response, no albedo and is never
+// sampled; its throughput is 0, as MaterialX's GLSL sets it in every context.
+fn mx_translucent_bsdf(cl: mx_closure, weight: f32, color: vec3<f32>, normal: vec3<f32>) -> BSDF {
+    return BSDF(vec3<f32>(0.0), vec3<f32>(0.0), mx_bsdf_empty().lobe);
 }
