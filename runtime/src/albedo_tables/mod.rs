@@ -8,6 +8,8 @@
 //! - `ggx_moments` [√ᾱ 32][x 32][16]: the weights of 16 hat functions of v·h (nodes
 //!   c_j = (j/15)²), so that any Fresnel curve's albedo is Σ_j W_j F(c_j) — conductors,
 //!   generalized Schlick (the split pair of Schlick is its special case);
+//! - `ggx_film_moments` [√ᾱ 32][x 32][32]: the same for 32 hat functions at nodes c_j = j/31,
+//!   uniform in v·h, for curves that oscillate with angle (the Airy reflectance of a thin film);
 //! - `ggx_dielectric` [q 32][√ᾱ 32][x 32]: exact dielectric Fresnel, q = (η−1)/(η+1) ∈ [−½, ½];
 //! - `sheen_conty_kulla`, `oren_nayar`, `burley` [t 32][x 32], t = roughness ∈ [0, 1].
 
@@ -23,8 +25,10 @@ pub const VIEW_NODES: usize = 32;
 pub const ROUGHNESS_NODES: usize = 32;
 pub const IOR_NODES: usize = 32;
 pub const FRESNEL_NODES: usize = 16;
+/// Nodes of the thin-film moments, uniform in v·h.
+pub const FILM_FRESNEL_NODES: usize = 32;
 /// Format version of the generated file (bump when layout or grids change).
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// Hammersley points per node: GGX tables (visible-normal sampling) and the cosine-sampled
 /// diffuse and sheen tables.
 pub const GGX_SAMPLES: u32 = 4096;
@@ -102,6 +106,19 @@ pub fn fresnel_node(m: usize) -> f64 {
     t * t
 }
 
+/// The cosine of thin-film Fresnel node m.
+pub fn film_fresnel_node(m: usize) -> f64 {
+    m as f64 / (FILM_FRESNEL_NODES - 1) as f64
+}
+
+/// The hat-function weights of cosine `c` on the thin-film nodes.
+pub fn film_fresnel_hats(c: f64) -> [(usize, f64); 2] {
+    let t = c.clamp(0.0, 1.0) * (FILM_FRESNEL_NODES - 1) as f64;
+    let m = (t.floor() as usize).min(FILM_FRESNEL_NODES - 2);
+    let w1 = t - m as f64;
+    [(m, 1.0 - w1), (m + 1, w1)]
+}
+
 fn node(i: usize, n: usize) -> f64 {
     i as f64 / (n - 1) as f64
 }
@@ -121,6 +138,7 @@ pub fn fresnel_hats(c: f64) -> [(usize, f64); 2] {
 pub struct GgxNode {
     pub ess: f64,
     pub moments: [f64; FRESNEL_NODES],
+    pub film_moments: [f64; FILM_FRESNEL_NODES],
     pub dielectric: [f64; IOR_NODES],
 }
 
@@ -128,7 +146,7 @@ pub struct GgxNode {
 pub fn integrate_ggx(mu: f64, alpha: f64, n: u32) -> GgxNode {
     let v = view(mu);
     let etas: Vec<f64> = (0..IOR_NODES).map(|k| ior_eta(node(k, IOR_NODES))).collect();
-    let mut out = GgxNode { ess: 0.0, moments: [0.0; FRESNEL_NODES], dielectric: [0.0; IOR_NODES] };
+    let mut out = GgxNode { ess: 0.0, moments: [0.0; FRESNEL_NODES], film_moments: [0.0; FILM_FRESNEL_NODES], dielectric: [0.0; IOR_NODES] };
     for i in 0..n {
         let (u1, u2) = qmc::hammersley(i, n);
         let (c, w) = ggx_albedo_sample(v, alpha, u1, u2);
@@ -139,6 +157,9 @@ pub fn integrate_ggx(mu: f64, alpha: f64, n: u32) -> GgxNode {
         for (m, hw) in fresnel_hats(c) {
             out.moments[m] += w * hw;
         }
+        for (m, hw) in film_fresnel_hats(c) {
+            out.film_moments[m] += w * hw;
+        }
         for (k, &eta) in etas.iter().enumerate() {
             out.dielectric[k] += w * fresnel_dielectric(c, eta);
         }
@@ -146,6 +167,7 @@ pub fn integrate_ggx(mu: f64, alpha: f64, n: u32) -> GgxNode {
     let s = 1.0 / n as f64;
     out.ess *= s;
     out.moments.iter_mut().for_each(|x| *x *= s);
+    out.film_moments.iter_mut().for_each(|x| *x *= s);
     out.dielectric.iter_mut().for_each(|x| *x *= s);
     out
 }
@@ -211,6 +233,7 @@ impl DiffuseTable {
 pub struct Tables {
     pub ggx_ess: Vec<f32>,
     pub ggx_moments: Vec<f32>,
+    pub ggx_film_moments: Vec<f32>,
     pub ggx_dielectric: Vec<f32>,
     pub diffuse: Vec<(DiffuseTable, Vec<f32>)>,
 }
@@ -218,6 +241,17 @@ pub struct Tables {
 /// Rounds to the precision the file stores (6 decimals), so tables read back exactly.
 fn stored(x: f64) -> f32 {
     format!("{x:.6}").parse::<f32>().unwrap()
+}
+
+/// A stored value as the file writes it: 6 decimals, trailing zeros dropped ("0.25", "0.0").
+fn literal(x: f32) -> String {
+    let s = format!("{x:.6}");
+    let t = s.trim_end_matches('0');
+    if t.ends_with('.') {
+        format!("{t}0")
+    } else {
+        t.to_string()
+    }
 }
 
 impl Tables {
@@ -234,6 +268,7 @@ impl Tables {
             .collect();
         let ggx_ess = nodes.iter().map(|n| stored(n.ess)).collect();
         let ggx_moments = nodes.iter().flat_map(|n| n.moments.iter().map(|&x| stored(x))).collect();
+        let ggx_film_moments = nodes.iter().flat_map(|n| n.film_moments.iter().map(|&x| stored(x))).collect();
         let mut ggx_dielectric = vec![0.0; IOR_NODES * ROUGHNESS_NODES * VIEW_NODES];
         for (idx, n) in nodes.iter().enumerate() {
             for k in 0..IOR_NODES {
@@ -252,7 +287,7 @@ impl Tables {
                 .collect();
             diffuse.push((t, values));
         }
-        Tables { ggx_ess, ggx_moments, ggx_dielectric, diffuse }
+        Tables { ggx_ess, ggx_moments, ggx_film_moments, ggx_dielectric, diffuse }
     }
 
     // ---- lookups (the same interpolation as albedo_lookup.wgsl) ---------------------------
@@ -285,6 +320,12 @@ impl Tables {
         (0..FRESNEL_NODES).map(|m| Self::bilinear(&self.ggx_moments, FRESNEL_NODES, m, x, y) * f(fresnel_node(m))).sum()
     }
 
+    /// GGX albedo for a Fresnel curve `f(cos)` through the thin-film moment weights.
+    pub fn with_film_fresnel(&self, mu: f64, alpha: f64, f: impl Fn(f64) -> f64) -> f64 {
+        let (x, y) = (GGX_VIEW.coordinate(mu), GGX_ROUGHNESS.coordinate(alpha));
+        (0..FILM_FRESNEL_NODES).map(|m| Self::bilinear(&self.ggx_film_moments, FILM_FRESNEL_NODES, m, x, y) * f(film_fresnel_node(m))).sum()
+    }
+
     /// The dielectric albedo for η ≥ 1 (η above 3 reads as 3; below 1 the kernels use the
     /// moments instead).
     pub fn dielectric(&self, mu: f64, alpha: f64, eta: f64) -> f64 {
@@ -306,6 +347,7 @@ impl Tables {
         let mut arrays = Vec::new();
         arrays.push(("mx_table_ggx_ess", &self.ggx_ess));
         arrays.push(("mx_table_ggx_moments", &self.ggx_moments));
+        arrays.push(("mx_table_ggx_film_moments", &self.ggx_film_moments));
         arrays.push(("mx_table_ggx_dielectric", &self.ggx_dielectric));
         let names: Vec<String> = self.diffuse.iter().map(|(t, _)| format!("mx_table_{}", t.name())).collect();
         for ((_, v), n) in self.diffuse.iter().zip(&names) {
@@ -323,7 +365,7 @@ impl Tables {
                 if k % 16 == 0 {
                     body.push_str("\n    ");
                 }
-                let _ = write!(body, "{x:.6}, ");
+                let _ = write!(body, "{}, ", literal(*x));
             }
             offset += values.len();
         }
@@ -335,7 +377,8 @@ impl Tables {
         let _ = writeln!(s, "// measured errors: docs/albedo-tables.md. Lookups: albedo_lookup.wgsl.");
         let _ = writeln!(s, "//");
         let _ = writeln!(s, "// format {FORMAT_VERSION}; every table is [axis 3][roughness][view], nodes uniform in t in [0, 1]: view {VIEW_NODES} nodes,");
-        let _ = writeln!(s, "// roughness {ROUGHNESS_NODES}, IOR {IOR_NODES}, Fresnel moments {FRESNEL_NODES} (at cos = (j/15)^2). Axes: log t = ln(1 + 100 v)/ln(101)");
+        let _ = writeln!(s, "// roughness {ROUGHNESS_NODES}, IOR {IOR_NODES}, Fresnel moments {FRESNEL_NODES} (at cos = (j/15)^2), thin-film moments {FILM_FRESNEL_NODES} (at cos = j/31).");
+        let _ = writeln!(s, "// Axes: log t = ln(1 + 100 v)/ln(101)");
         let _ = writeln!(s, "// (GGX view mu and alpha_bar, sheen view), angle t = 1 - acos(mu)*2/pi (diffuse view), sqrt t = sqrt(v) (sheen");
         let _ = writeln!(s, "// roughness), linear (diffuse roughness), IOR t = sqrt(2q), q = (eta-1)/(eta+1), eta in [1, 3].");
         let _ = writeln!(s, "// Integrator: 2-D Hammersley points, {GGX_SAMPLES} per node with visible-normal sampling (GGX tables), {COSINE_SAMPLES}");
@@ -349,6 +392,7 @@ impl Tables {
         let _ = writeln!(s, "const MX_TABLE_ROUGHNESS_NODES: i32 = {ROUGHNESS_NODES};");
         let _ = writeln!(s, "const MX_TABLE_IOR_NODES: i32 = {IOR_NODES};");
         let _ = writeln!(s, "const MX_TABLE_FRESNEL_NODES: i32 = {FRESNEL_NODES};");
+        let _ = writeln!(s, "const MX_TABLE_FILM_FRESNEL_NODES: i32 = {FILM_FRESNEL_NODES};");
         let _ = writeln!(s);
         let _ = writeln!(s, "// Where each table starts in mx_albedo_table_data.");
         s.push_str(&offsets);

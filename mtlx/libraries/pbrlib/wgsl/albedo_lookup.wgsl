@@ -41,10 +41,10 @@ fn mx_albedo_ggx_dielectric(mu: f32, abar: f32, eta: f32) -> f32 {
         return mx_albedo_ggx_ess(mu, abar);
     }
     if (eta < 1.0) {
-        let p = mx_ggx_moments_position(mu, abar);
+        let p = mx_ggx_moments_position(mu, abar, MX_TABLE_FRESNEL_NODES);
         var e = 0.0;
         for (var m = 0; m < MX_TABLE_FRESNEL_NODES; m++) {
-            e += mx_ggx_moment(p, m) * mx_fresnel_dielectric(mx_fresnel_node(m), eta);
+            e += mx_ggx_moment(MX_TABLE_GGX_MOMENTS, MX_TABLE_FRESNEL_NODES, p, m) * mx_fresnel_dielectric(mx_fresnel_node(m), eta);
         }
         return e;
     }
@@ -68,21 +68,26 @@ fn mx_albedo_ggx_dielectric(mu: f32, abar: f32, eta: f32) -> f32 {
 // local array: a dynamically indexed array stays in memory and keeps LLVM from vectorising the
 // batch loop around it ("cannot identify array bounds").
 //
-// The position of (μ, ᾱ) in the moments table: (first index, fraction along view, fraction
-// along ᾱ, 0); indices stay far below 2²⁴, exact in f32.
-fn mx_ggx_moments_position(mu: f32, abar: f32) -> vec4<f32> {
+// The position of (μ, ᾱ) in a moments table of `nodes` weights per cell: (first index,
+// fraction along view, fraction along ᾱ, 0); indices stay far below 2²⁴, exact in f32.
+fn mx_ggx_moments_position(mu: f32, abar: f32, nodes: i32) -> vec4<f32> {
     let p = mx_table_2d_index(mx_table_log_coordinate(mu), mx_table_log_coordinate(abar));
-    return vec4<f32>(p.x * f32(MX_TABLE_FRESNEL_NODES), p.y, p.z, 0.0);
+    return vec4<f32>(p.x * f32(nodes), p.y, p.z, 0.0);
 }
 
-// W_m at a position from mx_ggx_moments_position.
-fn mx_ggx_moment(p: vec4<f32>, m: i32) -> f32 {
-    let kk = MX_TABLE_FRESNEL_NODES;
-    let i = MX_TABLE_GGX_MOMENTS + i32(p.x) + m;
-    let j = i + MX_TABLE_VIEW_NODES * kk;
-    let a = mix(mx_albedo_table(i), mx_albedo_table(i + kk), p.y);
-    let b = mix(mx_albedo_table(j), mx_albedo_table(j + kk), p.y);
+// W_m of the moments table at `offset` (`nodes` weights per cell), at a position from
+// mx_ggx_moments_position.
+fn mx_ggx_moment(offset: i32, nodes: i32, p: vec4<f32>, m: i32) -> f32 {
+    let i = offset + i32(p.x) + m;
+    let j = i + MX_TABLE_VIEW_NODES * nodes;
+    let a = mix(mx_albedo_table(i), mx_albedo_table(i + nodes), p.y);
+    let b = mix(mx_albedo_table(j), mx_albedo_table(j + nodes), p.y);
     return mix(a, b, p.z);
+}
+
+// The cosine of thin-film Fresnel node m (uniform in v·h).
+fn mx_film_fresnel_node(m: i32) -> f32 {
+    return f32(m) * (1.0 / f32(MX_TABLE_FILM_FRESNEL_NODES - 1));
 }
 
 // The cosine of Fresnel node m.
@@ -93,20 +98,20 @@ fn mx_fresnel_node(m: i32) -> f32 {
 
 // GGX albedo for the conductor Fresnel of complex IOR n + ik.
 fn mx_albedo_ggx_conductor(mu: f32, abar: f32, n: vec3<f32>, k: vec3<f32>) -> vec3<f32> {
-    let p = mx_ggx_moments_position(mu, abar);
+    let p = mx_ggx_moments_position(mu, abar, MX_TABLE_FRESNEL_NODES);
     var e = vec3<f32>(0.0);
     for (var m = 0; m < MX_TABLE_FRESNEL_NODES; m++) {
-        e += mx_ggx_moment(p, m) * mx_fresnel_conductor(mx_fresnel_node(m), n, k);
+        e += mx_ggx_moment(MX_TABLE_GGX_MOMENTS, MX_TABLE_FRESNEL_NODES, p, m) * mx_fresnel_conductor(mx_fresnel_node(m), n, k);
     }
     return e;
 }
 
 // GGX albedo for the generalized Schlick curve with F82.
 fn mx_albedo_ggx_schlick(mu: f32, abar: f32, r0: vec3<f32>, r82: vec3<f32>, r90: vec3<f32>, exponent: f32) -> vec3<f32> {
-    let p = mx_ggx_moments_position(mu, abar);
+    let p = mx_ggx_moments_position(mu, abar, MX_TABLE_FRESNEL_NODES);
     var e = vec3<f32>(0.0);
     for (var m = 0; m < MX_TABLE_FRESNEL_NODES; m++) {
-        e += mx_ggx_moment(p, m) * mx_fresnel_schlick_f82(mx_fresnel_node(m), r0, r82, r90, exponent);
+        e += mx_ggx_moment(MX_TABLE_GGX_MOMENTS, MX_TABLE_FRESNEL_NODES, p, m) * mx_fresnel_schlick_f82(mx_fresnel_node(m), r0, r82, r90, exponent);
     }
     return e;
 }

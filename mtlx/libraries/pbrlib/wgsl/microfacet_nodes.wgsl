@@ -2,8 +2,11 @@
 // contributes nothing to reflection, as MaterialX's REFLECTION context), conductor_bsdf
 // (opaque: throughput 0, even at weight 0) and generalized_schlick_bsdf — in every closure
 // context. Albedos come from the project's Monte Carlo tables (albedo_tables.wgsl), so
-// albedo + throughput of a white lobe is exactly 1. Thin film replaces the Fresnel curve by
-// the Airy reflectance (not implemented yet: `thinfilm_*` inputs are accepted and ignored).
+// albedo + throughput of a white lobe is exactly 1. A thin film (`thinfilm_thickness` > 0 nm)
+// replaces the Fresnel curve by the Airy reflectance (thin_film.wgsl) everywhere it enters:
+// the response at v·h, F(1) in the energy compensation (with F90 = 1, as MaterialX) and the
+// albedo, Σ W_m F_airy(c_m) over the Fresnel moments (so throughputs stay consistent; MaterialX
+// approximates this albedo). A film thickness that is a constant 0 folds away at compile time.
 
 // A GGX lobe with its Fresnel curve evaluated at v·h, given everything the contexts share:
 // `scale` (weight·tint·compensation, RGB), the throughput, and the albedo luminance `c`.
@@ -28,10 +31,14 @@ fn mx_dielectric_bsdf(cl: mx_closure, weight: f32, tint: vec3<f32>, ior: f32, ro
     let s = mx_ggx_setup_new(cl, roughness, retroreflective, normal, tangent);
     let eta = max(ior, 0.0);
     let t = max(tint, vec3<f32>(0.0));
-    let favg = mx_fresnel_average(vec3<f32>(mx_fresnel_dielectric(1.0, eta)), vec3<f32>(1.0));
-    let comp = mx_ggx_energy_compensation(s.mu, s.abar, favg);
+    let film = thinfilm_thickness > 0.0;
+    let n3 = vec3<f32>(eta);
+    let k3 = vec3<f32>(0.0);
+    let f1 = select(vec3<f32>(mx_fresnel_dielectric(1.0, eta)), mx_fresnel_airy_conductor(1.0, n3, k3, thinfilm_thickness, thinfilm_ior), film);
+    let comp = mx_ggx_energy_compensation(s.mu, s.abar, mx_fresnel_average(f1, vec3<f32>(1.0)));
     // Untinted albedo (tint stays out of the throughput, as in MaterialX).
-    let albedo = comp * mx_albedo_ggx_dielectric(s.mu, s.abar, eta);
+    let e = select(vec3<f32>(mx_albedo_ggx_dielectric(s.mu, s.abar, eta)), mx_albedo_ggx_airy_conductor(s.mu, s.abar, n3, k3, thinfilm_thickness, thinfilm_ior), film);
+    let albedo = comp * e;
     let throughput = vec3<f32>(1.0) - w * albedo;
     let tinted = w * t * albedo;
     if (cl.context == MX_CONTEXT_ALBEDO) {
@@ -42,12 +49,18 @@ fn mx_dielectric_bsdf(cl: mx_closure, weight: f32, tint: vec3<f32>, ior: f32, ro
     }
     let l = mx_ggx_light(cl, s);
     let h = mx_half_vector(s.v, l);
-    let f = vec3<f32>(mx_fresnel_dielectric(dot(s.v, h), eta));
+    let vh = dot(s.v, h);
+    let f = select(vec3<f32>(mx_fresnel_dielectric(vh, eta)), mx_fresnel_airy_conductor(vh, n3, k3, thinfilm_thickness, thinfilm_ior), film);
     let response = (w * mx_ggx_reflection(s.v, l, h, s.a)) * f * comp * t;
     if (cl.context == MX_CONTEXT_EVAL) {
         return BSDF(response, throughput, mx_bsdf_empty().lobe);
     }
     return mx_lobe_with_pdf(response, throughput, mx_luminance_rgb(tinted), mx_ggx_pdf(s.v, h, s.a));
+}
+
+// The conductor's Fresnel curve at v·h, Airy over the conductor when a film is present.
+fn mx_conductor_fresnel(vh: f32, n: vec3<f32>, k: vec3<f32>, thickness: f32, film_ior: f32) -> vec3<f32> {
+    return select(mx_fresnel_conductor(vh, n, k), mx_fresnel_airy_conductor(vh, n, k, thickness, film_ior), thickness > 0.0);
 }
 
 // ND_conductor_bsdf
@@ -59,15 +72,17 @@ fn mx_conductor_bsdf(cl: mx_closure, weight: f32, ior: vec3<f32>, extinction: ve
     // Fresnel products inside f32.
     let n = clamp(ior, vec3<f32>(0.0), vec3<f32>(1.0e6));
     let k = clamp(extinction, vec3<f32>(0.0), vec3<f32>(1.0e6));
-    let f1 = mx_fresnel_conductor_normal(n, k);
+    let film = thinfilm_thickness > 0.0;
+    let f1 = select(mx_fresnel_conductor_normal(n, k), mx_fresnel_airy_conductor(1.0, n, k, thinfilm_thickness, thinfilm_ior), film);
     let comp = mx_ggx_energy_compensation(s.mu, s.abar, mx_fresnel_average(f1, vec3<f32>(1.0)));
     if (cl.context == MX_CONTEXT_EVAL) {
         let l = mx_ggx_light(cl, s);
         let h = mx_half_vector(s.v, l);
-        let f = mx_fresnel_conductor(dot(s.v, h), n, k);
+        let f = mx_conductor_fresnel(dot(s.v, h), n, k, thinfilm_thickness, thinfilm_ior);
         return BSDF((w * mx_ggx_reflection(s.v, l, h, s.a)) * f * comp, opaque, mx_bsdf_empty().lobe);
     }
-    let albedo = w * comp * mx_albedo_ggx_conductor(s.mu, s.abar, n, k);
+    let e = select(mx_albedo_ggx_conductor(s.mu, s.abar, n, k), mx_albedo_ggx_airy_conductor(s.mu, s.abar, n, k, thinfilm_thickness, thinfilm_ior), film);
+    let albedo = w * comp * e;
     if (cl.context == MX_CONTEXT_ALBEDO) {
         return BSDF(albedo, opaque, mx_bsdf_empty().lobe);
     }
@@ -76,7 +91,7 @@ fn mx_conductor_bsdf(cl: mx_closure, weight: f32, ior: vec3<f32>, extinction: ve
     }
     let l = mx_ggx_light(cl, s);
     let h = mx_half_vector(s.v, l);
-    let f = mx_fresnel_conductor(dot(s.v, h), n, k);
+    let f = mx_conductor_fresnel(dot(s.v, h), n, k, thinfilm_thickness, thinfilm_ior);
     let response = (w * mx_ggx_reflection(s.v, l, h, s.a)) * f * comp;
     return mx_lobe_with_pdf(response, opaque, mx_luminance_rgb(albedo), mx_ggx_pdf(s.v, h, s.a));
 }
@@ -93,9 +108,12 @@ fn mx_generalized_schlick_bsdf(cl: mx_closure, weight: f32, color0: vec3<f32>, c
     let r82 = max(color82, vec3<f32>(0.0));
     let r90 = max(color90, vec3<f32>(0.0));
     let q = max(exponent, 0.0);
-    let favg = mx_fresnel_average(mx_fresnel_schlick_f82(1.0, r0, r82, r90, q), r90);
+    let film = thinfilm_thickness > 0.0;
+    let th = thinfilm_thickness;
+    let favg = select(mx_fresnel_average(mx_fresnel_schlick_f82(1.0, r0, r82, r90, q), r90), mx_fresnel_average(mx_fresnel_airy_schlick(1.0, r0, r82, r90, q, th, thinfilm_ior), vec3<f32>(1.0)), film);
     let comp = mx_ggx_energy_compensation(s.mu, s.abar, favg);
-    let albedo = w * comp * mx_albedo_ggx_schlick(s.mu, s.abar, r0, r82, r90, q);
+    let e = select(mx_albedo_ggx_schlick(s.mu, s.abar, r0, r82, r90, q), mx_albedo_ggx_airy_schlick(s.mu, s.abar, r0, r82, r90, q, th, thinfilm_ior), film);
+    let albedo = w * comp * e;
     let throughput = vec3<f32>(1.0 - (albedo.x + albedo.y + albedo.z) * (1.0 / 3.0));
     if (cl.context == MX_CONTEXT_ALBEDO) {
         return BSDF(albedo, throughput, mx_bsdf_empty().lobe);
@@ -105,7 +123,8 @@ fn mx_generalized_schlick_bsdf(cl: mx_closure, weight: f32, color0: vec3<f32>, c
     }
     let l = mx_ggx_light(cl, s);
     let h = mx_half_vector(s.v, l);
-    let f = mx_fresnel_schlick_f82(dot(s.v, h), r0, r82, r90, q);
+    let vh = dot(s.v, h);
+    let f = select(mx_fresnel_schlick_f82(vh, r0, r82, r90, q), mx_fresnel_airy_schlick(vh, r0, r82, r90, q, th, thinfilm_ior), film);
     let response = (w * mx_ggx_reflection(s.v, l, h, s.a)) * f * comp;
     if (cl.context == MX_CONTEXT_EVAL) {
         return BSDF(response, throughput, mx_bsdf_empty().lobe);
