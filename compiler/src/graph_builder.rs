@@ -88,7 +88,9 @@ pub fn document_outputs(doc: &Document) -> Vec<OutputRef> {
         push(&mut out, *g, prefix);
     }
     // Top-level numeric nodes that nothing consumes are renderable values too (MaterialX's
-    // test documents often hold bare nodes): named by the node.
+    // test documents often hold bare nodes): named by the node. So are unconsumed top-level
+    // BSDFs, surface shaders and materials (a document's `surfacematerial`), for the closure
+    // contexts.
     let root = doc.root();
     let consumed: std::collections::HashSet<&str> = doc
         .descendants(root)
@@ -98,7 +100,8 @@ pub fn document_outputs(doc: &Document) -> Vec<OutputRef> {
     for &n in doc.children(root) {
         let ne = doc.get(n);
         let ty = DataType::from_name(ne.attr("type").unwrap_or(""));
-        if mtlx::schema::is_node_category(&ne.category) && !consumed.contains(ne.name()) && (ty.is_numeric() || ty == DataType::Multioutput) {
+        let closure = crate::wgsl_types::wgsl_type(&ty, false) == Some("BSDF");
+        if mtlx::schema::is_node_category(&ne.category) && !consumed.contains(ne.name()) && (ty.is_numeric() || ty == DataType::Multioutput || closure) {
             let outs: Vec<ElementId> = doc.children_of(n, "output").collect();
             if ty == DataType::Multioutput {
                 for o in outs {
