@@ -216,6 +216,16 @@ fn mx_fast_exp(x: f32) -> f32 {
     return mx_fast_exp2(x * 1.44269504);
 }
 
+// Natural logarithm (absolute error 2e-7·ln 2).
+fn mx_fast_ln(x: f32) -> f32 {
+    return mx_fast_log2(x) * 0.693147181;
+}
+
+// asin on [−1, 1] (inputs clamped), from mx_fast_acos.
+fn mx_fast_asin(x: f32) -> f32 {
+    return 0.5 * MX_PI - mx_fast_acos(clamp(x, -1.0, 1.0));
+}
+
 // acos on [−1, 1] (inputs clamped): Abramowitz & Stegun 4.4.46, √(1 − |x|) times a degree-7
 // polynomial (absolute error 2e-8, below 3e-7 in f32).
 fn mx_fast_acos(x: f32) -> f32 {

@@ -10,7 +10,8 @@
 // domain: ior ≥ 1, absorption ≥ 0, cuticle_angle in [0, 1], roughness in [0.001, 1] (MaterialX
 // clamps roughness too).
 // The albedo context integrates the eval over 256 Fibonacci directions of the hemisphere (the
-// BCSDF has no table); sampling is cosine-weighted.
+// BCSDF has no table); sampling is cosine-weighted. Transcendentals are the library's call-free
+// ones (closure.wgsl), so both engines evaluate the same polynomials.
 
 fn mx_hair_i0(x: f32) -> f32 {
     let x2 = x * x;
@@ -28,8 +29,8 @@ fn mx_hair_i0(x: f32) -> f32 {
 }
 
 fn mx_hair_log_i0(x: f32) -> f32 {
-    let big = x + 0.5 * (-log(2.0 * MX_PI) + log(1.0 / max(x, 1.0e-30)) + 1.0 / (8.0 * max(x, 1.0e-30)));
-    return select(log(mx_hair_i0(x)), big, x > 12.0);
+    let big = x + 0.5 * (-mx_fast_ln(2.0 * MX_PI) + mx_fast_ln(1.0 / max(x, 1.0e-30)) + 1.0 / (8.0 * max(x, 1.0e-30)));
+    return select(mx_fast_ln(mx_hair_i0(x)), big, x > 12.0);
 }
 
 // M_p: the longitudinal scattering of variance v.
@@ -37,18 +38,19 @@ fn mx_hair_longitudinal(sin_i: f32, cos_i: f32, sin_o: f32, cos_o: f32, v: f32) 
     let inv_v = 1.0 / v;
     let a = cos_o * cos_i * inv_v;
     let b = sin_o * sin_i * inv_v;
-    let narrow = exp(mx_hair_log_i0(a) - b - inv_v + 0.6931 + log(0.5 * inv_v));
-    let wide = exp(-b) * mx_hair_i0(a) / (2.0 * v * sinh(inv_v));
+    let narrow = mx_fast_exp(mx_hair_log_i0(a) - b - inv_v + 0.6931 + mx_fast_ln(0.5 * inv_v));
+    let sinh_inv_v = 0.5 * (mx_fast_exp(inv_v) - mx_fast_exp(-inv_v));
+    let wide = mx_fast_exp(-b) * mx_hair_i0(a) / (2.0 * v * sinh_inv_v);
     return select(wide, narrow, v < 0.1);
 }
 
 fn mx_hair_logistic(x: f32, s: f32) -> f32 {
-    let f = exp(-abs(x) / s);
+    let f = mx_fast_exp(-abs(x) / s);
     return f / (s * (1.0 + f) * (1.0 + f));
 }
 
 fn mx_hair_logistic_cdf(x: f32, s: f32) -> f32 {
-    return 1.0 / (1.0 + exp(-x / s));
+    return 1.0 / (1.0 + mx_fast_exp(-x / s));
 }
 
 // N_p for p = 0, 1, 2: a logistic of scale s (× √(π/8)) trimmed to [−π, π] around the
@@ -63,8 +65,9 @@ fn mx_hair_azimuthal(phi: f32, p: f32, s: f32, gamma_o: f32, gamma_t: f32) -> f3
 // The rotated (sin θi, cos θi) of lobe p for the cuticle tilt α (rotation by (2 − 3p)·α).
 fn mx_hair_tilt(sin_i: f32, cos_i: f32, alpha: f32, p: f32) -> vec2<f32> {
     let m = (2.0 - 3.0 * p) * alpha;
-    let sa = sin(m);
-    let ca = cos(m);
+    let cs = mx_fast_cos_sin(m);
+    let sa = cs.y;
+    let ca = cs.x;
     return vec2<f32>(sin_i * ca + cos_i * sa, cos_i * ca - sin_i * sa);
 }
 
@@ -75,20 +78,21 @@ fn mx_hair_response(v: vec3<f32>, l: vec3<f32>, tint_r: vec3<f32>, tint_tt: vec3
     let sin_i = clamp(l.x, -1.0, 1.0);
     let cos_o = sqrt(max(1.0 - sin_o * sin_o, 0.0));
     let cos_i = sqrt(max(1.0 - sin_i * sin_i, 0.0));
-    let phi = atan2(l.z * v.y - v.z * l.y, l.y * v.y + l.z * v.z);
+    let phi = mx_fast_atan2(l.z * v.y - v.z * l.y, l.y * v.y + l.z * v.z);
     let k1 = mx_normalize_or(vec3<f32>(0.0, v.y, v.z), vec3<f32>(0.0, 0.0, 1.0));
     let cos_go = k1.z;
     let sin_go = select(1.0, -1.0, k1.y > 0.0) * sqrt(max(1.0 - cos_go * cos_go, 0.0));
-    let gamma_o = asin(clamp(sin_go, -1.0, 1.0));
+    let gamma_o = mx_fast_asin(sin_go);
     let sin_t = sin_o / eta;
     let cos_t = sqrt(max(1.0 - sin_t * sin_t, 0.0));
     let eta_p = sqrt(max(eta * eta - sin_o * sin_o, 0.0)) / max(cos_o, 1.0e-8);
     let sin_gt = clamp(sin_go / eta_p, -1.0, 1.0);
     let cos_gt = sqrt(1.0 - sin_gt * sin_gt);
-    let gamma_t = asin(sin_gt);
+    let gamma_t = mx_fast_asin(sin_gt);
     // Attenuations A_p.
     let f = mx_fresnel_dielectric(cos_o * cos_go, eta);
-    let t = exp(-max(absorption, vec3<f32>(0.0)) * (2.0 * cos_gt / max(cos_t, 1.0e-8)));
+    let x = -max(absorption, vec3<f32>(0.0)) * (2.0 * cos_gt / max(cos_t, 1.0e-8));
+    let t = vec3<f32>(mx_fast_exp(x.x), mx_fast_exp(x.y), mx_fast_exp(x.z));
     let a0 = vec3<f32>(f);
     let a1 = (1.0 - f) * (1.0 - f) * t;
     let a2 = a1 * t * f;
