@@ -2,6 +2,8 @@
 //! on the wgpu engine for random inputs, and compare with values computed in the test.
 #![allow(dead_code)]
 
+pub mod bsdf;
+
 use std::sync::OnceLock;
 use uplift::batch::{Geometry, PatternBatch, PatternEngine, TextureData};
 use uplift::wgpu_engine::WgpuEngine;
