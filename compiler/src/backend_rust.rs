@@ -821,6 +821,29 @@ impl<'m> Writer<'m> {
         name
     }
 
+    /// A loop's continuing block and its `break_if`, at `indent`, in one scope (`break_if` sees
+    /// the continuing block's values; they go out of scope after it).
+    fn continuing(&mut self, ctx: &mut FnCtx<'m>, continuing: &'m naga::Block, break_if: Option<Handle<E>>, indent: usize, out: &mut String) -> R<()> {
+        let pad = "    ".repeat(indent);
+        ctx.scopes.push(Vec::new());
+        let mut r = Ok(());
+        for s in continuing.iter() {
+            r = self.statement(ctx, s, indent, out);
+            if r.is_err() {
+                break;
+            }
+        }
+        if let (Ok(()), Some(b)) = (&r, break_if) {
+            r = self.expr(ctx, b).map(|c| {
+                let _ = writeln!(out, "{pad}if {} {{\n{pad}    break;\n{pad}}}", c.s);
+            });
+        }
+        for h in ctx.scopes.pop().unwrap_or_default() {
+            ctx.baked.remove(&h);
+        }
+        r
+    }
+
     fn statement(&mut self, ctx: &mut FnCtx<'m>, s: &'m S, indent: usize, out: &mut String) -> R<()> {
         let pad = "    ".repeat(indent);
         match s {
@@ -854,7 +877,6 @@ impl<'m> Writer<'m> {
             S::Switch { selector, cases } => self.switch(ctx, *selector, cases, indent, out)?,
             S::Loop { body, continuing, break_if } => {
                 let pad1 = "    ".repeat(indent + 1);
-                let pad2 = "    ".repeat(indent + 2);
                 let simple = continuing.is_empty() && break_if.is_none();
                 // Without a `continue` in the body, the continuing block runs at the end of the
                 // body: `loop { body; continuing; if break_if { break } }`, the rotated shape
@@ -875,45 +897,12 @@ impl<'m> Writer<'m> {
                     let _ = writeln!(out, "{pad1}if !{flag} {{");
                     // The continuing block may use values emitted in `body`: not supported
                     // (reported by `expr` as a value out of scope).
-                    // `break_if` sees the values of the continuing block: one scope.
-                    ctx.scopes.push(Vec::new());
-                    let mut r = Ok(());
-                    for s in continuing.iter() {
-                        r = self.statement(ctx, s, indent + 2, out);
-                        if r.is_err() {
-                            break;
-                        }
-                    }
-                    if let (Ok(()), Some(b)) = (&r, break_if) {
-                        r = self.expr(ctx, *b).map(|c| {
-                            let _ = writeln!(out, "{pad2}if {} {{\n{pad2}    break;\n{pad2}}}", c.s);
-                        });
-                    }
-                    for h in ctx.scopes.pop().unwrap_or_default() {
-                        ctx.baked.remove(&h);
-                    }
-                    r?;
+                    self.continuing(ctx, continuing, *break_if, indent + 2, out)?;
                     let _ = writeln!(out, "{pad1}}}\n{pad1}{flag} = false;");
                 }
                 self.block(ctx, body, indent + 1, out)?;
                 if at_end {
-                    ctx.scopes.push(Vec::new());
-                    let mut r = Ok(());
-                    for s in continuing.iter() {
-                        r = self.statement(ctx, s, indent + 1, out);
-                        if r.is_err() {
-                            break;
-                        }
-                    }
-                    if let (Ok(()), Some(b)) = (&r, break_if) {
-                        r = self.expr(ctx, *b).map(|c| {
-                            let _ = writeln!(out, "{pad1}if {} {{\n{pad1}    break;\n{pad1}}}", c.s);
-                        });
-                    }
-                    for h in ctx.scopes.pop().unwrap_or_default() {
-                        ctx.baked.remove(&h);
-                    }
-                    r?;
+                    self.continuing(ctx, continuing, *break_if, indent + 1, out)?;
                 }
                 let _ = writeln!(out, "{pad}}}");
                 if let Some(Breakable::Loop { label, used: true }) = ctx.breakables.pop() {
