@@ -212,8 +212,16 @@ pub fn mx_absval_color3_(in_2: Vec3) -> Vec3 {
 }
 
 #[inline(always)]
+pub fn mx_pow(x_6: f32, y_4: f32) -> f32 {
+    if (x_6 == 0.0f32) & (y_4 > 0.0f32) { 0.0f32 } else { x_6.powf(y_4) }
+}
+
+#[inline(always)]
 pub fn mx_power_color3_(in1_4: Vec3, in2_4: Vec3) -> Vec3 {
-    wgsl_pow_vec3_vec3(in1_4, in2_4)
+    let _e4 = mx_pow(in1_4.x, in2_4.x);
+    let _e7 = mx_pow(in1_4.y, in2_4.y);
+    let _e10 = mx_pow(in1_4.z, in2_4.z);
+    Vec3::new(_e4, _e7, _e10)
 }
 
 #[inline(always)]
@@ -259,11 +267,6 @@ pub fn mx_pattern(geom_1: mx_geometry) -> MxOutputs {
     let v27_ = mx_clamp_color3_(v26_, Vec3::new(0.0f32, 0.0f32, 0.0f32), Vec3::new(1.0f32, 1.0f32, 1.0f32));
     let v28_ = mx_ifequal_color3B(true, true, v27_, v26_);
     MxOutputs { out: v28_, out_f: 0.9f32 }
-}
-
-#[inline(always)]
-fn wgsl_pow_vec3_vec3(a: Vec3, b: Vec3) -> Vec3 {
-    Vec3::new(a.x.powf(b.x), a.y.powf(b.y), a.z.powf(b.z))
 }
 
 #[inline(always)]

@@ -71,8 +71,14 @@ pub fn mx_modulo_float(in1_4: f32, in2_4: f32) -> f32 {
 }
 
 #[inline(always)]
+pub fn mx_pow(x: f32, y: f32) -> f32 {
+    if (x == 0.0f32) & (y > 0.0f32) { 0.0f32 } else { x.powf(y) }
+}
+
+#[inline(always)]
 pub fn mx_power_float(in1_5: f32, in2_5: f32) -> f32 {
-    in1_5.powf(in2_5)
+    let _e2 = mx_pow(in1_5, in2_5);
+    _e2
 }
 
 #[inline(always)]

@@ -162,8 +162,14 @@ pub fn mx_noise2d_float(amplitude: f32, pivot: f32, texcoord: Vec2) -> f32 {
 }
 
 #[inline(always)]
+pub fn mx_pow(x_4: f32, y_2: f32) -> f32 {
+    if (x_4 == 0.0f32) & (y_2 > 0.0f32) { 0.0f32 } else { x_4.powf(y_2) }
+}
+
+#[inline(always)]
 pub fn mx_power_float(in1_: f32, in2_: f32) -> f32 {
-    in1_.powf(in2_)
+    let _e2 = mx_pow(in1_, in2_);
+    _e2
 }
 
 #[inline(always)]

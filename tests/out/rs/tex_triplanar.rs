@@ -83,9 +83,9 @@ pub fn mx_image_address(i: i32, n: i32, mode: i32) -> i32 {
 
 #[inline(always)]
 pub fn mx_image_texel(tex: &(impl MxTextures + ?Sized), file: usize, ix: i32, iy: i32, size: IVec2, uaddressmode: i32, vaddressmode: i32) -> Vec4 {
-    let x = mx_image_address(ix, size.x, uaddressmode);
-    let y = mx_image_address(iy, size.y, vaddressmode);
-    let _e12 = tex.load(file, x, y);
+    let x_1 = mx_image_address(ix, size.x, uaddressmode);
+    let y_1 = mx_image_address(iy, size.y, vaddressmode);
+    let _e12 = tex.load(file, x_1, y_1);
     _e12
 }
 
@@ -183,9 +183,17 @@ pub fn mx_divide_vector3FA(in1_3: Vec3, in2_3: f32) -> Vec3 {
 }
 
 #[inline(always)]
+pub fn mx_pow(x: f32, y: f32) -> f32 {
+    if (x == 0.0f32) & (y > 0.0f32) { 0.0f32 } else { x.powf(y) }
+}
+
+#[inline(always)]
 #[allow(non_snake_case)]
 pub fn mx_power_vector3FA(in1_4: Vec3, in2_4: f32) -> Vec3 {
-    wgsl_pow_vec3_vec3(in1_4, Vec3::splat(in2_4))
+    let _e3 = mx_pow(in1_4.x, in2_4);
+    let _e5 = mx_pow(in1_4.y, in2_4);
+    let _e7 = mx_pow(in1_4.z, in2_4);
+    Vec3::new(_e3, _e5, _e7)
 }
 
 #[inline(always)]
@@ -254,11 +262,6 @@ fn wgsl_mix_vec4_vec4_vec4(a: Vec4, b: Vec4, c: Vec4) -> Vec4 {
 #[inline(always)]
 fn wgsl_normalize_vec3(a: Vec3) -> Vec3 {
     a / a.length()
-}
-
-#[inline(always)]
-fn wgsl_pow_vec3_vec3(a: Vec3, b: Vec3) -> Vec3 {
-    Vec3::new(a.x.powf(b.x), a.y.powf(b.y), a.z.powf(b.z))
 }
 
 #[inline(always)]

@@ -177,8 +177,15 @@ fn mx_absval_color3_(in_2: vec3<f32>) -> vec3<f32> {
     return abs(in_2);
 }
 
+fn mx_pow(x_6: f32, y_4: f32) -> f32 {
+    return select(pow(x_6, y_4), 0f, ((x_6 == 0f) & (y_4 > 0f)));
+}
+
 fn mx_power_color3_(in1_4: vec3<f32>, in2_4: vec3<f32>) -> vec3<f32> {
-    return pow(in1_4, in2_4);
+    let _e4 = mx_pow(in1_4.x, in2_4.x);
+    let _e7 = mx_pow(in1_4.y, in2_4.y);
+    let _e10 = mx_pow(in1_4.z, in2_4.z);
+    return vec3<f32>(_e4, _e7, _e10);
 }
 
 fn mx_sign_color3_(in_3: vec3<f32>) -> vec3<f32> {

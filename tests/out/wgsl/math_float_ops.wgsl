@@ -51,8 +51,13 @@ fn mx_modulo_float(in1_4: f32, in2_4: f32) -> f32 {
     return (in1_4 - (in2_4 * floor((in1_4 / in2_4))));
 }
 
+fn mx_pow(x: f32, y: f32) -> f32 {
+    return select(pow(x, y), 0f, ((x == 0f) & (y > 0f)));
+}
+
 fn mx_power_float(in1_5: f32, in2_5: f32) -> f32 {
-    return pow(in1_5, in2_5);
+    let _e2 = mx_pow(in1_5, in2_5);
+    return _e2;
 }
 
 fn mx_sqrt_float(in_1: f32) -> f32 {

@@ -139,8 +139,13 @@ fn mx_noise2d_float(amplitude: f32, pivot: f32, texcoord: vec2<f32>) -> f32 {
     return ((_e3 * amplitude) + pivot);
 }
 
+fn mx_pow(x_4: f32, y_2: f32) -> f32 {
+    return select(pow(x_4, y_2), 0f, ((x_4 == 0f) & (y_2 > 0f)));
+}
+
 fn mx_power_float(in1_: f32, in2_: f32) -> f32 {
-    return pow(in1_, in2_);
+    let _e2 = mx_pow(in1_, in2_);
+    return _e2;
 }
 
 fn mx_combine3_color3_(in1_1: f32, in2_1: f32, in3_: f32) -> vec3<f32> {

@@ -161,8 +161,15 @@ fn mx_divide_vector3FA(in1_3: vec3<f32>, in2_3: f32) -> vec3<f32> {
     return (in1_3 / vec3(in2_3));
 }
 
+fn mx_pow(x: f32, y: f32) -> f32 {
+    return select(pow(x, y), 0f, ((x == 0f) & (y > 0f)));
+}
+
 fn mx_power_vector3FA(in1_4: vec3<f32>, in2_4: f32) -> vec3<f32> {
-    return pow(in1_4, vec3(in2_4));
+    let _e3 = mx_pow(in1_4.x, in2_4);
+    let _e5 = mx_pow(in1_4.y, in2_4);
+    let _e7 = mx_pow(in1_4.z, in2_4);
+    return vec3<f32>(_e3, _e5, _e7);
 }
 
 fn mx_multiply_color3FA(in1_5: vec3<f32>, in2_5: f32) -> vec3<f32> {

@@ -574,49 +574,55 @@ fn mx_round_integer(in: f32) -> i32 {
 }
 
 // ---- power ----
+// WGSL leaves pow(0, y) to the implementation (its accuracy is that of exp2(y·log2(0))); C
+// and Rust give 0 for y > 0. The library defines pow(0, y > 0) = 0 so every engine agrees.
+
+fn mx_pow(x: f32, y: f32) -> f32 {
+    return select(pow(x, y), 0.0, (x == 0.0) & (y > 0.0));
+}
 
 fn mx_power_float(in1: f32, in2: f32) -> f32 {
-    return pow(in1, in2);
+    return mx_pow(in1, in2);
 }
 
 fn mx_power_color3(in1: vec3<f32>, in2: vec3<f32>) -> vec3<f32> {
-    return pow(in1, in2);
+    return vec3<f32>(mx_pow(in1.x, in2.x), mx_pow(in1.y, in2.y), mx_pow(in1.z, in2.z));
 }
 
 fn mx_power_color4(in1: vec4<f32>, in2: vec4<f32>) -> vec4<f32> {
-    return pow(in1, in2);
+    return vec4<f32>(mx_pow(in1.x, in2.x), mx_pow(in1.y, in2.y), mx_pow(in1.z, in2.z), mx_pow(in1.w, in2.w));
 }
 
 fn mx_power_vector2(in1: vec2<f32>, in2: vec2<f32>) -> vec2<f32> {
-    return pow(in1, in2);
+    return vec2<f32>(mx_pow(in1.x, in2.x), mx_pow(in1.y, in2.y));
 }
 
 fn mx_power_vector3(in1: vec3<f32>, in2: vec3<f32>) -> vec3<f32> {
-    return pow(in1, in2);
+    return vec3<f32>(mx_pow(in1.x, in2.x), mx_pow(in1.y, in2.y), mx_pow(in1.z, in2.z));
 }
 
 fn mx_power_vector4(in1: vec4<f32>, in2: vec4<f32>) -> vec4<f32> {
-    return pow(in1, in2);
+    return vec4<f32>(mx_pow(in1.x, in2.x), mx_pow(in1.y, in2.y), mx_pow(in1.z, in2.z), mx_pow(in1.w, in2.w));
 }
 
 fn mx_power_color3FA(in1: vec3<f32>, in2: f32) -> vec3<f32> {
-    return pow(in1, vec3<f32>(in2));
+    return vec3<f32>(mx_pow(in1.x, in2), mx_pow(in1.y, in2), mx_pow(in1.z, in2));
 }
 
 fn mx_power_color4FA(in1: vec4<f32>, in2: f32) -> vec4<f32> {
-    return pow(in1, vec4<f32>(in2));
+    return vec4<f32>(mx_pow(in1.x, in2), mx_pow(in1.y, in2), mx_pow(in1.z, in2), mx_pow(in1.w, in2));
 }
 
 fn mx_power_vector2FA(in1: vec2<f32>, in2: f32) -> vec2<f32> {
-    return pow(in1, vec2<f32>(in2));
+    return vec2<f32>(mx_pow(in1.x, in2), mx_pow(in1.y, in2));
 }
 
 fn mx_power_vector3FA(in1: vec3<f32>, in2: f32) -> vec3<f32> {
-    return pow(in1, vec3<f32>(in2));
+    return vec3<f32>(mx_pow(in1.x, in2), mx_pow(in1.y, in2), mx_pow(in1.z, in2));
 }
 
 fn mx_power_vector4FA(in1: vec4<f32>, in2: f32) -> vec4<f32> {
-    return pow(in1, vec4<f32>(in2));
+    return vec4<f32>(mx_pow(in1.x, in2), mx_pow(in1.y, in2), mx_pow(in1.z, in2), mx_pow(in1.w, in2));
 }
 
 // ---- sin ----
