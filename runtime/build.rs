@@ -24,6 +24,24 @@ fn main() {
     for g in &graphs {
         builder = builder.graph(g);
     }
+    // Uplift rules (`mtlx/rules/`): the pattern outputs of `uplift_rule` (the uplift_stack
+    // parameters and the shading normal) that `uplift enhance` bakes.
+    let rules_dir = manifest.join("../mtlx/rules");
+    println!("cargo:rerun-if-changed={}", rules_dir.display());
+    let mut rules: Vec<PathBuf> = std::fs::read_dir(&rules_dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", rules_dir.display()))
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "mtlx"))
+        .collect();
+    rules.sort();
+    for r in &rules {
+        println!("cargo:rerun-if-changed={}", r.display());
+        let outputs = rule_pattern_outputs(r);
+        let names: Vec<&str> = outputs.iter().map(String::as_str).collect();
+        builder = builder.graph_outputs(r, &names);
+        graphs.push(r.clone());
+    }
+    println!("cargo:rerun-if-changed={}", rules_dir.join("masks").display());
     // BSDF graphs (`graphs/bsdf/`): one kernel per closure context.
     let bsdf_dir = graphs_dir.join("bsdf");
     println!("cargo:rerun-if-changed={}", bsdf_dir.display());
@@ -70,6 +88,20 @@ fn main() {
         let version = locked_version(&lock, krate).map(|v| format!("={v}")).unwrap_or_else(|| fallback.to_string());
         println!("cargo:rustc-env=UPLIFT_RUNNER_{}_VERSION={version}", krate.to_uppercase());
     }
+}
+
+/// A rule's pattern outputs, `uplift_rule/<name>_out` for every non-closure output.
+fn rule_pattern_outputs(rule: &Path) -> Vec<String> {
+    let (doc, diags) = mtlx::read_file(rule);
+    if let Some(d) = diags.iter().find(|d| d.severity == mtlx::Severity::Error) {
+        panic!("{d}");
+    }
+    let graph = doc.top_level().iter().copied().find(|&id| doc.get(id).name() == "uplift_rule").unwrap_or_else(|| panic!("{}: no uplift_rule", rule.display()));
+    doc.children_of(graph, "output")
+        .map(|id| doc.get(id))
+        .filter(|e| e.name().ends_with("_out") && e.attr("type") != Some("BSDF"))
+        .map(|e| format!("uplift_rule/{}", e.name()))
+        .collect()
 }
 
 /// `path` relative to the runtime's manifest folder, with `/` separators.

@@ -7,6 +7,8 @@ pub mod atomic_write;
 pub mod batch;
 pub mod cli;
 pub mod cpu_engine;
+pub mod enhance;
+pub mod exr;
 pub mod csv_table;
 pub mod texture_loader;
 pub mod wgpu_engine;

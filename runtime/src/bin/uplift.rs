@@ -21,6 +21,10 @@ enum Command {
     Eval(uplift::cli::eval::EvalArgs),
     /// Regenerate the pbrlib albedo tables by quasi-Monte-Carlo integration.
     Tables(uplift::cli::tables::TablesArgs),
+    /// Enhance PBR materials into uplifted ones by an uplift rule (Types 0–5).
+    Enhance(uplift::cli::enhance::EnhanceArgs),
+    /// Write the uplift rules' procedural masks (dust, clearcoat damage) for a seed.
+    Masks(uplift::cli::masks::MasksArgs),
 }
 
 fn main() -> ExitCode {
@@ -30,6 +34,8 @@ fn main() -> ExitCode {
         Command::Compile(a) => uplift::cli::compile::run(a),
         Command::Eval(a) => uplift::cli::eval::run(a),
         Command::Tables(a) => uplift::cli::tables::run(a),
+        Command::Enhance(a) => uplift::cli::enhance::run(a),
+        Command::Masks(a) => uplift::cli::masks::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

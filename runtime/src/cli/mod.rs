@@ -4,7 +4,9 @@
 pub mod check;
 pub mod compile;
 pub mod compile_bench;
+pub mod enhance;
 pub mod eval;
+pub mod masks;
 pub mod tables;
 
 use mtlx::Diagnostic;

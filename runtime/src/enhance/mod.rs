@@ -1,0 +1,11 @@
+//! `uplift enhance`: turning a PBR material (texture files, a glTF material or a MaterialX
+//! material) into an uplifted one by an uplift rule (`mtlx/rules/`): the rule's random scalars,
+//! the procedural masks, the inputs' readers, the baked parameter textures and the written
+//! document.
+
+pub mod masks;
+pub mod gltf_input;
+pub mod material_writer;
+pub mod pbr_input;
+pub mod pipeline;
+pub mod rules;
