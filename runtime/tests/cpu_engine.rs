@@ -102,7 +102,13 @@ fn shipped_kernels_run_in_process_and_agree_with_wgpu() {
     assert!(BUILTIN_KERNELS.iter().any(|k| k.name == "triplanar_mask"));
     for (ki, shipped) in BUILTIN_KERNELS.iter().enumerate() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(shipped.source);
+        let rule = uplift::enhance::rules::EnhancementType::ALL.into_iter().find(|t| shipped.source.ends_with(&format!("mtlx/rules/{}", t.file_name())));
         let kernel = match shipped.context {
+            // The uplift rules ship their `<name>_out` pattern outputs, reading the example masks.
+            None if rule.is_some() => {
+                let rule = uplift::enhance::rules::interface(rule.unwrap()).unwrap();
+                uplift::enhance::pipeline::rule_kernel(&rule, path.parent().unwrap()).unwrap()
+            }
             None => compile_file(&compiler, &path),
             Some(c) => compiler.compile_file_in(&path, &OutputSelection::AllNumeric, uplift_compiler::ClosureContext::from_name(c)).kernel.unwrap(),
         };
@@ -110,8 +116,28 @@ fn shipped_kernels_run_in_process_and_agree_with_wgpu() {
         assert!(matches!(prepared, CpuKernel::Builtin(k) if k.name == shipped.name), "{}: not found among the shipped kernels", shipped.name);
         let mut rng = Rng::new(0x5eed ^ ki as u64);
         let points = random_points(&mut rng, POINTS);
-        let rows = random_inputs(&mut rng, &kernel, POINTS);
-        let batch = PatternBatch::from_rows(&points, &rows, kernel.input_stride, vec![]);
+        let mut rows = random_inputs(&mut rng, &kernel, POINTS);
+        if let Some(t) = rule {
+            // A rule's random scalars are drawn within their declared ranges (outside them the
+            // haze weight's variance ratio is ill-conditioned: at p ≈ 2 its numerator cancels),
+            // and `object_size` is the bounding-box diagonal (positions here span a cube of side 8).
+            let declared = uplift::enhance::rules::interface(t).unwrap().random;
+            for inp in &kernel.inputs {
+                let range = declared.iter().find(|d| d.name == inp.input.name).map(|d| (d.min as f32, d.max as f32));
+                let value = |rng: &mut Rng| match (inp.input.name.as_str(), range) {
+                    ("object_size", _) => Some(8.0 * 3f32.sqrt()),
+                    (_, Some((lo, hi))) => Some(rng.range(lo, hi)),
+                    _ => None,
+                };
+                for r in rows.chunks_mut(kernel.input_stride) {
+                    if let Some(v) = value(&mut rng) {
+                        r[inp.offset] = v;
+                    }
+                }
+            }
+        }
+        let textures = kernel.textures.iter().map(|t| uplift::texture_loader::load_texture(&t.path, t.colorspace.as_deref()).unwrap()).collect();
+        let batch = PatternBatch::from_rows(&points, &rows, kernel.input_stride, textures);
         let on_all = all.run_prepared(&prepared, &batch).unwrap();
         let on_one = one.run_pattern(&kernel, &batch).unwrap();
         assert!(on_all.data().iter().zip(on_one.data()).all(|(a, b)| a.to_bits() == b.to_bits()), "{}: threads change results", shipped.name);

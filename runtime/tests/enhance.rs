@@ -5,9 +5,10 @@
 //! - `params.exr` equals the written `material.mtlx`'s own graph (image nodes reading the written
 //!   textures, compiled afresh, run on wgpu) at 1,000 random texels, for texture-folder and glTF
 //!   inputs;
-//! - the material's BSDF, compiled from `material.mtlx` and evaluated at texels, equals the
-//!   uplift_stack composition of lobes.md §2.2 written out here from single-lobe kernels, fed
-//!   with the baked parameters, plus the Lambertian base scaled by the throughput;
+//! - the material's BSDF, compiled from `material.mtlx` and evaluated at texels (through the
+//!   library and through `uplift eval --context eval`), equals the uplift_stack composition of
+//!   lobes.md §2.2 written out here from single-lobe kernels, fed with the baked parameters,
+//!   plus the Lambertian base scaled by the throughput;
 //! - white furnace for every Type with a white base color;
 //! - determinism (same seed: same bytes; other seed: other values), batch mode (one folder per
 //!   material, finished ones skipped), and clear errors for bad input.
@@ -346,6 +347,33 @@ fn to_world(v: [f32; 3]) -> [f32; 3] {
     [v[0], v[2], -v[1]]
 }
 
+/// The material's BSDF through `uplift eval --context eval` (wgpu): response RGB per point.
+fn eval_through_cli(dir: &Path, geometry: &[Geometry], dirs: &[([f32; 3], [f32; 3])]) -> Vec<[f64; 3]> {
+    let mut csv = String::from("texcoord_x,texcoord_y,position_x,position_y,position_z,normal_x,normal_y,normal_z,tangent_x,tangent_y,tangent_z,wv_x,wv_y,wv_z,wl_x,wl_y,wl_z\n");
+    for (g, (wv, wl)) in geometry.iter().zip(dirs) {
+        let row: Vec<String> = g.texcoord.iter().chain(&g.position).chain(&g.normal).chain(&g.tangent).chain(&to_world(*wv)).chain(&to_world(*wl)).map(|v| format!("{v:?}")).collect();
+        csv.push_str(&row.join(","));
+        csv.push('\n');
+    }
+    let (input, output) = (dir.join("eval-in.csv"), dir.join("eval-out.csv"));
+    std::fs::write(&input, csv).unwrap();
+    let m = dir.join("material.mtlx");
+    let (code, text) = uplift(&["eval", m.to_str().unwrap(), "--output", "uplift_material/bsdf_out", "--context", "eval", "--engine", "wgpu", "--input", input.to_str().unwrap(), "-o", output.to_str().unwrap()]);
+    assert_eq!(code, 0, "{text}");
+    let table = std::fs::read_to_string(&output).unwrap();
+    let mut lines = table.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let cols: Vec<usize> = ["r", "g", "b"].iter().map(|c| header.iter().position(|h| h.ends_with(&format!("response_{c}"))).unwrap_or_else(|| panic!("{header:?}"))).collect();
+    let _ = std::fs::remove_file(&input);
+    let _ = std::fs::remove_file(&output);
+    lines
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();
+            [v[cols[0]], v[cols[1]], v[cols[2]]]
+        })
+        .collect()
+}
+
 #[test]
 fn enhanced_material_eval_equals_the_written_out_stack_with_its_baked_parameters() {
     let root = temp_dir("eval");
@@ -377,6 +405,7 @@ fn enhanced_material_eval_equals_the_written_out_stack_with_its_baked_parameters
             .collect();
         let geometry: Vec<Geometry> = texels.iter().map(|&(x, y)| plane_texel(x, y, 16, 16)).collect();
         let got = run_wgpu(&k, &geometry, &[("wv", dirs.iter().map(|d| to_world(d.0)).collect()), ("wl", dirs.iter().map(|d| to_world(d.1)).collect())]);
+        let cli = eval_through_cli(&out, &geometry, &dirs);
         for (i, &(x, y)) in texels.iter().enumerate() {
             let at = |name: &str| -> Vec<f32> {
                 match params.channel(name) {
@@ -391,6 +420,8 @@ fn enhanced_material_eval_equals_the_written_out_stack_with_its_baked_parameters
                 let err = (g - want[ch]).abs() / want[ch].abs().max(1.0);
                 worst = worst.max(err);
                 assert!(err <= 2e-4, "type {kind} texel ({x},{y}) channel {ch}: material {g}, written-out stack {}", want[ch]);
+                let e = (cli[i][ch] - want[ch]).abs() / want[ch].abs().max(1.0);
+                assert!(e <= 2e-4, "type {kind} texel ({x},{y}) channel {ch}: `uplift eval` {}, written-out stack {}", cli[i][ch], want[ch]);
             }
         }
     }
