@@ -1,5 +1,5 @@
-//! Builds the CPU kernels the runtime ships: every graph in `runtime/graphs/` and
-//! `examples/marble.mtlx`, compiled by `uplift_compiler::build_api` into `OUT_DIR`, and
+//! Builds the CPU kernels the runtime ships: every graph in `runtime/graphs/`,
+//! `examples/marble.mtlx` and the uplift rules' baked outputs (`mtlx/rules/`), compiled by `uplift_compiler::build_api` into `OUT_DIR`, and
 //! `builtin_kernels.rs`, the table `cpu_engine::builtin` includes (each kernel's fingerprint,
 //! shape and dispatching batch function). Adding a node to `mtlx/libraries/` and rebuilding is
 //! all a shipped graph needs. Also records, from the workspace's Cargo.lock, the exact versions
@@ -12,13 +12,7 @@ fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
     let out_dir = PathBuf::from(std::env::var("OUT_DIR").unwrap());
     let graphs_dir = manifest.join("graphs");
-    println!("cargo:rerun-if-changed={}", graphs_dir.display());
-    let mut graphs: Vec<PathBuf> = std::fs::read_dir(&graphs_dir)
-        .unwrap_or_else(|e| panic!("{}: {e}", graphs_dir.display()))
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "mtlx"))
-        .collect();
-    graphs.sort();
+    let mut graphs = mtlx_files(&graphs_dir);
     graphs.push(manifest.join("../examples/marble.mtlx"));
     let mut builder = uplift_compiler::build_api::Builder::new();
     for g in &graphs {
@@ -27,14 +21,7 @@ fn main() {
     // Uplift rules (`mtlx/rules/`): the pattern outputs of `uplift_rule` (the uplift_stack
     // parameters and the shading normal) that `uplift enhance` bakes.
     let rules_dir = manifest.join("../mtlx/rules");
-    println!("cargo:rerun-if-changed={}", rules_dir.display());
-    let mut rules: Vec<PathBuf> = std::fs::read_dir(&rules_dir)
-        .unwrap_or_else(|e| panic!("{}: {e}", rules_dir.display()))
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "mtlx"))
-        .collect();
-    rules.sort();
-    for r in &rules {
+    for r in &mtlx_files(&rules_dir) {
         println!("cargo:rerun-if-changed={}", r.display());
         let outputs = rule_pattern_outputs(r);
         let names: Vec<&str> = outputs.iter().map(String::as_str).collect();
@@ -44,13 +31,7 @@ fn main() {
     println!("cargo:rerun-if-changed={}", rules_dir.join("masks").display());
     // BSDF graphs (`graphs/bsdf/`): one kernel per closure context.
     let bsdf_dir = graphs_dir.join("bsdf");
-    println!("cargo:rerun-if-changed={}", bsdf_dir.display());
-    let mut bsdf: Vec<PathBuf> = std::fs::read_dir(&bsdf_dir)
-        .unwrap_or_else(|e| panic!("{}: {e}", bsdf_dir.display()))
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "mtlx"))
-        .collect();
-    bsdf.sort();
+    let bsdf = mtlx_files(&bsdf_dir);
     let mut contexts: Vec<Option<&str>> = vec![None; graphs.len()];
     for g in &bsdf {
         for c in uplift_compiler::ClosureContext::ALL {
@@ -88,6 +69,18 @@ fn main() {
         let version = locked_version(&lock, krate).map(|v| format!("={v}")).unwrap_or_else(|| fallback.to_string());
         println!("cargo:rustc-env=UPLIFT_RUNNER_{}_VERSION={version}", krate.to_uppercase());
     }
+}
+
+/// The `.mtlx` files of a folder, sorted; the folder is watched for changes.
+fn mtlx_files(dir: &Path) -> Vec<PathBuf> {
+    println!("cargo:rerun-if-changed={}", dir.display());
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "mtlx"))
+        .collect();
+    files.sort();
+    files
 }
 
 /// A rule's pattern outputs, `uplift_rule/<name>_out` for every non-closure output.

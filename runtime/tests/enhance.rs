@@ -15,7 +15,7 @@
 
 mod common;
 
-use common::bsdf::{bsdf, view, Bsdf, Params};
+use common::bsdf::{bsdf, gulbrandsen, view, Bsdf, Params};
 use common::Rng;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -279,16 +279,6 @@ fn every_type_validates_and_params_equal_the_document_graph() {
 struct Lobes {
     transparent: [Bsdf; 2],
     opaque: [Bsdf; 2],
-}
-
-/// Gulbrandsen's artistic conductor IOR, per channel: (n, k) from reflectivity r and edge g.
-fn gulbrandsen(r: f32, g: f32) -> (f32, f32) {
-    let r = r.clamp(0.0, 0.99);
-    let n_min = (1.0 - r) / (1.0 + r);
-    let n_max = (1.0 + r.sqrt()) / (1.0 - r.sqrt());
-    let n = n_max + (n_min - n_max) * g;
-    let k2 = ((n + 1.0) * (n + 1.0) * r - (n - 1.0) * (n - 1.0)) / (1.0 - r);
-    (n, k2.max(0.0).sqrt())
 }
 
 impl Lobes {

@@ -12,7 +12,7 @@
 
 mod common;
 
-use common::bsdf::{bsdf, view, Bsdf, Params};
+use common::bsdf::{bsdf, gulbrandsen, view, Bsdf, Params};
 use common::Rng;
 use uplift_compiler::ClosureContext;
 
@@ -41,17 +41,6 @@ fn random_params(r: &mut Rng) -> Params {
         ("subcutaneous_weight", vec![if r.range(0.0, 1.0) < 0.5 { 0.0 } else { 1.0 }]),
         ("subcutaneous_roughness", vec![r.range(0.49, 1.0)]),
     ])
-}
-
-/// Gulbrandsen's artistic conductor IOR ("Artist Friendly Metallic Fresnel", 2014), per channel:
-/// (n, k) from reflectivity r and edge colour g.
-fn gulbrandsen(r: f32, g: f32) -> (f32, f32) {
-    let r = r.clamp(0.0, 0.99);
-    let n_min = (1.0 - r) / (1.0 + r);
-    let n_max = (1.0 + r.sqrt()) / (1.0 - r.sqrt());
-    let n = n_max + (n_min - n_max) * g;
-    let k2 = ((n + 1.0) * (n + 1.0) * r - (n - 1.0) * (n - 1.0)) / (1.0 - r);
-    (n, k2.max(0.0).sqrt())
 }
 
 /// Albedo (RGB) and throughput (RGB) of a single-lobe kernel at every view.

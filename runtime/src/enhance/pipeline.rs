@@ -181,8 +181,7 @@ fn mask_seed(seed: u64, kind: MaskKind) -> u64 {
 /// `masks/*.png` are the material's): the same kernel `runtime/build.rs` ships.
 pub fn rule_kernel(rule: &RuleInterface, dir: &Path) -> Result<uplift_compiler::PatternKernel, String> {
     let name = dir.join(rule.kind.file_name()).display().to_string();
-    let text: String = rule.kind.rule_text().lines().filter(|l| !l.trim_start().starts_with("<xi:include")).map(|l| format!("{l}\n")).collect();
-    let (doc, diags) = mtlx::read_str(&text, &name);
+    let (doc, diags) = mtlx::read_str(&rule.kind.standalone_text(), &name);
     let outputs: Vec<String> = stack_outputs(&rule.document).into_iter().map(|o| format!("{}/{o}", rules::RULE_GRAPH)).collect();
     let c = Compiler::builtin().compile_document(doc, diags, &name, &OutputSelection::Named(outputs));
     if mtlx::has_errors(&c.diagnostics) {

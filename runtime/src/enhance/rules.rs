@@ -87,6 +87,12 @@ impl EnhancementType {
         RULE_TEXTS[self.index()]
     }
 
+    /// The rule document without its `xi:include` of the uplift library (which the compiler's
+    /// builtin library and every written material hold anyway), readable from any folder.
+    pub fn standalone_text(self) -> String {
+        self.rule_text().lines().filter(|l| !l.trim_start().starts_with("<xi:include")).map(|l| format!("{l}\n")).collect()
+    }
+
     /// Draws a Type in the paper's proportions (10/20/20/20/10/20 %) from `u` in [0, 1); for a
     /// metallic material the dielectric-only Types are left out and the rest renormalised.
     pub fn draw(u: f64, metallic: bool) -> EnhancementType {
@@ -138,8 +144,7 @@ pub struct RuleInterface {
 /// of a rule document; it still comes back as a message naming the rule and the input.
 pub fn interface(kind: EnhancementType) -> Result<RuleInterface, String> {
     let file = format!("mtlx/rules/{}", kind.file_name());
-    let text: String = kind.rule_text().lines().filter(|l| !l.trim_start().starts_with("<xi:include")).map(|l| format!("{l}\n")).collect();
-    let (document, diags) = mtlx::read_str(&text, &file);
+    let (document, diags) = mtlx::read_str(&kind.standalone_text(), &file);
     if let Some(d) = diags.iter().find(|d| d.severity == mtlx::Severity::Error) {
         return Err(format!("{file}: {}", d.message));
     }

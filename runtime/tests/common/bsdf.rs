@@ -78,3 +78,13 @@ pub fn view(mu: f64) -> [f32; 3] {
     [(1.0 - mu * mu).max(0.0).sqrt() as f32, 0.0, mu as f32]
 }
 
+/// Gulbrandsen's artistic conductor IOR ("Artist Friendly Metallic Fresnel", 2014), per channel:
+/// (n, k) from reflectivity r and edge colour g, written out independently of the library.
+pub fn gulbrandsen(r: f32, g: f32) -> (f32, f32) {
+    let r = r.clamp(0.0, 0.99);
+    let n_min = (1.0 - r) / (1.0 + r);
+    let n_max = (1.0 + r.sqrt()) / (1.0 - r.sqrt());
+    let n = n_max + (n_min - n_max) * g;
+    let k2 = ((n + 1.0) * (n + 1.0) * r - (n - 1.0) * (n - 1.0)) / (1.0 - r);
+    (n, k2.max(0.0).sqrt())
+}
