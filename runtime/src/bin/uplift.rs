@@ -1,5 +1,6 @@
 //! The `uplift` command line: `check` and `compile` (the compiler spine) and `eval` (run an
-//! output over CSV rows); later stages add data generation, training and rendering commands.
+//! output over CSV rows); `enhance` and `masks` (uplift rules);
+//! `datagen`, `train` and `fit` (neural materials).
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -25,6 +26,12 @@ enum Command {
     Enhance(uplift::cli::enhance::EnhanceArgs),
     /// Write the uplift rules' procedural masks (dust, clearcoat damage) for a seed.
     Masks(uplift::cli::masks::MasksArgs),
+    /// Write generated neural-material training data as safetensors shards.
+    Datagen(uplift::cli::datagen::DatagenArgs),
+    /// Train the universal encoder and decoder (paper §4.2) on generated data.
+    Train(uplift::cli::train::TrainArgs),
+    /// Fit an enhanced material's latent textures against the frozen decoder (paper §4.3).
+    Fit(uplift::cli::fit::FitArgs),
 }
 
 fn main() -> ExitCode {
@@ -36,6 +43,9 @@ fn main() -> ExitCode {
         Command::Tables(a) => uplift::cli::tables::run(a),
         Command::Enhance(a) => uplift::cli::enhance::run(a),
         Command::Masks(a) => uplift::cli::masks::run(a),
+        Command::Datagen(a) => uplift::cli::datagen::run(a),
+        Command::Train(a) => uplift::cli::train::run(a),
+        Command::Fit(a) => uplift::cli::fit::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

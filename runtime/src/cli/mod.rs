@@ -4,10 +4,13 @@
 pub mod check;
 pub mod compile;
 pub mod compile_bench;
+pub mod datagen;
 pub mod enhance;
 pub mod eval;
+pub mod fit;
 pub mod masks;
 pub mod tables;
+pub mod train;
 
 use mtlx::Diagnostic;
 use std::path::PathBuf;

@@ -1,0 +1,237 @@
+//! Per-material latent fitting (paper §4.3, lobes.md §4.4): the two RGB latent textures of an
+//! enhanced material are optimised against the frozen decoder with Eq. 3 (and the ±0.005
+//! jitter), starting from the encoder's latents.
+//!
+//! Texels are grouped by their parameter vector quantised to `levels` steps per encoded channel
+//! (`levels` = 0: exact vectors), so identical — or, quantised, nearly identical — texels are
+//! fitted once: each group gets a latent z_g, initialised from the encoder at the group's mean
+//! parameters and fitted on a fixed set of direction pairs drawn like the training data (cosine
+//! views; lights half uniform, half from the stack's sampler) with targets from the compiled
+//! kernels. A texel's latent is then clamp(Enc(p_texel) + (z_g − Enc(p̄_g)), 0, 1): the
+//! group's fitted correction on top of the encoder's own per-texel variation. Latents are
+//! clamped to [0, 1] after every Adam step. The report compares the encoder-only and the fitted
+//! latents on other directions at sampled texels with their own (unquantised) parameters.
+
+use super::adam::cosine_lr;
+use super::datagen::{DataGenerator, TrainingBatch};
+use super::evaluate::{decode, encode};
+use super::loss::{eq3_loss, LossParts, LossWeights, OUTPUTS};
+use super::mlp::Mlp;
+use super::model::{latent_slice, ModelWorkspace, NeuralModel, Slice, LATENT};
+use super::params::{encode_rows, PARAMETERS};
+use super::trainer::jitter;
+use crate::enhance::rules::mix64;
+use std::collections::HashMap;
+
+/// How to fit.
+#[derive(Clone, Debug)]
+pub struct FitOptions {
+    pub steps: u64,
+    /// Direction pairs per group.
+    pub directions: usize,
+    /// Quantisation steps per encoded channel for grouping texels (0: exact).
+    pub levels: u32,
+    pub lr_start: f64,
+    pub lr_end: f64,
+    pub jitter: f32,
+    pub seed: u64,
+    pub threads: usize,
+    /// Texels and directions per texel of the before/after report.
+    pub check_texels: usize,
+    pub check_directions: usize,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            steps: 200,
+            directions: 64,
+            levels: 32,
+            lr_start: 5e-3,
+            lr_end: 1e-4,
+            jitter: 0.005,
+            seed: 1,
+            threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            check_texels: 2048,
+            check_directions: 64,
+        }
+    }
+}
+
+/// Adam over rows of latents, and per-thread workspaces.
+#[derive(Default)]
+pub struct FitBuffers {
+    workspaces: Vec<ModelWorkspace<f32>>,
+    m: Vec<f32>,
+    v: Vec<f32>,
+    jitter: Vec<f32>,
+}
+
+/// ∂(Eq. 3)/∂latent for rows of latents (rows × 6, jitter added), over `threads` slices.
+fn latent_gradients(decoder: &Mlp<f32>, latents: &[f32], jit: &[f32], features: &[f32], target: &[f32], mu_l: &[f32], threads: usize, ws: &mut Vec<ModelWorkspace<f32>>) -> (LossParts, Vec<f32>) {
+    let rows = mu_l.len();
+    let threads = threads.clamp(1, rows.max(1));
+    ws.resize_with(threads, ModelWorkspace::default);
+    let per = rows.div_ceil(threads);
+    let parts: Vec<(LossParts, Vec<f32>)> = std::thread::scope(|scope| {
+        let handles: Vec<_> = ws
+            .iter_mut()
+            .enumerate()
+            .map(|(t, w)| {
+                let (a, b) = ((t * per).min(rows), ((t + 1) * per).min(rows));
+                scope.spawn(move || {
+                    if a == b {
+                        return (LossParts::default(), Vec::new());
+                    }
+                    let s = Slice { input: &latents[a * LATENT..b * LATENT], jitter: &jit[a * LATENT..b * LATENT], features: &features[a * 9..b * 9], target: &target[a * 7..b * 7], mu_l: &mu_l[a..b], batch: rows };
+                    latent_slice(decoder, &s, LossWeights::PAPER, w)
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().expect("a fitting thread panicked")).collect()
+    });
+    let mut loss = LossParts::default();
+    let mut grad = Vec::with_capacity(rows * LATENT);
+    for (p, g) in parts {
+        loss.add(&p);
+        grad.extend_from_slice(&g);
+    }
+    (loss, grad)
+}
+
+/// Adam on `z` with gradient `g` (element-wise), then clamp to [0, 1].
+fn adam_clamped(z: &mut [f32], g: &[f32], m: &mut [f32], v: &mut [f32], t: u64, lr: f32) {
+    let (b1, b2, eps) = (0.9f32, 0.999f32, 1e-8f32);
+    let c1 = 1.0 - b1.powi(t as i32);
+    let c2 = 1.0 - b2.powi(t as i32);
+    for k in 0..z.len() {
+        m[k] = b1 * m[k] + (1.0 - b1) * g[k];
+        v[k] = b2 * v[k] + (1.0 - b2) * g[k] * g[k];
+        z[k] = (z[k] - lr / c1 * m[k] / ((v[k] / c2).sqrt() + eps)).clamp(0.0, 1.0);
+    }
+}
+
+/// One fitting step in which every row has its own latent (the benchmark's unit of work; the
+/// material fit shares a latent over a group's rows).
+#[allow(clippy::too_many_arguments)]
+pub fn fit_step_rows(decoder: &Mlp<f32>, latents: &mut [f32], features: &[f32], target: &[f32], mu_l: &[f32], step: u64, lr: f32, threads: usize, buf: &mut FitBuffers) -> LossParts {
+    let rows = mu_l.len();
+    jitter(0, step, rows, 0.005, &mut buf.jitter);
+    let (loss, g) = latent_gradients(decoder, latents, &buf.jitter, features, target, mu_l, threads, &mut buf.workspaces);
+    buf.m.resize(latents.len(), 0.0);
+    buf.v.resize(latents.len(), 0.0);
+    adam_clamped(latents, &g, &mut buf.m, &mut buf.v, step + 1, lr);
+    loss
+}
+
+/// The result of fitting one material.
+#[derive(Clone, Debug)]
+pub struct FitResult {
+    pub width: usize,
+    pub height: usize,
+    /// texels × 6.
+    pub latents: Vec<f32>,
+    pub groups: usize,
+    /// Eq. 3 at the check texels: encoder-only latents, fitted latents.
+    pub before: LossParts,
+    pub after: LossParts,
+    /// Loss over the fitting directions at the first and last step.
+    pub first_step: LossParts,
+    pub last_step: LossParts,
+    pub seconds: f64,
+}
+
+/// Fits the latents of a material whose texels have parameters `params` (texels × 22).
+pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params: &[f32], width: usize, height: usize, o: &FitOptions, progress: bool) -> Result<FitResult, String> {
+    let start = std::time::Instant::now();
+    let n = width * height;
+    if params.len() != n * PARAMETERS {
+        return Err(format!("{} parameter values for {width}×{height} texels", params.len()));
+    }
+    if let Some(k) = params.iter().position(|x| !x.is_finite()) {
+        return Err(format!("texel {} parameter {} is not finite", k / PARAMETERS, k % PARAMETERS));
+    }
+    let mut encoded = vec![0.0; params.len()];
+    encode_rows(params, &mut encoded);
+    // Groups of texels by quantised encoded parameters.
+    let mut group_of = vec![0u32; n];
+    let mut index: HashMap<Vec<u32>, u32> = HashMap::new();
+    let mut sums: Vec<(Vec<f64>, usize)> = Vec::new();
+    for t in 0..n {
+        let e = &encoded[t * PARAMETERS..(t + 1) * PARAMETERS];
+        let key: Vec<u32> = if o.levels == 0 { e.iter().map(|x| x.to_bits()).collect() } else { e.iter().map(|x| (x.clamp(0.0, 1.0) * o.levels as f32).round() as u32).collect() };
+        let next = sums.len() as u32;
+        let g = *index.entry(key).or_insert(next);
+        if g == next {
+            sums.push((vec![0.0; PARAMETERS], 0));
+        }
+        let s = &mut sums[g as usize];
+        for (a, x) in s.0.iter_mut().zip(&params[t * PARAMETERS..(t + 1) * PARAMETERS]) {
+            *a += *x as f64;
+        }
+        s.1 += 1;
+        group_of[t] = g;
+    }
+    let groups = sums.len();
+    let mean: Vec<f32> = sums.iter().flat_map(|(s, c)| s.iter().map(move |x| (x / *c as f64) as f32)).collect();
+    let mut mean_encoded = vec![0.0; mean.len()];
+    encode_rows(&mean, &mut mean_encoded);
+    let z0 = encode(model, &mean_encoded);
+    // Fitting data: `directions` rows per group.
+    let d = o.directions.max(1);
+    let rows_params: Vec<f32> = (0..groups * d).flat_map(|r| mean[(r / d) * PARAMETERS..(r / d + 1) * PARAMETERS].to_vec()).collect();
+    let data: TrainingBatch = generator.evaluate(rows_params, mix64(o.seed ^ 0x6669_74))?;
+    let mut z = z0.clone();
+    let (mut m, mut v) = (vec![0.0f32; z.len()], vec![0.0f32; z.len()]);
+    let mut ws = Vec::new();
+    let mut jit = Vec::new();
+    let bar = if progress { indicatif::ProgressBar::new(o.steps) } else { indicatif::ProgressBar::hidden() };
+    bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps, eta {eta} · {msg}").unwrap());
+    let (mut first_step, mut last_step) = (LossParts::default(), LossParts::default());
+    let mut row_latents = vec![0.0f32; groups * d * LATENT];
+    for step in 0..o.steps {
+        for r in 0..groups * d {
+            row_latents[r * LATENT..(r + 1) * LATENT].copy_from_slice(&z[(r / d) * LATENT..(r / d + 1) * LATENT]);
+        }
+        jitter(o.seed, step, groups * d, o.jitter, &mut jit);
+        let (loss, g) = latent_gradients(&model.decoder, &row_latents, &jit, &data.features, &data.target, &data.mu_l, o.threads, &mut ws);
+        if step == 0 {
+            first_step = loss;
+        }
+        last_step = loss;
+        let mut gz = vec![0.0f32; z.len()];
+        for r in 0..groups * d {
+            for k in 0..LATENT {
+                gz[(r / d) * LATENT + k] += g[r * LATENT + k];
+            }
+        }
+        adam_clamped(&mut z, &gz, &mut m, &mut v, step + 1, cosine_lr(step, o.steps, o.lr_start, o.lr_end));
+        bar.inc(1);
+        bar.set_message(format!("loss {:.4}", loss.total));
+    }
+    bar.finish_and_clear();
+    // Texel latents: the encoder's, moved by the group's correction.
+    let enc = encode(model, &encoded);
+    let mut latents = vec![0.0f32; n * LATENT];
+    for t in 0..n {
+        let g = group_of[t] as usize;
+        for k in 0..LATENT {
+            latents[t * LATENT + k] = (enc[t * LATENT + k] + z[g * LATENT + k] - z0[g * LATENT + k]).clamp(0.0, 1.0);
+        }
+    }
+    // Before/after at sampled texels, on other directions, with their own parameters.
+    let checks: Vec<usize> = (0..o.check_texels.min(n).max(1)).map(|k| if o.check_texels >= n { k } else { (mix64(o.seed ^ 0x636b ^ k as u64) % n as u64) as usize }).collect();
+    let cd = o.check_directions.max(1);
+    let check_params: Vec<f32> = checks.iter().flat_map(|&t| (0..cd).flat_map(move |_| params[t * PARAMETERS..(t + 1) * PARAMETERS].to_vec())).collect();
+    let check = generator.evaluate(check_params, mix64(o.seed ^ 0x6368_6563_6b))?;
+    let lat = |src: &[f32]| -> Vec<f32> { checks.iter().flat_map(|&t| (0..cd).flat_map(move |_| src[t * LATENT..(t + 1) * LATENT].to_vec())).collect() };
+    let loss_of = |z: &[f32]| {
+        let out = decode(model, z, &check.features);
+        let mut d = vec![0.0f32; out.len()];
+        eq3_loss(&out, &check.target, &check.mu_l, check.rows, LossWeights::PAPER, &mut d)
+    };
+    let before = loss_of(&lat(&enc));
+    let after = loss_of(&lat(&latents));
+    debug_assert_eq!(OUTPUTS, 7);
+    Ok(FitResult { width, height, latents, groups, before, after, first_step, last_step, seconds: start.elapsed().as_secs_f64() })
+}

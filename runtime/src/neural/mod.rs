@@ -1,0 +1,18 @@
+//! Neural materials (paper §4, lobes.md §3.3–4): the 22 parameters (`params`), direction
+//! features (`features`), training data generated on the fly from the compiled `uplift_stack`
+//! kernels (`classes`, `datagen`), the hand-written networks and their training (`mlp`,
+//! `model`, `loss`, `adam`, `trainer`), weights as safetensors (`weights`).
+
+pub mod adam;
+pub mod classes;
+pub mod datagen;
+pub mod evaluate;
+pub mod features;
+pub mod fit;
+pub mod inference;
+pub mod loss;
+pub mod mlp;
+pub mod model;
+pub mod params;
+pub mod trainer;
+pub mod weights;
