@@ -5,6 +5,7 @@
 //! same naga module). This crate never touches wgpu, reads textures or runs kernels.
 
 pub mod arena;
+pub mod backend_neural;
 pub mod backend_rust;
 pub mod build_api;
 pub mod compile;

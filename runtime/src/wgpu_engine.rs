@@ -160,7 +160,6 @@ impl WgpuEngine {
         let inputs = buf(inputs.data(), wgpu::BufferUsages::STORAGE);
         let out_len = (n * p.shape.output_columns) as u64 * 4;
         let outputs = d.create_buffer(&wgpu::BufferDescriptor { label: None, size: out_len, usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC, mapped_at_creation: false });
-        let readback = d.create_buffer(&wgpu::BufferDescriptor { label: None, size: out_len, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
         let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents: bytemuck::cast_slice(&[n as u32, 0, 0, 0]), usage: wgpu::BufferUsages::UNIFORM });
         let mut group_entries = vec![
             wgpu::BindGroupEntry { binding: BINDING_GEOMETRY, resource: geometry.as_entire_binding() },
@@ -191,20 +190,28 @@ impl WgpuEngine {
             }
             pass.dispatch_workgroups(x as u32, y as u32, 1);
         }
-        encoder.copy_buffer_to_buffer(&outputs, 0, &readback, 0, out_len);
+        let result = self.submit_and_read(encoder, &outputs, out_len)?;
+        Columns::from_column_major(n, p.shape.output_columns, result)
+    }
+
+    /// Finishes `encoder` with a copy of `source`'s first `size` bytes into a mappable buffer,
+    /// submits it, waits, and returns those bytes as floats.
+    pub fn submit_and_read(&self, mut encoder: wgpu::CommandEncoder, source: &wgpu::Buffer, size: u64) -> Result<Vec<f32>, String> {
+        let readback = self.device.create_buffer(&wgpu::BufferDescriptor { label: None, size, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
+        encoder.copy_buffer_to_buffer(source, 0, &readback, 0, size);
         self.queue.submit([encoder.finish()]);
         let slice = readback.slice(..);
         let (tx, rx) = std::sync::mpsc::channel();
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
         });
-        d.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| format!("wgpu poll: {e}"))?;
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| format!("wgpu poll: {e}"))?;
         rx.recv().map_err(|e| e.to_string())?.map_err(|e| format!("map readback: {e}"))?;
         let data = slice.get_mapped_range().map_err(|e| format!("map readback: {e}"))?;
         let result: Vec<f32> = bytemuck::cast_slice(&data).to_vec();
         drop(data);
         readback.unmap();
-        Columns::from_column_major(n, p.shape.output_columns, result)
+        Ok(result)
     }
 
     fn upload_texture(&self, t: &TextureData) -> Result<wgpu::TextureView, String> {

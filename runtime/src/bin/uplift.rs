@@ -1,6 +1,6 @@
 //! The `uplift` command line: `check` and `compile` (the compiler spine) and `eval` (run an
 //! output over CSV rows); `enhance` and `masks` (uplift rules);
-//! `datagen`, `train` and `fit` (neural materials).
+//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials).
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -32,6 +32,8 @@ enum Command {
     Train(uplift::cli::train::TrainArgs),
     /// Fit an enhanced material's latent textures against the frozen decoder (paper §4.3).
     Fit(uplift::cli::fit::FitArgs),
+    /// Write a trained decoder's inference code (Rust and WGSL).
+    EmitDecoder(uplift::cli::emit_decoder::EmitDecoderArgs),
 }
 
 fn main() -> ExitCode {
@@ -46,6 +48,7 @@ fn main() -> ExitCode {
         Command::Datagen(a) => uplift::cli::datagen::run(a),
         Command::Train(a) => uplift::cli::train::run(a),
         Command::Fit(a) => uplift::cli::fit::run(a),
+        Command::EmitDecoder(a) => uplift::cli::emit_decoder::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

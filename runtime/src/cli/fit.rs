@@ -29,11 +29,11 @@ pub struct FitArgs {
     /// Adam steps.
     #[arg(long, default_value_t = 200)]
     pub steps: u64,
-    /// Direction pairs per texel group.
-    #[arg(long, default_value_t = 64)]
+    /// Direction pairs per texel group and step (fresh every step).
+    #[arg(long, default_value_t = 8)]
     pub directions: usize,
     /// Quantisation steps per encoded parameter when grouping texels (0: exact vectors only).
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = 16)]
     pub levels: u32,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,

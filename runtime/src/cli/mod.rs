@@ -5,6 +5,7 @@ pub mod check;
 pub mod compile;
 pub mod compile_bench;
 pub mod datagen;
+pub mod emit_decoder;
 pub mod enhance;
 pub mod eval;
 pub mod fit;

@@ -5,9 +5,10 @@
 //! Texels are grouped by their parameter vector quantised to `levels` steps per encoded channel
 //! (`levels` = 0: exact vectors), so identical — or, quantised, nearly identical — texels are
 //! fitted once: each group gets a latent z_g, initialised from the encoder at the group's mean
-//! parameters and fitted on a fixed set of direction pairs drawn like the training data (cosine
-//! views; lights half uniform, half from the stack's sampler) with targets from the compiled
-//! kernels. A texel's latent is then clamp(Enc(p_texel) + (z_g − Enc(p̄_g)), 0, 1): the
+//! parameters and fitted on direction pairs drawn afresh at every step like the training data
+//! (cosine views; lights half uniform, half from the stack's sampler) with targets from the
+//! compiled kernels (a fixed set lets six numbers overfit a few dozen directions of a sharp
+//! lobe: measured, the fitted latents then lost to the encoder's on other directions). A texel's latent is then clamp(Enc(p_texel) + (z_g − Enc(p̄_g)), 0, 1): the
 //! group's fitted correction on top of the encoder's own per-texel variation. Latents are
 //! clamped to [0, 1] after every Adam step. The report compares the encoder-only and the fitted
 //! latents on other directions at sampled texels with their own (unquantised) parameters.
@@ -27,7 +28,7 @@ use std::collections::HashMap;
 #[derive(Clone, Debug)]
 pub struct FitOptions {
     pub steps: u64,
-    /// Direction pairs per group.
+    /// Direction pairs per group and step (drawn afresh every step).
     pub directions: usize,
     /// Quantisation steps per encoded channel for grouping texels (0: exact).
     pub levels: u32,
@@ -45,8 +46,8 @@ impl Default for FitOptions {
     fn default() -> Self {
         FitOptions {
             steps: 200,
-            directions: 64,
-            levels: 32,
+            directions: 8,
+            levels: 16,
             lr_start: 5e-3,
             lr_end: 1e-4,
             jitter: 0.005,
@@ -135,7 +136,7 @@ pub struct FitResult {
     /// Eq. 3 at the check texels: encoder-only latents, fitted latents.
     pub before: LossParts,
     pub after: LossParts,
-    /// Loss over the fitting directions at the first and last step.
+    /// Loss over the step's directions at the first and last step.
     pub first_step: LossParts,
     pub last_step: LossParts,
     pub seconds: f64,
@@ -177,10 +178,11 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     let mut mean_encoded = vec![0.0; mean.len()];
     encode_rows(&mean, &mut mean_encoded);
     let z0 = encode(model, &mean_encoded);
-    // Fitting data: `directions` rows per group.
+    // Each step draws fresh direction pairs for every group (a fixed set lets six latent
+    // numbers overfit a few dozen directions of a sharp lobe).
     let d = o.directions.max(1);
-    let rows_params: Vec<f32> = (0..groups * d).flat_map(|r| mean[(r / d) * PARAMETERS..(r / d + 1) * PARAMETERS].to_vec()).collect();
-    let data: TrainingBatch = generator.evaluate(rows_params, mix64(o.seed ^ 0x6669_74))?;
+    let rows = groups * d;
+    let rows_params: Vec<f32> = (0..rows).flat_map(|r| mean[(r / d) * PARAMETERS..(r / d + 1) * PARAMETERS].to_vec()).collect();
     let mut z = z0.clone();
     let (mut m, mut v) = (vec![0.0f32; z.len()], vec![0.0f32; z.len()]);
     let mut ws = Vec::new();
@@ -188,19 +190,20 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     let bar = if progress { indicatif::ProgressBar::new(o.steps) } else { indicatif::ProgressBar::hidden() };
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps, eta {eta} · {msg}").unwrap());
     let (mut first_step, mut last_step) = (LossParts::default(), LossParts::default());
-    let mut row_latents = vec![0.0f32; groups * d * LATENT];
+    let mut row_latents = vec![0.0f32; rows * LATENT];
     for step in 0..o.steps {
-        for r in 0..groups * d {
+        let data: TrainingBatch = generator.evaluate(rows_params.clone(), mix64(o.seed ^ 0x6669_74) ^ mix64(step))?;
+        for r in 0..rows {
             row_latents[r * LATENT..(r + 1) * LATENT].copy_from_slice(&z[(r / d) * LATENT..(r / d + 1) * LATENT]);
         }
-        jitter(o.seed, step, groups * d, o.jitter, &mut jit);
+        jitter(o.seed, step, rows, o.jitter, &mut jit);
         let (loss, g) = latent_gradients(&model.decoder, &row_latents, &jit, &data.features, &data.target, &data.mu_l, o.threads, &mut ws);
         if step == 0 {
             first_step = loss;
         }
         last_step = loss;
         let mut gz = vec![0.0f32; z.len()];
-        for r in 0..groups * d {
+        for r in 0..rows {
             for k in 0..LATENT {
                 gz[(r / d) * LATENT + k] += g[r * LATENT + k];
             }

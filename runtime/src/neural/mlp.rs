@@ -114,6 +114,36 @@ impl Activation {
         }
     }
 
+    /// Applies the activation to every value (one `match`, then a loop LLVM vectorises).
+    pub fn apply_slice<T: Real>(self, values: &mut [T]) {
+        match self {
+            Activation::Identity => {}
+            Activation::LeakyRelu { slope } => {
+                let s = T::from_f64(slope);
+                let zero = T::default();
+                for v in values.iter_mut() {
+                    *v = if *v > zero { *v } else { *v * s };
+                }
+            }
+            _ => values.iter_mut().for_each(|v| *v = self.apply(*v)),
+        }
+    }
+
+    /// grad ⊙= activation′, from the activation's outputs (one `match`, then a loop).
+    pub fn scale_by_derivative<T: Real>(self, grad: &mut [T], outputs: &[T]) {
+        match self {
+            Activation::Identity => {}
+            Activation::LeakyRelu { slope } => {
+                let s = T::from_f64(slope);
+                let zero = T::default();
+                for (g, a) in grad.iter_mut().zip(outputs) {
+                    *g = if *a > zero { *g } else { *g * s };
+                }
+            }
+            _ => grad.iter_mut().zip(outputs).for_each(|(g, a)| *g = *g * self.derivative_from_output(*a)),
+        }
+    }
+
     pub fn name(self) -> String {
         match self {
             Activation::Identity => "identity".into(),
@@ -277,12 +307,7 @@ impl<T: Real> Mlp<T> {
             }
             // y (rows × out) += x (rows × in) · Wᵀ (in × out).
             T::gemm(rows, n_in, n_out, T::from_f64(1.0), x, n_in as isize, 1, w, 1, n_in as isize, T::from_f64(1.0), y, n_out as isize, 1);
-            let act = s.activation(l);
-            if act != Activation::Identity {
-                for v in y.iter_mut() {
-                    *v = act.apply(*v);
-                }
-            }
+            s.activation(l).apply_slice(y);
         }
         &ws.acts[s.layers() - 1]
     }
@@ -302,12 +327,7 @@ impl<T: Real> Mlp<T> {
         for l in (0..s.layers()).rev() {
             let (n_in, n_out) = (s.widths[l], s.widths[l + 1]);
             // dz = d_out ⊙ act'(z), from the activations.
-            let act = s.activation(l);
-            if act != Activation::Identity {
-                for (g, a) in ws.grad.iter_mut().zip(&ws.acts[l]) {
-                    *g = *g * act.derivative_from_output(*a);
-                }
-            }
+            s.activation(l).scale_by_derivative(&mut ws.grad, &ws.acts[l]);
             if let Some(grads) = grads.as_deref_mut() {
                 let x: &[T] = if l == 0 { input } else { &ws.acts[l - 1] };
                 let (w_at, b_at) = s.offsets(l);

@@ -1,7 +1,9 @@
-//! Neural materials (paper §4, lobes.md §3.3–4): the 22 parameters (`params`), direction
-//! features (`features`), training data generated on the fly from the compiled `uplift_stack`
-//! kernels (`classes`, `datagen`), the hand-written networks and their training (`mlp`,
-//! `model`, `loss`, `adam`, `trainer`), weights as safetensors (`weights`).
+//! Neural materials (paper §4, lobes.md §3.3–4; docs/neural.md): the 22 parameters (`params`),
+//! direction features (`features`), training data generated on the fly from the compiled
+//! `uplift_stack` kernels (`classes`, `datagen`), the hand-written networks and their training
+//! (`mlp`, `model`, `loss`, `adam`, `trainer`), weights as safetensors (`weights`), held-out
+//! errors (`evaluate`), per-material latent fitting (`fit`) and inference (`inference`; the
+//! shipped decoder's generated Rust in `shipped_decoder`).
 
 pub mod adam;
 pub mod classes;
@@ -14,5 +16,6 @@ pub mod loss;
 pub mod mlp;
 pub mod model;
 pub mod params;
+pub mod shipped_decoder;
 pub mod trainer;
 pub mod weights;
