@@ -1,7 +1,7 @@
 //! The pbrlib closure library against independent references, on the shipped CPU kernels
 //! (runtime/graphs/bsdf, found in-process by fingerprint):
 //! - every lobe and the layered stack: the albedo context equals a brute-force Monte Carlo
-//!   integral of the eval context (65,536 stratified directions, 200 random parameter sets,
+//!   integral of the eval context (65,536 stratified directions, 100 random parameter sets,
 //!   8 view angles from μ = 0.02 to 1) within 0.005 per channel;
 //! - white furnace: a white, non-absorbing stack over white Lambert has albedo 1 ± 2e-3, every
 //!   transmitting lobe alone has albedo + throughput = 1 ± 2e-3; a conductor of reflectivity 0.99
@@ -40,8 +40,9 @@ fn roughness(rng: &mut Rng) -> Vec<f32> {
     vec![a, a]
 }
 
-/// Random isotropic parameter sets per lobe in the albedo test.
-const ISOTROPIC_SETS: usize = 200;
+/// Random isotropic parameter sets per lobe in the albedo test (100: the test is the suite's
+/// longest; 200 measured the same worst errors).
+const ISOTROPIC_SETS: usize = 100;
 
 /// Anisotropic roughness (aspect ratio up to 1.5): the albedo tables are indexed by one
 /// roughness, exact for isotropic lobes only: up to ~4e-2 measured (an open gap; see the issue
@@ -301,7 +302,7 @@ fn mc_directions(v: [f32; 3], alphas: &[f64], side: usize, rng: &mut Rng) -> (Ve
     (dirs, pdfs)
 }
 
-/// Albedo (albedo context) vs Monte Carlo of eval for 200 parameter sets × 8 views per lobe.
+/// Albedo (albedo context) vs Monte Carlo of eval for 100 parameter sets × 8 views per lobe.
 #[test]
 fn albedo_matches_monte_carlo_integral_of_eval() {
     const SIDE: usize = 256; // 65,536 stratified directions
