@@ -8,15 +8,16 @@
 //! - data generation: rows per second of the training-data generator (three closure kernels).
 //!
 //! `cargo bench -p uplift --bench neural` (options after `--`: `--rows N`, `--seconds S`,
-//! `--threads T`, `--peak-gflops G`). The peak defaults to cores × 32 flop/cycle × the clock in
-//! /proc/cpuinfo (two 256-bit FMA pipes per core: AMD Zen 4, Intel client cores; Intel server
-//! cores with two 512-bit FMA units have twice that).
+//! `--threads T`, `--peak-gflops G`, `--only train|fit|infer|data`). The peak is measured: cores
+//! × the rate of a large single-threaded sgemm (matrixmultiply, 1024³), what a GEMM-bound
+//! network could reach at best on this machine.
 
 use std::time::Instant;
 use uplift::cpu_engine::CpuEngine;
 use uplift::neural::datagen::{ClassMix, DataGenerator};
 use uplift::neural::fit::{fit_step_rows, FitBuffers};
 use uplift::neural::model::{decoder_shape, encoder_shape, DECODER_INPUTS, LATENT};
+use uplift::neural::mlp::Real;
 use uplift::neural::trainer::{train_step, StepBuffers, TrainOptions, TrainState};
 
 struct Options {
@@ -24,10 +25,12 @@ struct Options {
     seconds: f64,
     threads: usize,
     peak_gflops: Option<f64>,
+    /// Only this measurement (`train`, `fit`, `infer`, `data`), e.g. under a profiler.
+    only: Option<String>,
 }
 
 fn options() -> Options {
-    let mut o = Options { rows: 16384, seconds: 3.0, threads: std::thread::available_parallelism().map_or(1, |n| n.get()), peak_gflops: None };
+    let mut o = Options { rows: 16384, seconds: 3.0, threads: std::thread::available_parallelism().map_or(1, |n| n.get()), peak_gflops: None, only: None };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
@@ -37,6 +40,7 @@ fn options() -> Options {
             "--seconds" => o.seconds = value(i).parse().expect("--seconds S"),
             "--threads" => o.threads = value(i).parse().expect("--threads T"),
             "--peak-gflops" => o.peak_gflops = Some(value(i).parse().expect("--peak-gflops G")),
+            "--only" => o.only = Some(value(i)),
             "--bench" => {
                 i += 1;
                 continue;
@@ -48,11 +52,22 @@ fn options() -> Options {
     o
 }
 
-/// cores × 32 flop/cycle × clock (GHz) from /proc/cpuinfo.
-fn machine_peak(cores: usize) -> Option<f64> {
-    let info = std::fs::read_to_string("/proc/cpuinfo").ok()?;
-    let mhz: f64 = info.lines().find(|l| l.starts_with("cpu MHz"))?.split(':').nth(1)?.trim().parse().ok()?;
-    Some(cores as f64 * 32.0 * mhz / 1000.0)
+/// The machine's practical fp32 peak: a large single-threaded GEMM (1024³, matrixmultiply, the
+/// trainer's own GEMM) per second, times the cores. The clock in /proc/cpuinfo is a VM's nominal
+/// one and understates the boost clock, so it is not used.
+fn measured_peak(cores: usize) -> f64 {
+    let n = 1024;
+    let a: Vec<f32> = (0..n * n).map(|k| (k % 7) as f32 * 0.1).collect();
+    let mut c = vec![0.0f32; n * n];
+    let mut run = || <f32 as Real>::gemm(n, n, n, 1.0, &a, n as isize, 1, &a, n as isize, 1, 0.0, &mut c, n as isize, 1);
+    run();
+    let start = Instant::now();
+    let mut reps = 0;
+    while start.elapsed().as_secs_f64() < 1.0 {
+        run();
+        reps += 1;
+    }
+    cores as f64 * reps as f64 * 2.0 * (n * n * n) as f64 / start.elapsed().as_secs_f64() / 1e9
 }
 
 /// Runs `f` (one pass over `rows`) repeatedly for `seconds`; rows per second.
@@ -70,7 +85,7 @@ fn rate(rows: usize, seconds: f64, mut f: impl FnMut()) -> f64 {
 fn main() {
     let o = options();
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let peak = o.peak_gflops.or_else(|| machine_peak(cores));
+    let peak = Some(o.peak_gflops.unwrap_or_else(|| measured_peak(cores)));
     let generator = DataGenerator::new(CpuEngine::with_threads(o.threads).unwrap(), ClassMix::All, 1).unwrap();
     let batch = generator.batch(0, o.rows).unwrap();
     let (enc, dec) = (encoder_shape(), decoder_shape());
@@ -80,35 +95,51 @@ fn main() {
     let flop_train = 2.0 * (3.0 * mac_dec + 3.0 * mac_enc - (enc.widths[0] * enc.widths[1]) as f64);
     let flop_fit = 2.0 * 2.0 * mac_dec;
     let flop_infer = 2.0 * mac_dec;
-    println!("neural benchmark: {} rows per batch, {} thread(s), {} core(s), fp32 peak {}", o.rows, o.threads, cores, peak.map_or("unknown".into(), |p| format!("{p:.0} GFLOP/s")));
+    println!(
+        "neural benchmark: {} rows per batch, {} thread(s), {} core(s), fp32 peak {} (cores × a 1024³ single-threaded sgemm, or --peak-gflops)",
+        o.rows,
+        o.threads,
+        cores,
+        peak.map_or("unknown".into(), |p| format!("{p:.0} GFLOP/s"))
+    );
     let report = |what: &str, r: f64, flop: f64| {
         let gflops = r * flop / 1e9;
         let frac = peak.map_or(String::new(), |p| format!(", {:.1} % of peak", 100.0 * gflops / p));
         println!("{what:<28} {:>10.0} samples/s  ({:.0} kflop/sample, {gflops:.1} GFLOP/s{frac})", r, flop / 1e3);
     };
 
+    let wants = |what: &str| o.only.as_deref().is_none_or(|w| w == what);
     let opts = TrainOptions { threads: o.threads, batch: o.rows, steps: 1 << 40, ..Default::default() };
     let mut state = TrainState::new(1);
     let mut buf = StepBuffers::default();
-    report("training step", rate(o.rows, o.seconds, || {
-        train_step(&mut state, &batch, &opts, &mut buf);
-    }), flop_train);
+    if wants("train") {
+        report("training step", rate(o.rows, o.seconds, || {
+            train_step(&mut state, &batch, &opts, &mut buf);
+        }), flop_train);
+    }
 
     let decoder = state.model.decoder.clone();
     let mut latents = vec![0.5f32; o.rows * LATENT];
     let mut fb = FitBuffers::default();
     let mut step = 0u64;
-    report("latent fitting step", rate(o.rows, o.seconds, || {
-        fit_step_rows(&decoder, &mut latents, &batch.features, &batch.target, &batch.mu_l, step, 1e-3, o.threads, &mut fb);
-        step += 1;
-    }), flop_fit);
+    if wants("fit") {
+        report("latent fitting step", rate(o.rows, o.seconds, || {
+            fit_step_rows(&decoder, &mut latents, &batch.features, &batch.target, &batch.mu_l, step, 1e-3, o.threads, &mut fb);
+            step += 1;
+        }), flop_fit);
+    }
 
     let dec_in: Vec<f32> = (0..o.rows).flat_map(|r| latents[r * LATENT..(r + 1) * LATENT].iter().chain(&batch.features[r * 9..(r + 1) * 9]).copied().collect::<Vec<_>>()).collect();
     assert_eq!(dec_in.len(), o.rows * DECODER_INPUTS);
     let mut out = vec![0.0f32; o.rows * 7];
-    report("inference (decoder forward)", rate(o.rows, o.seconds, || {
-        uplift::neural::inference::decode_parallel(&decoder, &dec_in, &mut out, o.threads);
-    }), flop_infer);
+    if wants("infer") {
+        report("inference (decoder forward)", rate(o.rows, o.seconds, || {
+            uplift::neural::inference::decode_parallel(&decoder, &dec_in, &mut out, o.threads);
+        }), flop_infer);
+    }
+    if !wants("data") {
+        return;
+    }
 
     let mut k = 1u64;
     let r = rate(o.rows, o.seconds, || {
