@@ -8,7 +8,7 @@ use super::datagen::{ClassMix, DataGenerator, TrainingBatch};
 use super::features::FEATURES;
 use super::loss::OUTPUTS;
 use super::mlp::Workspace;
-use super::model::{NeuralModel, DECODER_INPUTS, LATENT};
+use super::model::{fill_decoder_input, NeuralModel};
 use super::params::PARAMETERS;
 
 /// The seed offset of held-out data: training seeds never reach it.
@@ -35,11 +35,8 @@ pub fn encode(model: &NeuralModel<f32>, encoded: &[f32]) -> Vec<f32> {
 /// Decoder outputs (rows × 7) for latents (rows × 6) and features (rows × 9).
 pub fn decode(model: &NeuralModel<f32>, latents: &[f32], features: &[f32]) -> Vec<f32> {
     let rows = features.len() / FEATURES;
-    let mut dec_in = vec![0.0f32; rows * DECODER_INPUTS];
-    for r in 0..rows {
-        dec_in[r * DECODER_INPUTS..r * DECODER_INPUTS + LATENT].copy_from_slice(&latents[r * LATENT..(r + 1) * LATENT]);
-        dec_in[r * DECODER_INPUTS + LATENT..(r + 1) * DECODER_INPUTS].copy_from_slice(&features[r * FEATURES..(r + 1) * FEATURES]);
-    }
+    let mut dec_in = Vec::new();
+    fill_decoder_input(latents, &vec![0.0; latents.len()], features, rows, &mut dec_in);
     model.decoder.forward(&dec_in, rows, &mut Workspace::default()).to_vec()
 }
 

@@ -13,7 +13,7 @@
 //! clamped to [0, 1] after every Adam step. The report compares the encoder-only and the fitted
 //! latents on other directions at sampled texels with their own (unquantised) parameters.
 
-use super::adam::cosine_lr;
+use super::adam::{cosine_lr, Adam};
 use super::datagen::{DataGenerator, TrainingBatch};
 use super::evaluate::{decode, encode};
 use super::loss::{eq3_loss, LossParts, LossWeights, OUTPUTS};
@@ -63,8 +63,7 @@ impl Default for FitOptions {
 #[derive(Default)]
 pub struct FitBuffers {
     workspaces: Vec<ModelWorkspace<f32>>,
-    m: Vec<f32>,
-    v: Vec<f32>,
+    adam: Option<Adam>,
     jitter: Vec<f32>,
 }
 
@@ -100,16 +99,10 @@ fn latent_gradients(decoder: &Mlp<f32>, latents: &[f32], jit: &[f32], features: 
     (loss, grad)
 }
 
-/// Adam on `z` with gradient `g` (element-wise), then clamp to [0, 1].
-fn adam_clamped(z: &mut [f32], g: &[f32], m: &mut [f32], v: &mut [f32], t: u64, lr: f32) {
-    let (b1, b2, eps) = (0.9f32, 0.999f32, 1e-8f32);
-    let c1 = 1.0 - b1.powi(t as i32);
-    let c2 = 1.0 - b2.powi(t as i32);
-    for k in 0..z.len() {
-        m[k] = b1 * m[k] + (1.0 - b1) * g[k];
-        v[k] = b2 * v[k] + (1.0 - b2) * g[k] * g[k];
-        z[k] = (z[k] - lr / c1 * m[k] / ((v[k] / c2).sqrt() + eps)).clamp(0.0, 1.0);
-    }
+/// One Adam step on latents, then the clamp to [0, 1].
+fn adam_clamped(adam: &mut Adam, z: &mut [f32], g: &[f32], lr: f32) {
+    adam.step(z, g, lr);
+    z.iter_mut().for_each(|x| *x = x.clamp(0.0, 1.0));
 }
 
 /// One fitting step in which every row has its own latent (the benchmark's unit of work; the
@@ -119,9 +112,8 @@ pub fn fit_step_rows(decoder: &Mlp<f32>, latents: &mut [f32], features: &[f32], 
     let rows = mu_l.len();
     jitter(0, step, rows, 0.005, &mut buf.jitter);
     let (loss, g) = latent_gradients(decoder, latents, &buf.jitter, features, target, mu_l, threads, &mut buf.workspaces);
-    buf.m.resize(latents.len(), 0.0);
-    buf.v.resize(latents.len(), 0.0);
-    adam_clamped(latents, &g, &mut buf.m, &mut buf.v, step + 1, lr);
+    let adam = buf.adam.get_or_insert_with(|| Adam::new(latents.len()));
+    adam_clamped(adam, latents, &g, lr);
     loss
 }
 
@@ -184,7 +176,7 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     let rows = groups * d;
     let rows_params: Vec<f32> = (0..rows).flat_map(|r| mean[(r / d) * PARAMETERS..(r / d + 1) * PARAMETERS].to_vec()).collect();
     let mut z = z0.clone();
-    let (mut m, mut v) = (vec![0.0f32; z.len()], vec![0.0f32; z.len()]);
+    let mut adam = Adam::new(z.len());
     let mut ws = Vec::new();
     let mut jit = Vec::new();
     let bar = if progress { indicatif::ProgressBar::new(o.steps) } else { indicatif::ProgressBar::hidden() };
@@ -208,7 +200,7 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
                 gz[(r / d) * LATENT + k] += g[r * LATENT + k];
             }
         }
-        adam_clamped(&mut z, &gz, &mut m, &mut v, step + 1, cosine_lr(step, o.steps, o.lr_start, o.lr_end));
+        adam_clamped(&mut adam, &mut z, &gz, cosine_lr(step, o.steps, o.lr_start, o.lr_end));
         bar.inc(1);
         bar.set_message(format!("loss {:.4}", loss.total));
     }

@@ -90,7 +90,7 @@ impl<T: Real> NeuralModel<T> {
 }
 
 /// Rows of [latent + jitter, features].
-fn fill_decoder_input<T: Real>(z: &[T], jitter: &[T], features: &[T], rows: usize, dec_in: &mut Vec<T>) {
+pub fn fill_decoder_input<T: Real>(z: &[T], jitter: &[T], features: &[T], rows: usize, dec_in: &mut Vec<T>) {
     dec_in.resize(rows * DECODER_INPUTS, T::default());
     for r in 0..rows {
         let row = &mut dec_in[r * DECODER_INPUTS..(r + 1) * DECODER_INPUTS];
