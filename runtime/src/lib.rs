@@ -11,6 +11,8 @@ pub mod cpu_engine;
 pub mod enhance;
 pub mod exr;
 pub mod neural;
+pub mod render;
+pub mod stack_kernel;
 pub mod csv_table;
 pub mod texture_loader;
 pub mod wgpu_engine;

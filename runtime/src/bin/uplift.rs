@@ -1,6 +1,6 @@
 //! The `uplift` command line: `check` and `compile` (the compiler spine) and `eval` (run an
 //! output over CSV rows); `enhance` and `masks` (uplift rules);
-//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials).
+//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render` (evaluation).
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -34,6 +34,8 @@ enum Command {
     Fit(uplift::cli::fit::FitArgs),
     /// Write a trained decoder's inference code (Rust and WGSL).
     EmitDecoder(uplift::cli::emit_decoder::EmitDecoderArgs),
+    /// Render an enhanced material on the preview ball (reference kernels or neural).
+    Render(uplift::cli::render::RenderArgs),
 }
 
 fn main() -> ExitCode {
@@ -49,6 +51,7 @@ fn main() -> ExitCode {
         Command::Train(a) => uplift::cli::train::run(a),
         Command::Fit(a) => uplift::cli::fit::run(a),
         Command::EmitDecoder(a) => uplift::cli::emit_decoder::run(a),
+        Command::Render(a) => uplift::cli::render::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -10,6 +10,7 @@ pub mod enhance;
 pub mod eval;
 pub mod fit;
 pub mod masks;
+pub mod render;
 pub mod tables;
 pub mod train;
 

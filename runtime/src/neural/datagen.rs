@@ -10,14 +10,11 @@
 use super::classes::{class_parameters, DataClass};
 use super::features::{cosine_view, direction_features, uniform_hemisphere, FEATURES};
 use super::loss::OUTPUTS;
-use super::params::{encode_rows, PARAMETERS, PARAMETER_TABLE};
-use crate::batch::{Columns, Geometry, PatternBatch};
-use crate::cpu_engine::{CpuEngine, CpuKernel};
+use super::params::{encode_rows, PARAMETERS};
+use crate::cpu_engine::CpuEngine;
+use crate::stack_kernel::StackKernel;
 use crate::enhance::rules::mix64;
-use uplift_compiler::{ClosureContext, Compiler, OutputSelection, PatternKernel};
-
-/// The closure kernel's document.
-const STACK_GRAPH: &str = include_str!("../../graphs/bsdf/uplift_stack.mtlx");
+use uplift_compiler::ClosureContext;
 
 /// Base materials (tiles) per themed class.
 pub const TILES_PER_CLASS: u64 = 1 << 16;
@@ -64,54 +61,6 @@ pub struct TrainingBatch {
     pub target: Vec<f32>,
 }
 
-/// One closure context of the stack, prepared on the CPU engine.
-struct StackKernel {
-    kernel: PatternKernel,
-    cpu: CpuKernel,
-}
-
-impl StackKernel {
-    fn new(engine: &CpuEngine, context: ClosureContext) -> Result<StackKernel, String> {
-        let source = "runtime/graphs/bsdf/uplift_stack.mtlx";
-        let (doc, diags) = mtlx::read_str(STACK_GRAPH, source);
-        let c = Compiler::builtin().compile_document_in(doc, diags, source, &OutputSelection::AllNumeric, Some(context));
-        let kernel = c.kernel.ok_or_else(|| c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n"))?;
-        let cpu = engine.prepare(&kernel)?;
-        Ok(StackKernel { kernel, cpu })
-    }
-
-    fn input_offset(&self, name: &str) -> usize {
-        self.kernel.inputs.iter().find(|i| i.input.name == name).unwrap_or_else(|| panic!("uplift_stack kernel has no input `{name}`")).offset
-    }
-
-    fn output_offset(&self, name: &str) -> usize {
-        self.kernel.outputs.iter().find(|o| o.name == name).unwrap_or_else(|| panic!("uplift_stack kernel has no output `{name}`")).offset
-    }
-
-    /// Runs the kernel on `rows` (indices into the batch) with per-row directions.
-    fn run(&self, engine: &CpuEngine, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])]) -> Result<Columns, String> {
-        let n = rows.len();
-        let mut inputs = Columns::zeros(n, self.kernel.input_stride);
-        for (name, dirs) in directions {
-            let at = self.input_offset(name);
-            for c in 0..3 {
-                let col = inputs.column_mut(at + c);
-                for (x, &r) in col.iter_mut().zip(rows) {
-                    *x = dirs[r][c];
-                }
-            }
-        }
-        for (k, p) in PARAMETER_TABLE.iter().enumerate() {
-            let col = inputs.column_mut(self.input_offset(p.input) + p.component);
-            for (x, &r) in col.iter_mut().zip(rows) {
-                *x = params[r * PARAMETERS + k];
-            }
-        }
-        let geometry = Geometry::columns(&vec![Geometry::default(); n]);
-        engine.run_prepared(&self.cpu, &PatternBatch { geometry, inputs, textures: vec![] })
-    }
-}
-
 /// Generates training batches.
 pub struct DataGenerator {
     engine: CpuEngine,
@@ -141,7 +90,7 @@ impl DataGenerator {
 
     /// Where the stack's kernels come from (shipped or built).
     pub fn describe(&self) -> String {
-        self.eval.cpu.describe()
+        self.eval.describe()
     }
 
     /// Batch `index` of `rows` rows.

@@ -1,0 +1,105 @@
+//! `uplift render MATERIAL/ -o ball.png [-o ball.exr]`: renders an enhanced material (its
+//! params.exr) on the preview ball under an environment (`--env FILE.hdr|FILE.exr`, `studio`,
+//! the default, or `white`, a unit environment), shaded by the compiled reference kernels or,
+//! with `--neural`, by the decoder on the material's fitted latent.exr. A `.png` output is the
+//! AgX display image, an `.exr` output the linear radiance.
+
+use super::fit::{load_model, SHIPPED_DECODER};
+use crate::cpu_engine::CpuEngine;
+use crate::render::environment::Environment;
+use crate::render::image_files::{write_exr, write_png};
+use crate::render::integrator::{render, RenderOptions, Strategy};
+use crate::render::scene::Sphere;
+use crate::render::shading::{Model, Shading};
+use crate::render::surface::SurfaceTextures;
+use crate::render::tonemap::to_display;
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// An enhanced material's folder (params.exr; latent.exr with --neural).
+    pub material: PathBuf,
+    /// Output images: `.png` (AgX display) and/or `.exr` (linear radiance).
+    #[arg(short, long, required = true)]
+    pub output: Vec<PathBuf>,
+    /// Shade with the neural decoder and the fitted latents instead of the reference kernels.
+    #[arg(long)]
+    pub neural: bool,
+    /// Encoder and decoder weights for --neural.
+    #[arg(long, default_value = SHIPPED_DECODER)]
+    pub decoder: PathBuf,
+    /// Environment: an equirectangular .hdr/.exr file, `studio` or `white`.
+    #[arg(long, default_value = "studio")]
+    pub env: String,
+    /// Image width and height in pixels.
+    #[arg(long, default_value_t = 256)]
+    pub size: usize,
+    #[arg(long, default_value_t = 64)]
+    pub spp: usize,
+    /// Surface interactions after the first.
+    #[arg(long, default_value_t = 2)]
+    pub bounces: usize,
+    /// Direct lighting: mis, bsdf or light.
+    #[arg(long, default_value = "mis")]
+    pub strategy: String,
+    /// Exposure multiplier before AgX.
+    #[arg(long, default_value_t = 1.0)]
+    pub exposure: f32,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+/// An environment from the command line's `--env`.
+pub fn environment(arg: &str) -> Result<Environment, String> {
+    match arg {
+        "studio" => Ok(Environment::studio()),
+        "white" => Ok(Environment::constant([1.0; 3])),
+        path => Environment::load(Path::new(path)),
+    }
+}
+
+/// Writes a rendering to each output by its extension.
+pub fn write_outputs(outputs: &[PathBuf], radiance: &[[f32; 3]], size: (usize, usize), exposure: f32) -> Result<(), String> {
+    for out in outputs {
+        match out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref() {
+            Some("png") => write_png(out, &to_display(radiance, exposure), size.0, size.1)?,
+            Some("exr") => write_exr(out, radiance, size.0, size.1)?,
+            _ => return Err(format!("{}: an output must end in .png or .exr", out.display())),
+        }
+    }
+    Ok(())
+}
+
+pub fn run(args: RenderArgs) -> Result<(), String> {
+    let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
+    if args.size == 0 || args.spp == 0 {
+        return Err("--size and --spp must be at least 1".into());
+    }
+    if !(args.exposure > 0.0 && args.exposure.is_finite()) {
+        return Err(format!("--exposure must be positive (got {})", args.exposure));
+    }
+    for out in &args.output {
+        if !matches!(out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref(), Some("png" | "exr")) {
+            return Err(format!("{}: an output must end in .png or .exr", out.display()));
+        }
+    }
+    let strategy = Strategy::parse(&args.strategy)?;
+    let env = environment(&args.env)?;
+    let surface = SurfaceTextures::load(&args.material, args.neural)?;
+    let model = if args.neural { Model::Neural(load_model(&args.decoder)?.decoder) } else { Model::Reference };
+    let shading = Shading::new(CpuEngine::with_threads(threads)?, model)?;
+    let o = RenderOptions { width: args.size, height: args.size, spp: args.spp, bounces: args.bounces, seed: args.seed, strategy, ..Default::default() };
+    let bar = ProgressBar::new(o.spp as u64).with_style(ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} spp {elapsed}").map_err(|e| e.to_string())?.progress_chars("=> "));
+    bar.set_message(format!("rendering {}", args.material.display()));
+    let start = std::time::Instant::now();
+    let img = render(&Sphere::preview(), &env, &surface, &shading, &o, Some(&bar))?;
+    bar.finish_and_clear();
+    write_outputs(&args.output, &img.radiance, (img.width, img.height), args.exposure)?;
+    let secs = start.elapsed().as_secs_f64();
+    eprintln!("rendered {}×{} at {} spp in {secs:.1} s ({:.0} k paths/s)", o.width, o.height, o.spp, (o.width * o.height * o.spp) as f64 / secs / 1e3);
+    Ok(())
+}

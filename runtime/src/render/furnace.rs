@@ -1,0 +1,166 @@
+//! The white furnace test, per texel (lobes.md §5.1, the deterministic form of the paper's §4.3
+//! filter): for a convex object under a unit environment a one-bounce pixel equals the
+//! material's total albedo A(wv) = ∫ f cos θl dωl = ∫ f_nd cos dωl + T·c, so if A ≤ 1 at every
+//! texel and view no render of it can exceed 1.
+//!
+//! A is estimated by Monte Carlo with the material's own sampling mixture (material.rs), the
+//! selector stratified so each strategy gets exactly its share, and a seeded hash for the other
+//! dimensions — the same numbers every run. The reference material's A is also known exactly
+//! from the albedo kernel (`exact_albedo`), which is how the estimator is tested.
+//!
+//! Texels with identical data are checked once; at most `max_texels` distinct texels are
+//! checked (a seeded subset when there are more), at `views` view cosines from 1 down to the
+//! decoder's smallest (θv = 87°). A material fails if any channel of any (texel, view) exceeds
+//! `limit` (1.02), or if more than `over_one_fraction` (1 %) of the pairs exceed 1.
+
+use super::material;
+use super::scene::Vec3;
+use super::shading::Shading;
+use super::surface::{SurfaceSample, SurfaceTextures, TEXEL_VALUES};
+use crate::enhance::rules::mix64;
+use crate::neural::features::MIN_VIEW_COSINE;
+use std::collections::HashMap;
+
+#[derive(Clone, Debug)]
+pub struct FurnaceOptions {
+    pub views: usize,
+    pub directions: usize,
+    pub max_texels: usize,
+    pub limit: f32,
+    pub over_one_fraction: f64,
+    pub seed: u64,
+}
+
+impl Default for FurnaceOptions {
+    fn default() -> Self {
+        FurnaceOptions { views: 16, directions: 1024, max_texels: 256, limit: 1.02, over_one_fraction: 0.01, seed: 1 }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct FurnaceResult {
+    /// Distinct texels in the material, and how many were checked.
+    pub distinct_texels: usize,
+    pub checked_texels: usize,
+    /// (texel, view) pairs checked.
+    pub pairs: usize,
+    /// The largest channel of A over all pairs, with its texel (x, y) and view cosine.
+    pub worst: f32,
+    pub worst_texel: (usize, usize),
+    pub worst_mu: f32,
+    /// Pairs whose largest channel exceeds 1.
+    pub over_one: usize,
+    pub passed: bool,
+}
+
+/// The view cosines checked.
+pub fn view_cosines(views: usize) -> Vec<f32> {
+    let views = views.max(1);
+    (0..views).map(|k| if views == 1 { 1.0 } else { 1.0 - (1.0 - MIN_VIEW_COSINE) * k as f32 / (views - 1) as f32 }).collect()
+}
+
+fn view_direction(mu: f32) -> Vec3 {
+    [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu]
+}
+
+fn unit(key: u64) -> f32 {
+    ((mix64(key) >> 40) as f32) / (1u64 << 24) as f32
+}
+
+/// Monte Carlo estimate of A(wv) per (point, view), `directions` samples each.
+pub fn estimated_albedo(shading: &Shading, points: &[SurfaceSample], wv: &[Vec3], directions: usize, seed: u64) -> Result<Vec<[f32; 3]>, String> {
+    let n = points.len();
+    // P per row, from the material at the normal direction (P depends on wv only).
+    let up = vec![[0.0, 0.0, 1.0]; n];
+    let (_, select) = material::evaluate(shading, points, wv, &up)?;
+    let mut acc = vec![[0.0f64; 3]; n];
+    // Rows per kernel call: about 128 k.
+    let per = (131_072 / directions.max(1)).max(1);
+    for start in (0..n).step_by(per) {
+        let end = (start + per).min(n);
+        let mut p = Vec::with_capacity((end - start) * directions);
+        let mut v = Vec::with_capacity(p.capacity());
+        let mut s = Vec::with_capacity(p.capacity());
+        let mut u = Vec::with_capacity(p.capacity());
+        for r in start..end {
+            let key = mix64(seed ^ mix64(r as u64 ^ 0x6675_726e));
+            for j in 0..directions {
+                let k = mix64(key ^ j as u64);
+                let stratum = (j as f32 + unit(k)) / directions as f32;
+                p.push(points[r]);
+                v.push(wv[r]);
+                s.push(select[r]);
+                u.push([stratum, unit(k ^ 1), unit(k ^ 2), unit(k ^ 3), unit(k ^ 4), unit(k ^ 5)]);
+            }
+        }
+        let drawn = material::sample(shading, &p, &v, &s, &u)?;
+        for (i, (_, m)) in drawn.iter().enumerate() {
+            if m.pdf > 0.0 {
+                let r = start + i / directions;
+                for c in 0..3 {
+                    acc[r][c] += (m.fcos[c] / m.pdf) as f64;
+                }
+            }
+        }
+    }
+    Ok(acc.iter().map(|a| a.map(|x| (x / directions as f64) as f32)).collect())
+}
+
+/// The reference material's A(wv) from the albedo kernel: albedo + T·c.
+pub fn exact_albedo(shading: &Shading, points: &[SurfaceSample], wv: &[Vec3]) -> Result<Vec<[f32; 3]>, String> {
+    let a = shading.reference_albedo(points, wv)?;
+    Ok(a.iter().zip(points).map(|((alb, t), p)| [0, 1, 2].map(|c| alb[c] + t[c] * p.diffuse[c])).collect())
+}
+
+/// The distinct texels of a material (bitwise identical data counted once): their indices.
+pub fn distinct_texels(surface: &SurfaceTextures) -> Vec<usize> {
+    let mut seen: HashMap<Vec<u32>, usize> = HashMap::new();
+    let mut order = Vec::new();
+    for t in 0..surface.width * surface.height {
+        let key: Vec<u32> = surface.values[t * TEXEL_VALUES..(t + 1) * TEXEL_VALUES].iter().map(|x| x.to_bits()).collect();
+        if let std::collections::hash_map::Entry::Vacant(e) = seen.entry(key) {
+            e.insert(t);
+            order.push(t);
+        }
+    }
+    order
+}
+
+/// The white furnace check of a material under `shading`.
+pub fn white_furnace(surface: &SurfaceTextures, shading: &Shading, o: &FurnaceOptions) -> Result<FurnaceResult, String> {
+    let distinct = distinct_texels(surface);
+    let mut chosen = distinct.clone();
+    if chosen.len() > o.max_texels {
+        // A seeded subset: sort by a hash of the texel index and keep the first.
+        chosen.sort_by_key(|&t| mix64(o.seed ^ mix64(t as u64)));
+        chosen.truncate(o.max_texels);
+        chosen.sort_unstable();
+    }
+    let mus = view_cosines(o.views);
+    let mut points = Vec::new();
+    let mut wv = Vec::new();
+    for &t in &chosen {
+        let s = surface.texel(t);
+        for &mu in &mus {
+            points.push(s);
+            wv.push(view_direction(mu));
+        }
+    }
+    let a = estimated_albedo(shading, &points, &wv, o.directions, o.seed)?;
+    let mut r = FurnaceResult { distinct_texels: distinct.len(), checked_texels: chosen.len(), pairs: a.len(), worst: 0.0, worst_texel: (0, 0), worst_mu: 1.0, over_one: 0, passed: true };
+    for (i, v) in a.iter().enumerate() {
+        let m = v[0].max(v[1]).max(v[2]);
+        let m = if m.is_finite() { m } else { f32::INFINITY };
+        if m > 1.0 {
+            r.over_one += 1;
+        }
+        if m > r.worst {
+            let t = chosen[i / mus.len()];
+            r.worst = m;
+            r.worst_texel = (t % surface.width, t / surface.width);
+            r.worst_mu = mus[i % mus.len()];
+        }
+    }
+    r.passed = r.worst <= o.limit && (r.over_one as f64) <= o.over_one_fraction * r.pairs as f64;
+    Ok(r)
+}

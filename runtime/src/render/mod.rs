@@ -1,0 +1,16 @@
+//! Rendering and evaluation (docs/render.md): the preview-ball path tracer with environment and
+//! BSDF importance sampling combined by MIS (`integrator`), its environments (`environment`),
+//! geometry and camera (`scene`), the material data it reads (`surface`) and the two ways of
+//! shading it — the compiled reference kernels or the neural decoder (`shading`) — the AgX
+//! display transform (`tonemap`) and the image metrics, FLIP and PSNR (`metrics`).
+
+pub mod environment;
+pub mod furnace;
+pub mod integrator;
+pub mod material;
+pub mod metrics;
+pub mod scene;
+pub mod shading;
+pub mod surface;
+pub mod image_files;
+pub mod tonemap;

@@ -1,0 +1,73 @@
+//! The `uplift_stack` closure kernels (runtime/graphs/bsdf/uplift_stack.mtlx, shipped as CPU
+//! kernels in every closure context): one prepared kernel per context, run on rows of the 22
+//! parameters (neural::params::PARAMETER_TABLE order) with per-row directions in the local
+//! frame (normal +z). The training-data generator, the renderer's reference material and the
+//! white furnace check evaluate the stack through it.
+
+use crate::batch::{Columns, Geometry, PatternBatch};
+use crate::cpu_engine::{CpuEngine, CpuKernel};
+use crate::neural::params::{PARAMETERS, PARAMETER_TABLE};
+use uplift_compiler::{ClosureContext, Compiler, OutputSelection, PatternKernel};
+
+/// The closure kernel's document.
+const STACK_GRAPH: &str = include_str!("../graphs/bsdf/uplift_stack.mtlx");
+
+/// One closure context of the stack, prepared on the CPU engine.
+pub struct StackKernel {
+    kernel: PatternKernel,
+    cpu: CpuKernel,
+}
+
+impl StackKernel {
+    pub fn new(engine: &CpuEngine, context: ClosureContext) -> Result<StackKernel, String> {
+        let source = "runtime/graphs/bsdf/uplift_stack.mtlx";
+        let (doc, diags) = mtlx::read_str(STACK_GRAPH, source);
+        let c = Compiler::builtin().compile_document_in(doc, diags, source, &OutputSelection::AllNumeric, Some(context));
+        let kernel = c.kernel.ok_or_else(|| c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n"))?;
+        let cpu = engine.prepare(&kernel)?;
+        Ok(StackKernel { kernel, cpu })
+    }
+
+    /// Where the kernel comes from (shipped or built).
+    pub fn describe(&self) -> String {
+        self.cpu.describe()
+    }
+
+    fn input_offset(&self, name: &str) -> usize {
+        self.kernel.inputs.iter().find(|i| i.input.name == name).unwrap_or_else(|| panic!("uplift_stack kernel has no input `{name}`")).offset
+    }
+
+    /// The first column of output `name` (`response`, `throughput`, `albedo`, `wl`, `pdf`).
+    pub fn output_offset(&self, name: &str) -> usize {
+        self.kernel.outputs.iter().find(|o| o.name == name).unwrap_or_else(|| panic!("uplift_stack kernel has no output `{name}`")).offset
+    }
+
+    /// Runs the kernel on `rows` (indices into `params`, rows × 22) with per-row directions
+    /// (`wv`, `wl` or `u`, indexed like `params`).
+    pub fn run(&self, engine: &CpuEngine, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])]) -> Result<Columns, String> {
+        let n = rows.len();
+        let mut inputs = Columns::zeros(n, self.kernel.input_stride);
+        for (name, dirs) in directions {
+            let at = self.input_offset(name);
+            for c in 0..3 {
+                let col = inputs.column_mut(at + c);
+                for (x, &r) in col.iter_mut().zip(rows) {
+                    *x = dirs[r][c];
+                }
+            }
+        }
+        for (k, p) in PARAMETER_TABLE.iter().enumerate() {
+            let col = inputs.column_mut(self.input_offset(p.input) + p.component);
+            for (x, &r) in col.iter_mut().zip(rows) {
+                *x = params[r * PARAMETERS + k];
+            }
+        }
+        let geometry = Geometry::columns(&vec![Geometry::default(); n]);
+        engine.run_prepared(&self.cpu, &PatternBatch { geometry, inputs, textures: vec![] })
+    }
+}
+
+/// Three consecutive columns of `out` at row `k`.
+pub fn vec3_at(out: &Columns, at: usize, k: usize) -> [f32; 3] {
+    [0, 1, 2].map(|c| out.column(at + c)[k])
+}
