@@ -1,6 +1,6 @@
 //! The `uplift` command line: `check` and `compile` (the compiler spine) and `eval` (run an
 //! output over CSV rows); `enhance` and `masks` (uplift rules);
-//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render` (evaluation).
+//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render`, `furnace` and `flip` (evaluation).
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -36,6 +36,10 @@ enum Command {
     EmitDecoder(uplift::cli::emit_decoder::EmitDecoderArgs),
     /// Render an enhanced material on the preview ball (reference kernels or neural).
     Render(uplift::cli::render::RenderArgs),
+    /// The per-texel white furnace test of enhanced materials; --filter moves failures aside.
+    Furnace(uplift::cli::furnace::FurnaceArgs),
+    /// LDR-FLIP (and PSNR) of two images.
+    Flip(uplift::cli::flip::FlipArgs),
 }
 
 fn main() -> ExitCode {
@@ -52,6 +56,8 @@ fn main() -> ExitCode {
         Command::Fit(a) => uplift::cli::fit::run(a),
         Command::EmitDecoder(a) => uplift::cli::emit_decoder::run(a),
         Command::Render(a) => uplift::cli::render::run(a),
+        Command::Furnace(a) => uplift::cli::furnace::run(a),
+        Command::Flip(a) => uplift::cli::flip::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

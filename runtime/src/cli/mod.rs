@@ -9,6 +9,8 @@ pub mod emit_decoder;
 pub mod enhance;
 pub mod eval;
 pub mod fit;
+pub mod flip;
+pub mod furnace;
 pub mod masks;
 pub mod render;
 pub mod tables;
