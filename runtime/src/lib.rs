@@ -8,6 +8,7 @@ pub mod atomic_write;
 pub mod batch;
 pub mod cli;
 pub mod cpu_engine;
+pub mod demo;
 pub mod enhance;
 pub mod exr;
 pub mod neural;

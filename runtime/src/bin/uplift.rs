@@ -1,6 +1,6 @@
 //! The `uplift` command line: `check` and `compile` (the compiler spine) and `eval` (run an
 //! output over CSV rows); `enhance` and `masks` (uplift rules);
-//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render`, `furnace` and `flip` (evaluation).
+//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render`, `eval-fit`, `furnace` and `flip` (evaluation); `demo` (the main job).
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -38,6 +38,10 @@ enum Command {
     Render(uplift::cli::render::RenderArgs),
     /// The per-texel white furnace test of enhanced materials; --filter moves failures aside.
     Furnace(uplift::cli::furnace::FurnaceArgs),
+    /// Render fitted materials reference vs neural; FLIP per Type in the paper's Table 1 format.
+    EvalFit(uplift::cli::eval_fit::EvalFitArgs),
+    /// The main job: enhance a procedural PBR set across all Types, fit, render, FLIP, furnace, report.
+    Demo(uplift::cli::demo::DemoArgs),
     /// LDR-FLIP (and PSNR) of two images.
     Flip(uplift::cli::flip::FlipArgs),
 }
@@ -58,6 +62,8 @@ fn main() -> ExitCode {
         Command::Render(a) => uplift::cli::render::run(a),
         Command::Furnace(a) => uplift::cli::furnace::run(a),
         Command::Flip(a) => uplift::cli::flip::run(a),
+        Command::Demo(a) => uplift::cli::demo::run(a),
+        Command::EvalFit(a) => uplift::cli::eval_fit::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

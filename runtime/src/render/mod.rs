@@ -5,6 +5,7 @@
 //! display transform (`tonemap`) and the image metrics, FLIP and PSNR (`metrics`).
 
 pub mod environment;
+pub mod evaluation;
 pub mod furnace;
 pub mod integrator;
 pub mod material;
