@@ -1,36 +1,61 @@
 //! The `uplift_stack` closure kernels (runtime/graphs/bsdf/uplift_stack.mtlx, shipped as CPU
-//! kernels in every closure context): one prepared kernel per context, run on rows of the 22
-//! parameters (neural::params::PARAMETER_TABLE order) with per-row directions in the local
-//! frame (normal +z). The training-data generator, the renderer's reference material and the
-//! white furnace check evaluate the stack through it.
+//! kernels in every closure context): one prepared kernel per context, on the CPU engine or
+//! the wgpu engine, run on rows of the 22 parameters (neural::params::PARAMETER_TABLE order)
+//! with per-row directions in the local frame (normal +z). The training-data generator, the
+//! renderer's reference material and the white furnace check evaluate the stack through it.
 
 use crate::batch::{Columns, Geometry, PatternBatch};
 use crate::cpu_engine::{CpuEngine, CpuKernel};
+use crate::wgpu_engine::{WgpuEngine, WgpuPipeline};
 use crate::neural::params::{PARAMETERS, PARAMETER_TABLE};
 use uplift_compiler::{ClosureContext, Compiler, OutputSelection, PatternKernel};
 
 /// The closure kernel's document.
 const STACK_GRAPH: &str = include_str!("../graphs/bsdf/uplift_stack.mtlx");
 
-/// One closure context of the stack, prepared on the CPU engine.
+/// The engine a stack kernel runs on.
+#[derive(Clone, Copy)]
+pub enum Engine<'a> {
+    Cpu(&'a CpuEngine),
+    Wgpu(&'a WgpuEngine),
+}
+
+enum Prepared {
+    Cpu(CpuKernel),
+    Wgpu(WgpuPipeline),
+}
+
+/// One closure context of the stack, prepared on an engine.
 pub struct StackKernel {
     kernel: PatternKernel,
-    cpu: CpuKernel,
+    prepared: Prepared,
 }
 
 impl StackKernel {
+    /// The kernel on the CPU engine.
     pub fn new(engine: &CpuEngine, context: ClosureContext) -> Result<StackKernel, String> {
+        Self::on(Engine::Cpu(engine), context)
+    }
+
+    /// The kernel on either engine.
+    pub fn on(engine: Engine<'_>, context: ClosureContext) -> Result<StackKernel, String> {
         let source = "runtime/graphs/bsdf/uplift_stack.mtlx";
         let (doc, diags) = mtlx::read_str(STACK_GRAPH, source);
         let c = Compiler::builtin().compile_document_in(doc, diags, source, &OutputSelection::AllNumeric, Some(context));
         let kernel = c.kernel.ok_or_else(|| c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n"))?;
-        let cpu = engine.prepare(&kernel)?;
-        Ok(StackKernel { kernel, cpu })
+        let prepared = match engine {
+            Engine::Cpu(e) => Prepared::Cpu(e.prepare(&kernel)?),
+            Engine::Wgpu(e) => Prepared::Wgpu(e.prepare(&kernel)),
+        };
+        Ok(StackKernel { kernel, prepared })
     }
 
-    /// Where the kernel comes from (shipped or built).
+    /// Where the kernel comes from (shipped or built; or the wgpu engine).
     pub fn describe(&self) -> String {
-        self.cpu.describe()
+        match &self.prepared {
+            Prepared::Cpu(k) => k.describe(),
+            Prepared::Wgpu(_) => "the wgpu engine (generated WGSL)".into(),
+        }
     }
 
     fn input_offset(&self, name: &str) -> usize {
@@ -45,6 +70,11 @@ impl StackKernel {
     /// Runs the kernel on `rows` (indices into `params`, rows × 22) with per-row directions
     /// (`wv`, `wl` or `u`, indexed like `params`).
     pub fn run(&self, engine: &CpuEngine, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])]) -> Result<Columns, String> {
+        self.run_on(Engine::Cpu(engine), params, rows, directions)
+    }
+
+    /// [`run`](Self::run) on the engine the kernel was prepared on (`engine` must be it).
+    pub fn run_on(&self, engine: Engine<'_>, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])]) -> Result<Columns, String> {
         let n = rows.len();
         let mut inputs = Columns::zeros(n, self.kernel.input_stride);
         for (name, dirs) in directions {
@@ -63,7 +93,12 @@ impl StackKernel {
             }
         }
         let geometry = Geometry::columns(&vec![Geometry::default(); n]);
-        engine.run_prepared(&self.cpu, &PatternBatch { geometry, inputs, textures: vec![] })
+        let batch = PatternBatch { geometry, inputs, textures: vec![] };
+        match (&self.prepared, engine) {
+            (Prepared::Cpu(k), Engine::Cpu(e)) => e.run_prepared(k, &batch),
+            (Prepared::Wgpu(p), Engine::Wgpu(e)) => e.run_prepared(p, &batch),
+            _ => Err("uplift_stack kernel run on another engine than it was prepared on".into()),
+        }
     }
 }
 

@@ -226,3 +226,41 @@ fn furnace_estimator_matches_the_albedo_kernel() {
         assert!(a.iter().all(|&x| (x - 1.0).abs() <= 2e-3), "white stack at μ {mu}: {a:?}");
     }
 }
+
+#[test]
+fn wgpu_engine_renders_what_the_cpu_engine_renders() {
+    // The same seed: the same samples, so the two engines' kernels (generated WGSL and Rust,
+    // agreeing to ~1e-5) give the same image up to rare flipped sampling decisions.
+    let engine = match uplift::wgpu_engine::WgpuEngine::new() {
+        Ok(e) => e,
+        Err(e) => panic!("wgpu engine: {e} (install mesa-vulkan-drivers for lavapipe)"),
+    };
+    let p = stack_params(&[("haze_weight", 0.4), ("coat_weight", 0.6), ("fuzz_weight", 0.3)]);
+    let decoder = uplift::cli::fit::load_model(std::path::Path::new(uplift::cli::fit::SHIPPED_DECODER)).unwrap().decoder;
+    let surface = SurfaceTextures::uniform(p, [0.5, 0.4, 0.3], Some([0.5, 0.4, 0.6, 0.3, 0.2, 0.5]));
+    let o = RenderOptions { width: 32, height: 32, spp: 8, bounces: 1, ..Default::default() };
+    let env = Environment::studio();
+    let gpu = Shading::new_wgpu(engine, Model::Neural(decoder.clone())).unwrap();
+    let cpu = Shading::new(CpuEngine::new().unwrap(), Model::Neural(decoder)).unwrap();
+    for (name, a, b) in [("neural", &cpu, &gpu)] {
+        let x = render(&Sphere::preview(), &env, &surface, a, &o, None).unwrap();
+        let y = render(&Sphere::preview(), &env, &surface, b, &o, None).unwrap();
+        let (mut close, mut n) = (0usize, 0usize);
+        for (p, q) in x.radiance.iter().zip(&y.radiance) {
+            for c in 0..3 {
+                n += 1;
+                if (p[c] - q[c]).abs() <= 1e-3 * (1.0 + p[c].abs()) {
+                    close += 1;
+                }
+            }
+        }
+        eprintln!("{name}: {close} of {n} pixel channels agree within 1e-3 between the engines");
+        assert!(close as f64 >= 0.99 * n as f64, "{name}: only {close} of {n} agree");
+    }
+    let gpu_ref = Shading::new_wgpu(uplift::wgpu_engine::WgpuEngine::new().unwrap(), Model::Reference).unwrap();
+    let x = render(&Sphere::preview(), &env, &surface, &reference(), &o, None).unwrap();
+    let y = render(&Sphere::preview(), &env, &surface, &gpu_ref, &o, None).unwrap();
+    let agree = x.radiance.iter().zip(&y.radiance).filter(|(p, q)| (0..3).all(|c| (p[c] - q[c]).abs() <= 1e-3 * (1.0 + p[c].abs()))).count();
+    eprintln!("reference: {agree} of {} pixels agree within 1e-3 between the engines", x.radiance.len());
+    assert!(agree as f64 >= 0.99 * x.radiance.len() as f64);
+}

@@ -4,7 +4,7 @@
 //! (in the file's metadata) the held-out relative L1 error of f·cos per class.
 
 use crate::cpu_engine::CpuEngine;
-use crate::neural::datagen::{ClassMix, DataGenerator};
+use crate::neural::datagen::{ClassMix, DataGenerator, ViewDistribution};
 use crate::neural::evaluate::holdout_errors;
 use crate::neural::trainer::{train, TrainOptions};
 use clap::Args;
@@ -46,6 +46,12 @@ pub struct TrainArgs {
     /// The weights file to write.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Start from this weights file (a fine-tune) instead of a fresh initialisation.
+    #[arg(long)]
+    pub init: Option<PathBuf>,
+    /// Training views: `cosine` (cosine-weighted) or `mixed` (half with μv uniform).
+    #[arg(long, default_value = "cosine")]
+    pub views: String,
 }
 
 pub fn run(args: TrainArgs) -> Result<(), String> {
@@ -57,14 +63,32 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
         return Err(format!("--jitter {}: the latent jitter is in [0, 0.5]", args.jitter));
     }
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
-    let opts = TrainOptions { steps: args.steps, batch: args.batch, seed: args.seed, lr_start: args.lr, lr_end: args.lr_end, jitter: args.jitter, threads, mix, checkpoint_every: args.checkpoint_every, stop_after: args.stop_after, ..Default::default() };
+    let views = ViewDistribution::parse(&args.views).map_err(|e| format!("--views: {e}"))?;
+    let opts = TrainOptions { steps: args.steps, batch: args.batch, seed: args.seed, lr_start: args.lr, lr_end: args.lr_end, jitter: args.jitter, threads, mix, checkpoint_every: args.checkpoint_every, stop_after: args.stop_after, init: args.init.clone(), views, ..Default::default() };
     if let Some(parent) = args.output.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
     }
     let mut generator = DataGenerator::new(CpuEngine::with_threads(threads)?, mix, args.seed)?;
+    generator.views = views;
     eprintln!("training data from {}", generator.describe());
-    let command = format!("uplift train --steps {} --batch {} --seed {} --lr {} --lr-end {} --jitter {} --class {}", args.steps, args.batch, args.seed, args.lr, args.lr_end, args.jitter, args.class);
-    let state = train(&generator, &opts, &args.output, &[("command", command.clone())], true)?;
+    let mut command = format!("uplift train --steps {} --batch {} --seed {} --lr {} --lr-end {} --jitter {} --class {}", args.steps, args.batch, args.seed, args.lr, args.lr_end, args.jitter, args.class);
+    if views != ViewDistribution::Cosine {
+        command += &format!(" --views {}", views.name());
+    }
+    let mut extra = vec![];
+    if let Some(init) = &args.init {
+        command += &format!(" --init {}", init.display());
+        // Keep the starting point's record beside the fine-tune's.
+        let f = crate::neural::weights::TensorFile::read(init)?;
+        for key in ["command", "history", "seconds", "holdout"] {
+            if let Some(v) = f.metadata.get(key) {
+                extra.push((key, v.clone()));
+            }
+        }
+    }
+    let extra: Vec<(String, String)> = std::iter::once(("command".to_string(), command.clone())).chain(extra.into_iter().map(|(k, v)| (format!("init.{k}"), v))).collect();
+    let extra_refs: Vec<(&str, String)> = extra.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
+    let state = train(&generator, &opts, &args.output, &extra_refs, true)?;
     if state.step < opts.steps {
         eprintln!("stopped at step {} of {}; the checkpoint is {} — run the same command again to resume", state.step, opts.steps, crate::neural::trainer::checkpoint_path(&args.output).display());
         return Ok(());

@@ -8,7 +8,7 @@
 //! `eval` (or `sample`, whose response is the same), T (RGB) and R = Y(albedo) from `albedo`.
 
 use super::classes::{class_parameters, DataClass};
-use super::features::{cosine_view, direction_features, uniform_hemisphere, FEATURES};
+use super::features::{cosine_view, direction_features, uniform_cosine_view, uniform_hemisphere, FEATURES};
 use super::loss::OUTPUTS;
 use super::params::{encode_rows, PARAMETERS};
 use crate::cpu_engine::CpuEngine;
@@ -69,6 +69,33 @@ pub struct DataGenerator {
     sample: StackKernel,
     pub mix: ClassMix,
     pub seed: u64,
+    pub views: ViewDistribution,
+}
+
+/// How training views are drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewDistribution {
+    /// Cosine-weighted, θv ≤ 87° (a sphere's pixels see views this way).
+    Cosine,
+    /// Half cosine-weighted, half with μv uniform: more grazing views.
+    Mixed,
+}
+
+impl ViewDistribution {
+    pub fn parse(s: &str) -> Result<ViewDistribution, String> {
+        match s {
+            "cosine" => Ok(ViewDistribution::Cosine),
+            "mixed" => Ok(ViewDistribution::Mixed),
+            _ => Err(format!("`{s}` is not cosine or mixed")),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ViewDistribution::Cosine => "cosine",
+            ViewDistribution::Mixed => "mixed",
+        }
+    }
 }
 
 /// A uniform in [0, 1) from a key.
@@ -85,6 +112,7 @@ impl DataGenerator {
             engine,
             mix,
             seed,
+            views: ViewDistribution::Cosine,
         })
     }
 
@@ -123,7 +151,8 @@ impl DataGenerator {
         let mut u3 = vec![[0.0f32; 3]; rows];
         for r in 0..rows {
             let rk = mix64(key.wrapping_add(r as u64)) ^ 0x5eed;
-            b.wv.push(cosine_view(unit(rk ^ 4), unit(rk ^ 5)));
+            let grazing = self.views == ViewDistribution::Mixed && unit(rk ^ 12) < 0.5;
+            b.wv.push(if grazing { uniform_cosine_view(unit(rk ^ 4), unit(rk ^ 5)) } else { cosine_view(unit(rk ^ 4), unit(rk ^ 5)) });
             b.wl.push(uniform_hemisphere(unit(rk ^ 6), unit(rk ^ 7)));
             u3[r] = [unit(rk ^ 8), unit(rk ^ 9), unit(rk ^ 10)];
             if unit(rk ^ 11) < 0.5 { sampled.push(r) } else { uniform.push(r) }

@@ -35,6 +35,15 @@ pub fn cosine_view(u1: f32, u2: f32) -> [f32; 3] {
     [s * phi.cos(), s * phi.sin(), mu]
 }
 
+/// A view with μ uniform in [μmin, 1] (θ ≤ 87°): more grazing views than `cosine_view`
+/// (16 % below μ = 0.2 instead of 4 %).
+pub fn uniform_cosine_view(u1: f32, u2: f32) -> [f32; 3] {
+    let mu = MIN_VIEW_COSINE + u1 * (1.0 - MIN_VIEW_COSINE);
+    let s = (1.0 - mu * mu).max(0.0).sqrt();
+    let phi = std::f32::consts::TAU * u2;
+    [s * phi.cos(), s * phi.sin(), mu]
+}
+
 /// A uniformly distributed direction on the upper hemisphere (μ > 0).
 pub fn uniform_hemisphere(u1: f32, u2: f32) -> [f32; 3] {
     let mu = 1.0 - u1.clamp(0.0, 1.0 - 1e-7);

@@ -30,6 +30,11 @@ pub struct TrainOptions {
     pub log_every: u64,
     /// Stop at this step with a checkpoint (a time-boxed run; the next run resumes).
     pub stop_after: Option<u64>,
+    /// Start from this weights file's encoder and decoder instead of a fresh initialisation (a
+    /// fine-tune; Adam's moments start at zero).
+    pub init: Option<std::path::PathBuf>,
+    /// The training views' distribution (recorded; the generator draws them).
+    pub views: super::datagen::ViewDistribution,
 }
 
 impl Default for TrainOptions {
@@ -46,6 +51,8 @@ impl Default for TrainOptions {
             checkpoint_every: 200,
             log_every: 20,
             stop_after: None,
+            init: None,
+            views: super::datagen::ViewDistribution::Cosine,
         }
     }
 }
@@ -158,7 +165,14 @@ pub fn checkpoint_path(out: &Path) -> PathBuf {
 
 /// The options a checkpoint must share with the run that resumes it.
 fn option_fingerprint(o: &TrainOptions) -> String {
-    format!("steps={} batch={} seed={} lr={}..{} jitter={} mix={}", o.steps, o.batch, o.seed, o.lr_start, o.lr_end, o.jitter, o.mix.name())
+    let mut f = format!("steps={} batch={} seed={} lr={}..{} jitter={} mix={}", o.steps, o.batch, o.seed, o.lr_start, o.lr_end, o.jitter, o.mix.name());
+    if o.views != super::datagen::ViewDistribution::Cosine {
+        f += &format!(" views={}", o.views.name());
+    }
+    if let Some(init) = &o.init {
+        f += &format!(" init={}", init.display());
+    }
+    f
 }
 
 fn history_csv(history: &[LossRecord]) -> String {
@@ -239,7 +253,17 @@ pub fn train(generator: &DataGenerator, opts: &TrainOptions, out: &Path, extra: 
         return Err("--steps and --batch must be at least 1".into());
     }
     let ckpt = checkpoint_path(out);
-    let mut state = if ckpt.exists() { read_checkpoint(&ckpt, opts)? } else { TrainState::new(opts.seed) };
+    let mut state = if ckpt.exists() {
+        read_checkpoint(&ckpt, opts)?
+    } else {
+        let mut s = TrainState::new(opts.seed);
+        if let Some(init) = &opts.init {
+            let f = super::weights::TensorFile::read(init)?;
+            let at = |e: String| format!("{}: {e}", init.display());
+            s.model = NeuralModel { encoder: f.mlp("encoder").map_err(at)?, decoder: f.mlp("decoder").map_err(at)? };
+        }
+        s
+    };
     let bar = if progress { indicatif::ProgressBar::new(opts.steps) } else { indicatif::ProgressBar::hidden() };
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps, {elapsed} elapsed, eta {eta} · {msg}").unwrap());
     bar.set_position(state.step);

@@ -3,8 +3,9 @@
 //! material's total albedo A(wv) = ∫ f cos θl dωl = ∫ f_nd cos dωl + T·c, so if A ≤ 1 at every
 //! texel and view no render of it can exceed 1.
 //!
-//! The neural material's A is estimated by Monte Carlo with the material's own sampling mixture
-//! (material.rs), the selector stratified so each strategy gets exactly its share, and a seeded
+//! The neural material's A is estimated by Monte Carlo with a defensive mixture of the
+//! material's two strategies (material.rs: the stack's sampler and cosine, half each), the
+//! selector stratified so each strategy gets exactly its share, and a seeded
 //! hash for the other dimensions — the same numbers every run; its standard error is the
 //! tolerance (an estimate counts as above a threshold only when it is more than 3 standard
 //! errors above). The reference material's A is exact, from the albedo kernel
@@ -87,9 +88,10 @@ pub fn estimated_albedo(shading: &Shading, points: &[SurfaceSample], wv: &[Vec3]
 /// Monte Carlo estimate of A(wv) per (point, view) and its standard error per channel.
 pub fn estimated_albedo_with_error(shading: &Shading, points: &[SurfaceSample], wv: &[Vec3], directions: usize, seed: u64) -> Result<Vec<([f32; 3], [f32; 3])>, String> {
     let n = points.len();
-    // P per row, from the material at the normal direction (P depends on wv only).
-    let up = vec![[0.0, 0.0, 1.0]; n];
-    let (_, select) = material::evaluate(shading, points, wv, &up)?;
+    // A defensive mixture: half the directions from the stack's sampler, half cosine-weighted,
+    // whatever the material's own choice — a decoder's lobe may reach where the stack's sampler
+    // rarely goes, and the estimate must not miss that energy.
+    let select = vec![0.5f32; n];
     let mut acc = vec![[0.0f64; 3]; n];
     let mut acc_sq = vec![[0.0f64; 3]; n];
     // Rows per kernel call: about 128 k.

@@ -7,6 +7,9 @@
 //! - `Neural`: the frozen decoder on the interpolated latents, f = f_neu and T, R from its
 //!   outputs (paper Eq. 2).
 //!
+//! Both run on the CPU engine (generated Rust kernels, the trainer's forward pass) or on the
+//! wgpu engine (generated WGSL kernels, the emitted WGSL decoder).
+//!
 //! Both sample the non-diffuse part with the stack's own `sample` kernel on the material's
 //! parameters (no sampling decoder exists yet, lobes.md §4.5): any proposal keeps the estimator
 //! unbiased, and sharing it gives reference and neural renders correlated noise, which lowers the
@@ -22,7 +25,9 @@ use crate::neural::loss::OUTPUTS;
 use crate::neural::mlp::Mlp;
 use crate::neural::model::{fill_decoder_input, LATENT};
 use crate::neural::params::PARAMETERS;
-use crate::stack_kernel::{vec3_at, StackKernel};
+use crate::neural::inference::WgpuDecoder;
+use crate::stack_kernel::{vec3_at, Engine, StackKernel};
+use crate::wgpu_engine::WgpuEngine;
 use uplift_compiler::ClosureContext;
 
 /// The non-diffuse part's values at one direction pair.
@@ -43,9 +48,17 @@ pub enum Model {
     Neural(Mlp<f32>),
 }
 
+/// Where the kernels run.
+pub enum ShadingEngine {
+    Cpu(CpuEngine),
+    /// The wgpu engine: the stack's WGSL kernels and the emitted WGSL decoder.
+    Wgpu(WgpuEngine),
+}
+
 /// The stack's kernels and, for the neural model, the decoder.
 pub struct Shading {
-    engine: CpuEngine,
+    engine: ShadingEngine,
+    wgpu_decoder: Option<WgpuDecoder>,
     pdf: StackKernel,
     sample: StackKernel,
     albedo: StackKernel,
@@ -66,19 +79,54 @@ fn finite3(v: [f32; 3]) -> [f32; 3] {
 }
 
 impl Shading {
+    /// Shading on the CPU engine (generated Rust; the decoder is the trainer's forward pass).
     pub fn new(engine: CpuEngine, model: Model) -> Result<Shading, String> {
         Ok(Shading {
             pdf: StackKernel::new(&engine, ClosureContext::Pdf)?,
             sample: StackKernel::new(&engine, ClosureContext::Sample)?,
             albedo: StackKernel::new(&engine, ClosureContext::Albedo)?,
             threads: engine.threads(),
-            engine,
+            engine: ShadingEngine::Cpu(engine),
+            wgpu_decoder: None,
             model,
         })
     }
 
+    /// Shading on the wgpu engine (the stack's WGSL kernels, the emitted WGSL decoder).
+    pub fn new_wgpu(engine: WgpuEngine, model: Model) -> Result<Shading, String> {
+        let e = Engine::Wgpu(&engine);
+        let wgpu_decoder = match &model {
+            Model::Neural(d) => Some(WgpuDecoder::new(&engine, d, "render")?),
+            Model::Reference => None,
+        };
+        Ok(Shading {
+            pdf: StackKernel::on(e, ClosureContext::Pdf)?,
+            sample: StackKernel::on(e, ClosureContext::Sample)?,
+            albedo: StackKernel::on(e, ClosureContext::Albedo)?,
+            threads: 1,
+            engine: ShadingEngine::Wgpu(engine),
+            wgpu_decoder,
+            model,
+        })
+    }
+
+    fn engine(&self) -> Engine<'_> {
+        match &self.engine {
+            ShadingEngine::Cpu(e) => Engine::Cpu(e),
+            ShadingEngine::Wgpu(e) => Engine::Wgpu(e),
+        }
+    }
+
+    /// Which engine, in words.
+    pub fn engine_name(&self) -> &'static str {
+        match self.engine {
+            ShadingEngine::Cpu(_) => "CPU",
+            ShadingEngine::Wgpu(_) => "wgpu",
+        }
+    }
+
     /// Decoder outputs (rows × 7) at (latent, wv, wl) per row.
-    fn decode(&self, decoder: &Mlp<f32>, points: &[SurfaceSample], wv: &[Vec3], wl: &[Vec3]) -> Vec<f32> {
+    fn decode(&self, decoder: &Mlp<f32>, points: &[SurfaceSample], wv: &[Vec3], wl: &[Vec3]) -> Result<Vec<f32>, String> {
         let n = points.len();
         let mut z = Vec::with_capacity(n * LATENT);
         let mut features = Vec::with_capacity(n * FEATURES);
@@ -88,9 +136,12 @@ impl Shading {
         }
         let mut dec_in = Vec::new();
         fill_decoder_input(&z, &vec![0.0; z.len()], &features, n, &mut dec_in);
+        if let (ShadingEngine::Wgpu(e), Some(d)) = (&self.engine, &self.wgpu_decoder) {
+            return d.decode(e, &dec_in);
+        }
         let mut out = vec![0.0f32; n * OUTPUTS];
         decode_parallel(decoder, &dec_in, &mut out, self.threads);
-        out
+        Ok(out)
     }
 
     /// The non-diffuse part at (wv, wl) per point (local frame, both above the surface).
@@ -102,7 +153,7 @@ impl Shading {
         }
         let params = params_of(points);
         let rows: Vec<usize> = (0..n).collect();
-        let out = self.pdf.run(&self.engine, &params, &rows, &[("wv", wv), ("wl", wl)])?;
+        let out = self.pdf.run_on(self.engine(), &params, &rows, &[("wv", wv), ("wl", wl)])?;
         let (resp_at, thr_at, pdf_at) = (self.pdf.output_offset("response"), self.pdf.output_offset("throughput"), self.pdf.output_offset("pdf"));
         let mut values: Vec<LobeValue> = (0..n)
             .map(|k| LobeValue {
@@ -115,7 +166,7 @@ impl Shading {
         match &self.model {
             Model::Reference => {
                 if want_reflectance {
-                    let a = self.albedo.run(&self.engine, &params, &rows, &[("wv", wv)])?;
+                    let a = self.albedo.run_on(self.engine(), &params, &rows, &[("wv", wv)])?;
                     let alb_at = self.albedo.output_offset("albedo");
                     for (k, v) in values.iter_mut().enumerate() {
                         v.reflectance = luminance(finite3(vec3_at(&a, alb_at, k)));
@@ -123,7 +174,7 @@ impl Shading {
                 }
             }
             Model::Neural(decoder) => {
-                let out = self.decode(decoder, points, wv, wl);
+                let out = self.decode(decoder, points, wv, wl)?;
                 for (k, v) in values.iter_mut().enumerate() {
                     let o = &out[k * OUTPUTS..(k + 1) * OUTPUTS];
                     v.fcos = finite3([o[0], o[1], o[2]]);
@@ -143,7 +194,7 @@ impl Shading {
         }
         let params = params_of(points);
         let rows: Vec<usize> = (0..points.len()).collect();
-        let a = self.albedo.run(&self.engine, &params, &rows, &[("wv", wv)])?;
+        let a = self.albedo.run_on(self.engine(), &params, &rows, &[("wv", wv)])?;
         let (alb_at, thr_at) = (self.albedo.output_offset("albedo"), self.albedo.output_offset("throughput"));
         Ok((0..points.len()).map(|k| (finite3(vec3_at(&a, alb_at, k)), finite3(vec3_at(&a, thr_at, k)))).collect())
     }
@@ -157,7 +208,7 @@ impl Shading {
         }
         let params = params_of(points);
         let rows: Vec<usize> = (0..n).collect();
-        let out = self.sample.run(&self.engine, &params, &rows, &[("wv", wv), ("u", u)])?;
+        let out = self.sample.run_on(self.engine(), &params, &rows, &[("wv", wv), ("u", u)])?;
         let (wl_at, pdf_at, resp_at, thr_at) =
             (self.sample.output_offset("wl"), self.sample.output_offset("pdf"), self.sample.output_offset("response"), self.sample.output_offset("throughput"));
         let mut result: Vec<(Vec3, LobeValue)> = (0..n)
@@ -174,7 +225,7 @@ impl Shading {
             .collect();
         if let Model::Neural(decoder) = &self.model {
             let wl: Vec<Vec3> = result.iter().map(|r| r.0).collect();
-            let dec = self.decode(decoder, points, wv, &wl);
+            let dec = self.decode(decoder, points, wv, &wl)?;
             for (k, r) in result.iter_mut().enumerate() {
                 let o = &dec[k * OUTPUTS..(k + 1) * OUTPUTS];
                 r.1.fcos = finite3([o[0], o[1], o[2]]);
