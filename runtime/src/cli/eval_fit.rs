@@ -4,9 +4,9 @@
 //! the paper's Table 1 format. With `-o`, writes each material's reference, neural and FLIP
 //! images and `table.md` there.
 
-use super::fit::{load_model, SHIPPED_DECODER};
+use super::fit::load_model;
 use super::furnace::material_folders;
-use super::render::environment;
+use super::render::{environment, RenderSettings};
 use crate::atomic_write::write_atomically;
 use crate::cpu_engine::CpuEngine;
 use crate::render::evaluation::{evaluate_material, format_table, per_type, write_eval_images};
@@ -24,33 +24,18 @@ pub struct EvalFitArgs {
     /// Write images and table.md here.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    #[arg(long, default_value = SHIPPED_DECODER)]
-    pub decoder: PathBuf,
-    /// Environment: an equirectangular .hdr/.exr file, `studio` or `white`.
-    #[arg(long, default_value = "studio")]
-    pub env: String,
-    #[arg(long, default_value_t = 256)]
-    pub size: usize,
-    #[arg(long, default_value_t = 64)]
-    pub spp: usize,
-    #[arg(long, default_value_t = 1.0)]
-    pub exposure: f32,
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    #[arg(long)]
-    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub settings: RenderSettings,
 }
 
 pub fn run(args: EvalFitArgs) -> Result<(), String> {
-    let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
-    if args.size == 0 || args.spp == 0 || !(args.exposure > 0.0 && args.exposure.is_finite()) {
-        return Err("--size and --spp must be at least 1 and --exposure positive".into());
-    }
+    let threads = args.settings.check()?;
+    let st = &args.settings;
     let folders = material_folders(&args.materials)?;
-    let env = environment(&args.env)?;
+    let env = environment(&st.env)?;
     let reference = Shading::new(CpuEngine::with_threads(threads)?, Model::Reference)?;
-    let neural = Shading::new(CpuEngine::with_threads(threads)?, Model::Neural(load_model(&args.decoder)?.decoder))?;
-    let o = RenderOptions { width: args.size, height: args.size, spp: args.spp, seed: args.seed, ..Default::default() };
+    let neural = Shading::new(CpuEngine::with_threads(threads)?, Model::Neural(load_model(&st.decoder)?.decoder))?;
+    let o = RenderOptions { width: st.size, height: st.size, spp: st.spp, seed: st.seed, ..Default::default() };
     if let Some(out) = &args.output {
         std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;
     }
@@ -58,7 +43,7 @@ pub fn run(args: EvalFitArgs) -> Result<(), String> {
     let mut evals = Vec::new();
     for dir in &folders {
         bar.set_message(dir.display().to_string());
-        let (e, images) = evaluate_material(dir, &reference, &neural, &env, &o, args.exposure)?;
+        let (e, images) = evaluate_material(dir, &reference, &neural, &env, &o, st.exposure)?;
         if let Some(out) = &args.output {
             write_eval_images(out, &e.name, &images, (o.width, o.height))?;
         }

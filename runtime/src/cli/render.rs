@@ -27,7 +27,20 @@ pub struct RenderArgs {
     /// Shade with the neural decoder and the fitted latents instead of the reference kernels.
     #[arg(long)]
     pub neural: bool,
-    /// Encoder and decoder weights for --neural.
+    #[command(flatten)]
+    pub settings: RenderSettings,
+    /// Surface interactions after the first.
+    #[arg(long, default_value_t = 2)]
+    pub bounces: usize,
+    /// Direct lighting: mis, bsdf or light.
+    #[arg(long, default_value = "mis")]
+    pub strategy: String,
+}
+
+/// The settings `render` and `eval-fit` share.
+#[derive(Args)]
+pub struct RenderSettings {
+    /// Encoder and decoder weights (the neural material).
     #[arg(long, default_value = SHIPPED_DECODER)]
     pub decoder: PathBuf,
     /// Environment: an equirectangular .hdr/.exr file, `studio` or `white`.
@@ -38,12 +51,6 @@ pub struct RenderArgs {
     pub size: usize,
     #[arg(long, default_value_t = 64)]
     pub spp: usize,
-    /// Surface interactions after the first.
-    #[arg(long, default_value_t = 2)]
-    pub bounces: usize,
-    /// Direct lighting: mis, bsdf or light.
-    #[arg(long, default_value = "mis")]
-    pub strategy: String,
     /// Exposure multiplier before AgX.
     #[arg(long, default_value_t = 1.0)]
     pub exposure: f32,
@@ -51,6 +58,19 @@ pub struct RenderArgs {
     pub seed: u64,
     #[arg(long)]
     pub threads: Option<usize>,
+}
+
+impl RenderSettings {
+    /// Checks the numbers; returns the thread count.
+    pub fn check(&self) -> Result<usize, String> {
+        if self.size == 0 || self.spp == 0 {
+            return Err("--size and --spp must be at least 1".into());
+        }
+        if !(self.exposure > 0.0 && self.exposure.is_finite()) {
+            return Err(format!("--exposure must be positive (got {})", self.exposure));
+        }
+        Ok(self.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1))
+    }
 }
 
 /// An environment from the command line's `--env`.
@@ -75,30 +95,25 @@ pub fn write_outputs(outputs: &[PathBuf], radiance: &[[f32; 3]], size: (usize, u
 }
 
 pub fn run(args: RenderArgs) -> Result<(), String> {
-    let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
-    if args.size == 0 || args.spp == 0 {
-        return Err("--size and --spp must be at least 1".into());
-    }
-    if !(args.exposure > 0.0 && args.exposure.is_finite()) {
-        return Err(format!("--exposure must be positive (got {})", args.exposure));
-    }
+    let threads = args.settings.check()?;
+    let st = &args.settings;
     for out in &args.output {
         if !matches!(out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).as_deref(), Some("png" | "exr")) {
             return Err(format!("{}: an output must end in .png or .exr", out.display()));
         }
     }
     let strategy = Strategy::parse(&args.strategy)?;
-    let env = environment(&args.env)?;
+    let env = environment(&st.env)?;
     let surface = SurfaceTextures::load(&args.material, args.neural)?;
-    let model = if args.neural { Model::Neural(load_model(&args.decoder)?.decoder) } else { Model::Reference };
+    let model = if args.neural { Model::Neural(load_model(&st.decoder)?.decoder) } else { Model::Reference };
     let shading = Shading::new(CpuEngine::with_threads(threads)?, model)?;
-    let o = RenderOptions { width: args.size, height: args.size, spp: args.spp, bounces: args.bounces, seed: args.seed, strategy, ..Default::default() };
+    let o = RenderOptions { width: st.size, height: st.size, spp: st.spp, bounces: args.bounces, seed: st.seed, strategy, ..Default::default() };
     let bar = ProgressBar::new(o.spp as u64).with_style(ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} spp {elapsed}").map_err(|e| e.to_string())?.progress_chars("=> "));
     bar.set_message(format!("rendering {}", args.material.display()));
     let start = std::time::Instant::now();
     let img = render(&Sphere::preview(), &env, &surface, &shading, &o, Some(&bar))?;
     bar.finish_and_clear();
-    write_outputs(&args.output, &img.radiance, (img.width, img.height), args.exposure)?;
+    write_outputs(&args.output, &img.radiance, (img.width, img.height), st.exposure)?;
     let secs = start.elapsed().as_secs_f64();
     eprintln!("rendered {}×{} at {} spp in {secs:.1} s ({:.0} k paths/s)", o.width, o.height, o.spp, (o.width * o.height * o.spp) as f64 / secs / 1e3);
     Ok(())

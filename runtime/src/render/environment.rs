@@ -199,3 +199,52 @@ impl Environment {
         acc.map(|a| (a / (4.0 * std::f64::consts::PI)) as f32)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit(k: u64) -> f32 {
+        ((crate::enhance::rules::mix64(k) >> 40) as f32) / (1u64 << 24) as f32
+    }
+
+    #[test]
+    fn sampling_is_consistent_with_pdf_and_radiance() {
+        let env = Environment::studio();
+        // E[L/pdf] over samples = ∫ L dω = 4π · mean radiance; E[1/pdf]·… = 4π on the sphere.
+        let n = 400_000;
+        let (mut acc, mut solid) = ([0.0f64; 3], 0.0f64);
+        for i in 0..n {
+            let (d, pdf, l) = env.sample([unit(3 * i), unit(3 * i + 1), unit(3 * i + 2)]);
+            assert!(pdf > 0.0 && ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - 1.0).abs() < 1e-4);
+            assert!((pdf - env.pdf(d)).abs() <= 1e-6 * pdf && l == env.radiance(d));
+            solid += 1.0 / pdf as f64;
+            for c in 0..3 {
+                acc[c] += l[c] as f64 / pdf as f64;
+            }
+        }
+        let mean = env.mean_radiance();
+        let four_pi = 4.0 * std::f64::consts::PI;
+        assert!((solid / n as f64 - four_pi).abs() < 0.05 * four_pi, "∫ dω = {}", solid / n as f64);
+        for c in 0..3 {
+            let want = four_pi * mean[c] as f64;
+            assert!((acc[c] / n as f64 - want).abs() < 0.01 * want, "channel {c}: {} vs {want}", acc[c] / n as f64);
+        }
+        // Uniform directions: the pdf integrates to 1.
+        let mut total = 0.0f64;
+        for i in 0..n {
+            let z = 1.0 - 2.0 * unit(7 * i + 5);
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            let phi = TAU * unit(7 * i + 6);
+            total += env.pdf([r * phi.cos(), z, r * phi.sin()]) as f64;
+        }
+        assert!((total / n as f64 * four_pi - 1.0).abs() < 0.02, "∫ pdf = {}", total / n as f64 * four_pi);
+    }
+
+    #[test]
+    fn bad_environments_are_errors() {
+        assert!(Environment::from_texels(2, 1, vec![[1.0; 3], [f32::NAN, 0.0, 0.0]], "t").err().unwrap().contains("texel (1, 0)"));
+        assert!(Environment::from_texels(2, 2, vec![[1.0; 3]; 3], "t").is_err());
+        assert!(Environment::load(Path::new("sky.png")).err().unwrap().contains(".hdr or .exr"));
+    }
+}
