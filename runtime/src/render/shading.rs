@@ -4,8 +4,8 @@
 //!
 //! - `Reference`: the compiled `uplift_stack` kernels on the 22 interpolated parameters (the
 //!   `pdf` context returns response, throughput and pdf in one call; `albedo` gives R).
-//! - `Neural`: the frozen decoder on the interpolated latents, f = f_neu and T, R from its
-//!   outputs (paper Eq. 2).
+//! - `Neural`: the frozen decoder on the interpolated latents: its outputs are f (so f·cos θl
+//!   is f̂·μl, as Eq. 3 compares it), T and R (paper Eq. 2).
 //!
 //! Both run on the CPU engine (generated Rust kernels, the trainer's forward pass) or on the
 //! wgpu engine (generated WGSL kernels, the emitted WGSL decoder).
@@ -177,7 +177,9 @@ impl Shading {
                 let out = self.decode(decoder, points, wv, wl)?;
                 for (k, v) in values.iter_mut().enumerate() {
                     let o = &out[k * OUTPUTS..(k + 1) * OUTPUTS];
-                    v.fcos = finite3([o[0], o[1], o[2]]);
+                    // The decoder predicts f; Eq. 3 compares μl·f with the reference's f·cos.
+                    let mu = wl[k][2].max(0.0);
+                    v.fcos = finite3([o[0] * mu, o[1] * mu, o[2] * mu]);
                     v.throughput = finite3([o[3], o[4], o[5]]);
                     v.reflectance = if o[6].is_finite() { o[6].max(0.0) } else { 0.0 };
                 }
@@ -228,7 +230,8 @@ impl Shading {
             let dec = self.decode(decoder, points, wv, &wl)?;
             for (k, r) in result.iter_mut().enumerate() {
                 let o = &dec[k * OUTPUTS..(k + 1) * OUTPUTS];
-                r.1.fcos = finite3([o[0], o[1], o[2]]);
+                let mu = r.0[2].max(0.0);
+                r.1.fcos = finite3([o[0] * mu, o[1] * mu, o[2] * mu]);
                 r.1.throughput = finite3([o[3], o[4], o[5]]);
             }
         }
