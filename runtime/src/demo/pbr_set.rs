@@ -6,7 +6,7 @@
 
 use crate::batch::TextureData;
 use crate::enhance::pbr_input::{PbrChannel, PbrMaterial, Surface};
-use crate::enhance::rules::{mix64, EnhancementType};
+use crate::enhance::rules::{mix64, unit_from_key as unit, EnhancementType};
 use std::sync::Arc;
 
 /// Linear F0 of some metals (after Hoffman / physicallybased.info).
@@ -18,10 +18,6 @@ const METALS: [(&str, [f32; 3]); 6] = [
     ("iron", [0.562, 0.565, 0.578]),
     ("brass", [0.910, 0.778, 0.423]),
 ];
-
-fn unit(key: u64) -> f32 {
-    ((mix64(key) >> 40) as f32) / (1u64 << 24) as f32
-}
 
 /// Tileable value noise with `period` lattice cells across the texture, smoothstep-interpolated.
 fn value_noise(x: f32, y: f32, period: u32, key: u64) -> f32 {

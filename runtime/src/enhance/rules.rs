@@ -203,6 +203,11 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// A uniform in [0, 1) from a key: the top 24 bits of `mix64(key)`.
+pub fn unit_from_key(key: u64) -> f32 {
+    ((mix64(key) >> 40) as f32) / (1u64 << 24) as f32
+}
+
 /// A stable 64-bit hash of a string (FNV-1a), for deriving per-name and per-material seeds.
 pub fn hash_str(s: &str) -> u64 {
     s.bytes().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3))

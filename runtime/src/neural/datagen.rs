@@ -13,7 +13,7 @@ use super::loss::OUTPUTS;
 use super::params::{encode_rows, PARAMETERS};
 use crate::cpu_engine::CpuEngine;
 use crate::stack_kernel::StackKernel;
-use crate::enhance::rules::mix64;
+use crate::enhance::rules::{mix64, unit_from_key as unit};
 use uplift_compiler::ClosureContext;
 
 /// Base materials (tiles) per themed class.
@@ -96,11 +96,6 @@ impl ViewDistribution {
             ViewDistribution::Mixed => "mixed",
         }
     }
-}
-
-/// A uniform in [0, 1) from a key.
-fn unit(key: u64) -> f32 {
-    ((mix64(key) >> 40) as f32) / (1u64 << 24) as f32
 }
 
 impl DataGenerator {

@@ -204,9 +204,7 @@ impl Environment {
 mod tests {
     use super::*;
 
-    fn unit(k: u64) -> f32 {
-        ((crate::enhance::rules::mix64(k) >> 40) as f32) / (1u64 << 24) as f32
-    }
+    use crate::enhance::rules::unit_from_key as unit;
 
     #[test]
     fn sampling_is_consistent_with_pdf_and_radiance() {

@@ -21,7 +21,7 @@ use super::material;
 use super::scene::Vec3;
 use super::shading::{Model, Shading};
 use super::surface::{SurfaceSample, SurfaceTextures, TEXEL_VALUES};
-use crate::enhance::rules::mix64;
+use crate::enhance::rules::{mix64, unit_from_key as unit};
 use crate::neural::features::MIN_VIEW_COSINE;
 use std::collections::HashMap;
 
@@ -74,10 +74,6 @@ pub fn view_cosines(views: usize) -> Vec<f32> {
 
 fn view_direction(mu: f32) -> Vec3 {
     [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu]
-}
-
-fn unit(key: u64) -> f32 {
-    ((mix64(key) >> 40) as f32) / (1u64 << 24) as f32
 }
 
 /// Monte Carlo estimate of A(wv) per (point, view), `directions` samples each.

@@ -16,7 +16,7 @@ use super::scene::{dot, Camera, Hit, Scene, Vec3};
 use super::material;
 use super::shading::Shading;
 use super::surface::{SurfaceSample, SurfaceTextures};
-use crate::enhance::rules::mix64;
+use crate::enhance::rules::{mix64, unit_from_key as unit};
 use indicatif::ProgressBar;
 use rayon::prelude::*;
 
@@ -90,11 +90,6 @@ struct PathState {
     beta: [f32; 3],
     /// The BSDF pdf the current direction was drawn with (for MIS when it escapes).
     pdf_prev: f32,
-}
-
-/// A uniform in [0, 1) from a key.
-fn unit(key: u64) -> f32 {
-    ((mix64(key) >> 40) as f32) / (1u64 << 24) as f32
 }
 
 /// The random stream of one pixel.

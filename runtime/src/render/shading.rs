@@ -166,10 +166,8 @@ impl Shading {
         match &self.model {
             Model::Reference => {
                 if want_reflectance {
-                    let a = self.albedo.run_on(self.engine(), &params, &rows, &[("wv", wv)])?;
-                    let alb_at = self.albedo.output_offset("albedo");
-                    for (k, v) in values.iter_mut().enumerate() {
-                        v.reflectance = luminance(finite3(vec3_at(&a, alb_at, k)));
+                    for (v, (albedo, _)) in values.iter_mut().zip(self.reference_albedo(points, wv)?) {
+                        v.reflectance = luminance(albedo);
                     }
                 }
             }
@@ -177,10 +175,7 @@ impl Shading {
                 let out = self.decode(decoder, points, wv, wl)?;
                 for (k, v) in values.iter_mut().enumerate() {
                     let o = &out[k * OUTPUTS..(k + 1) * OUTPUTS];
-                    // The decoder predicts f; Eq. 3 compares μl·f with the reference's f·cos.
-                    let mu = wl[k][2].max(0.0);
-                    v.fcos = finite3([o[0] * mu, o[1] * mu, o[2] * mu]);
-                    v.throughput = finite3([o[3], o[4], o[5]]);
+                    set_from_decoder(v, o, wl[k][2]);
                     v.reflectance = if o[6].is_finite() { o[6].max(0.0) } else { 0.0 };
                 }
             }
@@ -229,14 +224,19 @@ impl Shading {
             let wl: Vec<Vec3> = result.iter().map(|r| r.0).collect();
             let dec = self.decode(decoder, points, wv, &wl)?;
             for (k, r) in result.iter_mut().enumerate() {
-                let o = &dec[k * OUTPUTS..(k + 1) * OUTPUTS];
-                let mu = r.0[2].max(0.0);
-                r.1.fcos = finite3([o[0] * mu, o[1] * mu, o[2] * mu]);
-                r.1.throughput = finite3([o[3], o[4], o[5]]);
+                set_from_decoder(&mut r.1, &dec[k * OUTPUTS..(k + 1) * OUTPUTS], r.0[2]);
             }
         }
         Ok(result)
     }
+}
+
+/// f·cos and T from a decoder output row at light cosine `mu_l`: the decoder predicts f, and
+/// Eq. 3 compares μl·f̂ with the reference's f·cos.
+fn set_from_decoder(v: &mut LobeValue, o: &[f32], mu_l: f32) {
+    let mu = mu_l.max(0.0);
+    v.fcos = finite3([o[0] * mu, o[1] * mu, o[2] * mu]);
+    v.throughput = finite3([o[3], o[4], o[5]]);
 }
 
 pub fn luminance(c: [f32; 3]) -> f32 {
