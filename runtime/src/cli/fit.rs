@@ -8,6 +8,8 @@ use crate::atomic_write::write_atomically;
 use crate::cpu_engine::CpuEngine;
 use crate::exr::{self, Compression, ExrImage};
 use crate::neural::datagen::{ClassMix, DataGenerator};
+use crate::neural::energy_bound::EnergyReport;
+use crate::render::surface::DIFFUSE_CHANNELS;
 use crate::neural::fit::{fit_material, FitOptions, FitResult};
 use crate::neural::loss::LossParts;
 use crate::neural::model::{NeuralModel, LATENT};
@@ -35,6 +37,10 @@ pub struct FitArgs {
     /// Quantisation steps per encoded parameter when grouping texels (0: exact vectors only).
     #[arg(long, default_value_t = 16)]
     pub levels: u32,
+    /// Skip the energy bound (neural/energy_bound.rs): keep the Eq. 3 fit even where its
+    /// energy exceeds the reference's.
+    #[arg(long)]
+    pub no_energy_bound: bool,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     #[arg(long)]
@@ -62,8 +68,30 @@ pub fn read_params(path: &Path) -> Result<(usize, usize, Vec<f32>), String> {
     Ok((img.width, img.height, params))
 }
 
+/// The diffuse colour c per texel (texels × 3) of params.exr, if it has the channels (folders
+/// written before `uplift enhance` baked them do not; the energy bound then assumes c = 1).
+pub fn read_diffuse(path: &Path) -> Result<Option<Vec<f32>>, String> {
+    let img = exr::read(path)?;
+    let n = img.width * img.height;
+    let mut diffuse = vec![0.0f32; n * 3];
+    for (c, name) in DIFFUSE_CHANNELS.iter().enumerate() {
+        let Some(ch) = img.channel(name) else { return Ok(None) };
+        for t in 0..n {
+            diffuse[t * 3 + c] = ch[t];
+        }
+    }
+    Ok(Some(diffuse))
+}
+
 fn parts_json(p: &LossParts) -> String {
     format!("{{\"total\": {:.6}, \"f\": {:.6}, \"T\": {:.6}, \"R\": {:.6}}}", p.total, p.f, p.t, p.r)
+}
+
+fn energy_json(e: &EnergyReport) -> String {
+    format!(
+        "{{\"groups\": {}, \"over_before\": {}, \"over_after\": {}, \"worst_excess_before\": {:.5}, \"worst_excess_after\": {:.5}, \"steps\": {}}}",
+        e.groups, e.over_before, e.over_after, e.worst_before, e.worst_after, e.steps
+    )
 }
 
 /// Writes latent.exr, the two PNGs and fit.json into `dir`.
@@ -83,7 +111,7 @@ pub fn write_fit(dir: &Path, r: &FitResult, decoder: &Path, o: &FitOptions) -> R
     }
     exr::write(&dir.join("latent.exr"), &img, Compression::Zip)?;
     let json = format!(
-        "{{\n  \"decoder\": {:?},\n  \"texels\": {n},\n  \"groups\": {},\n  \"steps\": {},\n  \"directions\": {},\n  \"levels\": {},\n  \"seconds\": {:.2},\n  \"eq3_encoder_only\": {},\n  \"eq3_fitted\": {},\n  \"fitting_loss_first_step\": {},\n  \"fitting_loss_last_step\": {}\n}}\n",
+        "{{\n  \"decoder\": {:?},\n  \"texels\": {n},\n  \"groups\": {},\n  \"steps\": {},\n  \"directions\": {},\n  \"levels\": {},\n  \"seconds\": {:.2},\n  \"eq3_encoder_only\": {},\n  \"eq3_fitted\": {},\n  \"eq3_fitted_before_energy_bound\": {},\n  \"fitting_loss_first_step\": {},\n  \"fitting_loss_last_step\": {},\n  \"energy_bound\": {}\n}}\n",
         decoder.display().to_string(),
         r.groups,
         o.steps,
@@ -92,8 +120,10 @@ pub fn write_fit(dir: &Path, r: &FitResult, decoder: &Path, o: &FitOptions) -> R
         r.seconds,
         parts_json(&r.before),
         parts_json(&r.after),
+        parts_json(&r.after_unbounded),
         parts_json(&r.first_step),
-        parts_json(&r.last_step)
+        parts_json(&r.last_step),
+        r.energy.as_ref().map_or("null".to_string(), energy_json)
     );
     let path = dir.join("fit.json");
     write_atomically(&path, json.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))
@@ -106,14 +136,24 @@ pub fn run(args: FitArgs) -> Result<(), String> {
     }
     let model = load_model(&args.decoder)?;
     let (w, h, params) = read_params(&args.material.join("params.exr"))?;
+    let diffuse = read_diffuse(&args.material.join("params.exr"))?;
     let generator = DataGenerator::new(CpuEngine::with_threads(threads)?, ClassMix::All, args.seed)?;
-    let o = FitOptions { steps: args.steps, directions: args.directions, levels: args.levels, seed: args.seed, threads, ..Default::default() };
-    let r = fit_material(&model, &generator, &params, w, h, &o, true)?;
+    let mut o = FitOptions { steps: args.steps, directions: args.directions, levels: args.levels, seed: args.seed, threads, ..Default::default() };
+    if args.no_energy_bound {
+        o.energy = None;
+    }
+    let r = fit_material(&model, &generator, &params, diffuse.as_deref(), w, h, &o, true)?;
     write_fit(&args.material, &r, &args.decoder, &o)?;
     eprintln!(
         "fitted {w}×{h} texels ({} groups) in {:.1} s; Eq. 3 at {} check texels: encoder only {:.5} (f {:.5}, T {:.5}, R {:.5}) → fitted {:.5} (f {:.5}, T {:.5}, R {:.5})",
         r.groups, r.seconds, o.check_texels.min(w * h), r.before.total, r.before.f, r.before.t, r.before.r, r.after.total, r.after.f, r.after.t, r.after.r
     );
+    if let Some(e) = &r.energy {
+        eprintln!(
+            "energy bound: {} of {} groups over it (worst excess {:.4}) → {} after {} steps (worst {:.4}); Eq. 3 before the bound {:.5}",
+            e.over_before, e.groups, e.worst_before, e.over_after, e.steps, e.worst_after, r.after_unbounded.total
+        );
+    }
     eprintln!("wrote {}", args.material.join("latent.exr").display());
     Ok(())
 }

@@ -67,6 +67,7 @@ pub struct DataGenerator {
     eval: StackKernel,
     albedo: StackKernel,
     sample: StackKernel,
+    pdf: StackKernel,
     pub mix: ClassMix,
     pub seed: u64,
     pub views: ViewDistribution,
@@ -104,11 +105,32 @@ impl DataGenerator {
             eval: StackKernel::new(&engine, ClosureContext::Eval)?,
             albedo: StackKernel::new(&engine, ClosureContext::Albedo)?,
             sample: StackKernel::new(&engine, ClosureContext::Sample)?,
+            pdf: StackKernel::new(&engine, ClosureContext::Pdf)?,
             engine,
             mix,
             seed,
             views: ViewDistribution::Cosine,
         })
+    }
+
+    /// The engine the reference kernels run on.
+    pub fn engine(&self) -> &CpuEngine {
+        &self.engine
+    }
+
+    /// The stack's `sample` kernel (wv, u → wl, pdf, response, throughput).
+    pub fn sample_kernel(&self) -> &StackKernel {
+        &self.sample
+    }
+
+    /// The stack's `pdf` kernel (wv, wl → pdf, response, throughput).
+    pub fn pdf_kernel(&self) -> &StackKernel {
+        &self.pdf
+    }
+
+    /// The stack's `albedo` kernel (wv → albedo, throughput).
+    pub fn albedo_kernel(&self) -> &StackKernel {
+        &self.albedo
     }
 
     /// Where the stack's kernels come from (shipped or built).

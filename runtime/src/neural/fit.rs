@@ -15,6 +15,7 @@
 
 use super::adam::{cosine_lr, Adam};
 use super::datagen::{DataGenerator, TrainingBatch};
+use super::energy_bound::{enforce_energy_bound, EnergyOptions, EnergyReport};
 use super::evaluate::{decode, encode};
 use super::loss::{eq3_loss, LossParts, LossWeights, OUTPUTS};
 use super::mlp::Mlp;
@@ -40,6 +41,8 @@ pub struct FitOptions {
     /// Texels and directions per texel of the before/after report.
     pub check_texels: usize,
     pub check_directions: usize,
+    /// The energy bound after the Eq. 3 fit (energy_bound.rs); `None` skips it.
+    pub energy: Option<EnergyOptions>,
 }
 
 impl Default for FitOptions {
@@ -55,6 +58,7 @@ impl Default for FitOptions {
             threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
             check_texels: 2048,
             check_directions: 64,
+            energy: Some(EnergyOptions::default()),
         }
     }
 }
@@ -125,21 +129,35 @@ pub struct FitResult {
     /// texels × 6.
     pub latents: Vec<f32>,
     pub groups: usize,
-    /// Eq. 3 at the check texels: encoder-only latents, fitted latents.
+    /// Eq. 3 at the check texels: encoder-only latents, fitted latents (after the energy bound),
+    /// and the Eq. 3 fit before the bound moved it (equal to `after` without the bound).
     pub before: LossParts,
     pub after: LossParts,
+    pub after_unbounded: LossParts,
     /// Loss over the step's directions at the first and last step.
     pub first_step: LossParts,
     pub last_step: LossParts,
+    /// What the energy bound did (when it ran).
+    pub energy: Option<EnergyReport>,
     pub seconds: f64,
 }
 
-/// Fits the latents of a material whose texels have parameters `params` (texels × 22).
-pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params: &[f32], width: usize, height: usize, o: &FitOptions, progress: bool) -> Result<FitResult, String> {
+/// Fits the latents of a material whose texels have parameters `params` (texels × 22) and
+/// diffuse colour `diffuse` (texels × 3; the energy bound assumes c = 1 when it is `None`).
+#[allow(clippy::too_many_arguments)]
+pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params: &[f32], diffuse: Option<&[f32]>, width: usize, height: usize, o: &FitOptions, progress: bool) -> Result<FitResult, String> {
     let start = std::time::Instant::now();
     let n = width * height;
     if params.len() != n * PARAMETERS {
         return Err(format!("{} parameter values for {width}×{height} texels", params.len()));
+    }
+    if let Some(d) = diffuse {
+        if d.len() != n * 3 {
+            return Err(format!("{} diffuse colour values for {width}×{height} texels", d.len()));
+        }
+        if let Some(k) = d.iter().position(|x| !x.is_finite()) {
+            return Err(format!("texel {} diffuse colour channel {} is not finite", k / 3, k % 3));
+        }
     }
     if let Some(k) = params.iter().position(|x| !x.is_finite()) {
         return Err(format!("texel {} parameter {} is not finite", k / PARAMETERS, k % PARAMETERS));
@@ -205,15 +223,34 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
         bar.set_message(format!("loss {:.4}", loss.total));
     }
     bar.finish_and_clear();
+    let z_unbounded = z.clone();
+    let energy = match &o.energy {
+        Some(e) => {
+            // The bound holds for the brightest diffuse colour of each group.
+            let mut c = vec![0.0f32; groups * 3];
+            for t in 0..n {
+                let g = group_of[t] as usize;
+                for k in 0..3 {
+                    c[g * 3 + k] = c[g * 3 + k].max(diffuse.map_or(1.0, |d| d[t * 3 + k]));
+                }
+            }
+            Some(enforce_energy_bound(&model.decoder, generator, &mean, &c, &mut z, o.threads, &EnergyOptions { seed: o.seed, ..e.clone() })?)
+        }
+        None => None,
+    };
     // Texel latents: the encoder's, moved by the group's correction.
     let enc = encode(model, &encoded);
-    let mut latents = vec![0.0f32; n * LATENT];
-    for t in 0..n {
-        let g = group_of[t] as usize;
-        for k in 0..LATENT {
-            latents[t * LATENT + k] = (enc[t * LATENT + k] + z[g * LATENT + k] - z0[g * LATENT + k]).clamp(0.0, 1.0);
+    let texel_latents = |z: &[f32]| -> Vec<f32> {
+        let mut latents = vec![0.0f32; n * LATENT];
+        for t in 0..n {
+            let g = group_of[t] as usize;
+            for k in 0..LATENT {
+                latents[t * LATENT + k] = (enc[t * LATENT + k] + z[g * LATENT + k] - z0[g * LATENT + k]).clamp(0.0, 1.0);
+            }
         }
-    }
+        latents
+    };
+    let latents = texel_latents(&z);
     // Before/after at sampled texels, on other directions, with their own parameters.
     let checks: Vec<usize> = (0..o.check_texels.min(n).max(1)).map(|k| if o.check_texels >= n { k } else { (mix64(o.seed ^ 0x636b ^ k as u64) % n as u64) as usize }).collect();
     let cd = o.check_directions.max(1);
@@ -227,6 +264,7 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     };
     let before = loss_of(&lat(&enc));
     let after = loss_of(&lat(&latents));
+    let after_unbounded = if energy.is_some() { loss_of(&lat(&texel_latents(&z_unbounded))) } else { after };
     debug_assert_eq!(OUTPUTS, 7);
-    Ok(FitResult { width, height, latents, groups, before, after, first_step, last_step, seconds: start.elapsed().as_secs_f64() })
+    Ok(FitResult { width, height, latents, groups, before, after, after_unbounded, first_step, last_step, energy, seconds: start.elapsed().as_secs_f64() })
 }

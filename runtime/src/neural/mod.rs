@@ -2,12 +2,13 @@
 //! direction features (`features`), training data generated on the fly from the compiled
 //! `uplift_stack` kernels (`classes`, `datagen`), the hand-written networks and their training
 //! (`mlp`, `model`, `loss`, `adam`, `trainer`), weights as safetensors (`weights`), held-out
-//! errors (`evaluate`), per-material latent fitting (`fit`) and inference (`inference`; the
+//! errors (`evaluate`), per-material latent fitting (`fit`) and its energy bound (`energy_bound`) and inference (`inference`; the
 //! shipped decoder's generated Rust in `shipped_decoder`).
 
 pub mod adam;
 pub mod classes;
 pub mod datagen;
+pub mod energy_bound;
 pub mod evaluate;
 pub mod features;
 pub mod fit;
