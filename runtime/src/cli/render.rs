@@ -1,15 +1,19 @@
 //! `uplift render MATERIAL/ -o ball.png [-o ball.exr]`: renders an enhanced material (its
 //! params.exr) on the preview ball under an environment (`--env FILE.hdr|FILE.exr`, `studio`,
 //! the default, or `white`, a unit environment), shaded by the compiled reference kernels or,
-//! with `--neural`, by the decoder on the material's fitted latent.exr. A `.png` output is the
-//! AgX display image, an `.exr` output the linear radiance.
+//! with `--neural`, by the decoder on the material's fitted latent.exr. `--mesh FILE.gltf|.glb`
+//! renders a glTF scene's triangles instead of the ball (scaled into the ball's unit sphere,
+//! with their own uvs, normals and tangents; render/mesh.rs). A `.png` output is the AgX display
+//! image, an `.exr` output the linear radiance.
 
 use super::fit::{load_model, SHIPPED_DECODER};
 use crate::cpu_engine::CpuEngine;
 use crate::render::environment::Environment;
 use crate::render::image_files::{write_exr, write_png};
 use crate::render::integrator::{render, RenderOptions, Strategy};
-use crate::render::scene::Sphere;
+use crate::enhance::gltf_input;
+use crate::render::mesh::Mesh;
+use crate::render::scene::{Scene, Sphere};
 use crate::render::shading::{Model, Shading};
 use crate::render::surface::SurfaceTextures;
 use crate::render::tonemap::to_display;
@@ -27,6 +31,9 @@ pub struct RenderArgs {
     /// Shade with the neural decoder and the fitted latents instead of the reference kernels.
     #[arg(long)]
     pub neural: bool,
+    /// Render this glTF scene's triangles (.gltf or .glb) instead of the preview ball.
+    #[arg(long)]
+    pub mesh: Option<PathBuf>,
     #[command(flatten)]
     pub settings: RenderSettings,
     /// Surface interactions after the first.
@@ -111,7 +118,11 @@ pub fn run(args: RenderArgs) -> Result<(), String> {
     let bar = ProgressBar::new(o.spp as u64).with_style(ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} spp {elapsed}").map_err(|e| e.to_string())?.progress_chars("=> "));
     bar.set_message(format!("rendering {}", args.material.display()));
     let start = std::time::Instant::now();
-    let img = render(&Sphere::preview(), &env, &surface, &shading, &o, Some(&bar))?;
+    let scene: Box<dyn Scene> = match &args.mesh {
+        Some(path) => Box::new(Mesh::new(gltf_input::load(path)?.world_triangles()).map_err(|e| format!("{}: {e}", path.display()))?),
+        None => Box::new(Sphere::preview()),
+    };
+    let img = render(scene.as_ref(), &env, &surface, &shading, &o, Some(&bar))?;
     bar.finish_and_clear();
     write_outputs(&args.output, &img.radiance, (img.width, img.height), st.exposure)?;
     let secs = start.elapsed().as_secs_f64();

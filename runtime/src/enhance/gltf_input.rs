@@ -130,6 +130,18 @@ pub struct SurfaceBake {
     pub bbox_max: [f32; 3],
 }
 
+/// One world-space triangle of the scene, for rendering (render/mesh.rs): vertex positions,
+/// normals (NORMAL through the inverse transpose, else the face normal), tangents (TANGENT.xyz
+/// through the node matrix, else the face's dP/du) and TEXCOORD_0 (glTF convention: (0, 0) at
+/// the image's top-left; (0, 0) where absent) — the conventions of [`rasterize_uv`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorldTriangle {
+    pub position: [[f32; 3]; 3],
+    pub normal: [[f32; 3]; 3],
+    pub tangent: [[f32; 3]; 3],
+    pub uv: [[f32; 2]; 3],
+}
+
 /// One decoded primitive (object space; `tan` is TANGENT.xyz).
 #[derive(Debug)]
 struct Prim {
@@ -141,6 +153,36 @@ struct Prim {
     tan: Option<Vec<DVec3>>,
     uv: Option<Vec<DVec2>>,
     tris: Vec<[usize; 3]>,
+}
+
+impl GltfAsset {
+    /// Every instanced triangle of the scene in world space, in drawing order (degenerate ones
+    /// skipped).
+    pub fn world_triangles(&self) -> Vec<WorldTriangle> {
+        let f32s = |v: DVec3| v.as_vec3().to_array();
+        let mut out = Vec::new();
+        for &(pi, m) in &self.instances {
+            let p = &self.prims[pi];
+            let m3 = DMat3::from_mat4(m);
+            let (nmat, flip) = (m3.inverse().transpose(), m3.determinant() < 0.0);
+            for &[a, b, c] in &p.tris {
+                let wp = [a, b, c].map(|i| m.transform_point3(p.pos[i]));
+                let uv = [a, b, c].map(|i| p.uv.as_ref().map_or(DVec2::ZERO, |uv| uv[i]));
+                let (e1, e2, d1, d2) = (wp[1] - wp[0], wp[2] - wp[0], uv[1] - uv[0], uv[2] - uv[0]);
+                let face_n = e1.cross(e2).normalize_or_zero() * if flip { -1.0 } else { 1.0 };
+                if face_n == DVec3::ZERO || !wp.iter().all(|v| v.is_finite()) {
+                    continue;
+                }
+                let det = d1.perp_dot(d2);
+                let face_t = if det != 0.0 { ((e1 * d2.y - e2 * d1.y) / det).normalize_or_zero() } else { DVec3::ZERO };
+                let face_t = if face_t == DVec3::ZERO || !face_t.is_finite() { face_n.any_orthonormal_vector() } else { face_t };
+                let normal = [a, b, c].map(|i| p.nrm.as_ref().map(|n| (nmat * n[i]).normalize_or_zero()).filter(|n| *n != DVec3::ZERO && n.is_finite()).unwrap_or(face_n));
+                let tangent = [a, b, c].map(|i| p.tan.as_ref().map(|t| m3 * t[i]).filter(|t| t.length_squared() > 0.0 && t.is_finite()).unwrap_or(face_t));
+                out.push(WorldTriangle { position: wp.map(f32s), normal: normal.map(f32s), tangent: tangent.map(f32s), uv: uv.map(|v| [v.x as f32, v.y as f32]) });
+            }
+        }
+        out
+    }
 }
 
 /// Loads a `.gltf` or `.glb` (told apart by the GLB magic, not the extension).

@@ -372,7 +372,7 @@ fn meta_json(material: &PbrMaterial, kind: EnhancementType, seed: u64, scalars: 
         .map(|(input, k)| format!("    {}: {{ \"file\": \"masks/{}.png\", \"seed\": {} }}", json_string(input), k.file_stem(), mask_seed(seed, *k)))
         .collect();
     format!(
-        "{{\n  \"type\": {},\n  \"rule\": {},\n  \"seed\": {seed},\n  \"source\": {},\n  \"name\": {},\n  \"resolution\": [{}, {}],\n  \"object_size\": {},\n  \"scalars\": {{\n{}\n  }},\n  \"masks\": {{\n{}\n  }},\n  \"uplift\": {}\n}}\n",
+        "{{\n  \"type\": {},\n  \"rule\": {},\n  \"seed\": {seed},\n  \"source\": {},\n  \"name\": {},\n  \"resolution\": [{}, {}],\n  \"object_size\": {},\n  \"normal_space\": {},\n  \"scalars\": {{\n{}\n  }},\n  \"masks\": {{\n{}\n  }},\n  \"uplift\": {}\n}}\n",
         kind.index(),
         json_string(&format!("mtlx/rules/{}", kind.file_name())),
         json_string(&material.source),
@@ -380,6 +380,10 @@ fn meta_json(material: &PbrMaterial, kind: EnhancementType, seed: u64, scalars: 
         size.0,
         size.1,
         format_value(&[object_size]),
+        json_string(match material.surface {
+            Surface::Plane => "plane",
+            Surface::Gltf { .. } => "world",
+        }),
         scalar_lines.join(",\n"),
         masks.join(",\n"),
         json_string(env!("CARGO_PKG_VERSION")),

@@ -3,7 +3,8 @@
 //! direct lighting by environment sampling and BSDF sampling combined with the power heuristic
 //! (or either strategy alone), and a configurable number of bounces.
 //!
-//! The material (f = f_nd + T·c/π, its evaluation and sampling) is `material.rs`.
+//! The material (f = f_nd + T·c/π, its evaluation and sampling) is `material.rs`; the normal map
+//! replaces each hit's shading frame before it is shaded (surface.rs).
 //!
 //! Every random number is a hash of (seed, pixel, pass, depth, dimension), so a render is a
 //! pure function of its inputs, samples are independent (the per-pixel variance is an honest
@@ -210,9 +211,11 @@ fn shade_hits(
         // Environment sample: local direction, pdf, radiance, visible.
         nee: (Vec3, f32, [f32; 3], bool),
     }
+    let world_normals = scene.world_space_normals();
     let points: Vec<Point> = shade
         .par_iter()
         .filter_map(|(path, hit)| {
+            let hit = &surface.normal_mapped(hit, world_normals);
             let wv = hit.to_local([-path.dir[0], -path.dir[1], -path.dir[2]]);
             if wv[2] <= 1e-5 {
                 return None;

@@ -1,6 +1,6 @@
 //! Rendering and evaluation (docs/render.md): the preview-ball path tracer with environment and
 //! BSDF importance sampling combined by MIS (`integrator`), its environments (`environment`),
-//! geometry and camera (`scene`), the material data it reads (`surface`) and the two ways of
+//! geometry and camera (`scene`; glTF meshes behind a BVH in `mesh`), the material data it reads (`surface`) and the two ways of
 //! shading it — the compiled reference kernels or the neural decoder (`shading`) — the AgX
 //! display transform (`tonemap`) and the image metrics, FLIP and PSNR (`metrics`).
 
@@ -9,6 +9,7 @@ pub mod evaluation;
 pub mod furnace;
 pub mod integrator;
 pub mod material;
+pub mod mesh;
 pub mod metrics;
 pub mod scene;
 pub mod shading;

@@ -1,5 +1,6 @@
 //! What the renderer traces: the pinhole camera and the geometry behind the `Scene` trait (the
-//! preview sphere here), with the hit record the shading needs (position, shading frame, uv).
+//! preview sphere here; glTF meshes in mesh.rs), with the hit record the shading needs
+//! (position, shading frame, uv).
 //!
 //! Preview setup (lobes.md §5.2): a unit sphere at the origin, the camera on +z looking at it
 //! with a 30° vertical field of view from distance 4.8, so the ball spans ≈ 80 % of the image
@@ -51,6 +52,22 @@ impl Hit {
         [0, 1, 2].map(|c| f[0][c] * l[0] + f[1][c] * l[1] + f[2][c] * l[2])
     }
 
+    /// The hit with its shading normal replaced by `n` (world space; turned to the geometric
+    /// normal's side), the tangent made orthogonal to it.
+    pub fn with_shading_normal(&self, n: Vec3) -> Hit {
+        let mut n = normalize(n);
+        if !n.iter().all(|x| x.is_finite()) || dot(n, n) < 0.5 {
+            return *self;
+        }
+        if dot(n, self.geometric_normal) < 0.0 {
+            n = add_scaled(n, self.geometric_normal, -2.0 * dot(n, self.geometric_normal));
+        }
+        let t = self.frame[0];
+        let t = add_scaled(t, n, -dot(t, n));
+        let t = if dot(t, t) > 1e-12 { normalize(t) } else { normalize(cross(self.frame[1], n)) };
+        Hit { frame: [t, cross(n, t), n], ..*self }
+    }
+
     /// The origin for a ray leaving the surface in direction `d`, offset off the surface.
     pub fn spawn(&self, d: Vec3) -> Vec3 {
         let s = if dot(d, self.geometric_normal) >= 0.0 { 1.0 } else { -1.0 };
@@ -62,6 +79,12 @@ impl Hit {
 pub trait Scene: Sync {
     /// The nearest hit along o + t·d, t > 0.
     fn intersect(&self, o: Vec3, d: Vec3) -> Option<Hit>;
+
+    /// Whether the scene is a glTF mesh, whose materials' baked normals (`normal_space`
+    /// "world", surface.rs) are world-space directions of this geometry.
+    fn world_space_normals(&self) -> bool {
+        false
+    }
 }
 
 /// The preview sphere.
