@@ -1,6 +1,7 @@
 //! Preview-ball rendering speed (issue 7): paths per second for the reference material (the
 //! `uplift_stack` kernels) and the neural material (the decoder), on the CPU engine and the
-//! wgpu engine, 192² at 16 spp with MIS and 2 bounces under the studio environment.
+//! wgpu engine, 192² at 16 spp with MIS and 2 bounces under the studio environment; and the
+//! same ball tessellated into 128 × 64 quads, rendered through the BVH (CPU, reference).
 //! `cargo bench -p uplift --bench render`.
 
 use std::time::Instant;
@@ -8,7 +9,9 @@ use uplift::cpu_engine::CpuEngine;
 use uplift::neural::params::PARAMETER_TABLE;
 use uplift::render::environment::Environment;
 use uplift::render::integrator::{render, RenderOptions};
-use uplift::render::scene::Sphere;
+use uplift::enhance::gltf_input::WorldTriangle;
+use uplift::render::mesh::Mesh;
+use uplift::render::scene::{Scene, Sphere};
 use uplift::render::shading::{Model, Shading};
 use uplift::render::surface::SurfaceTextures;
 use uplift::wgpu_engine::WgpuEngine;
@@ -49,4 +52,33 @@ fn main() {
         let hits: f64 = img.coverage.iter().map(|&c| c as f64).sum::<f64>() * o.spp as f64;
         println!("| {engine} | {material} | {s:.2} | {:.0} k | {:.0} k |", paths / s / 1e3, hits / s / 1e3);
     }
+    let mesh = Mesh::new(uv_sphere(128, 64)).unwrap();
+    let shading = &engines[0].2;
+    let scene: &dyn Scene = &mesh;
+    render(scene, &env, &surface, shading, &RenderOptions { spp: 1, ..o.clone() }, None).unwrap();
+    let t = Instant::now();
+    let img = render(scene, &env, &surface, shading, &o, None).unwrap();
+    let s = t.elapsed().as_secs_f64();
+    let hits: f64 = img.coverage.iter().map(|&c| c as f64).sum::<f64>() * o.spp as f64;
+    println!("| CPU, {}-triangle mesh | reference | {s:.2} | {:.0} k | {:.0} k |", mesh.triangle_count(), (o.width * o.height * o.spp) as f64 / s / 1e3, hits / s / 1e3);
+}
+
+/// The unit ball as `nu` × `nv` quads (the pole rows as triangles).
+fn uv_sphere(nu: usize, nv: usize) -> Vec<WorldTriangle> {
+    use std::f32::consts::{PI, TAU};
+    let vertex = |i: usize, j: usize| {
+        let (theta, phi) = (PI * j as f32 / nv as f32, TAU * i as f32 / nu as f32);
+        let (st, ct) = if j == 0 || j == nv { (0.0, if j == 0 { 1.0 } else { -1.0 }) } else { (theta.sin(), theta.cos()) };
+        ([st * phi.sin(), ct, st * phi.cos()], [i as f32 / nu as f32, j as f32 / nv as f32], [phi.cos(), 0.0, -phi.sin()])
+    };
+    let mut out = Vec::new();
+    for j in 0..nv {
+        for i in 0..nu {
+            for tri in [[(i, j), (i, j + 1), (i + 1, j + 1)], [(i, j), (i + 1, j + 1), (i + 1, j)]] {
+                let v = tri.map(|(a, b)| vertex(a, b));
+                out.push(WorldTriangle { position: v.map(|x| x.0), normal: v.map(|x| x.0), tangent: v.map(|x| x.2), uv: v.map(|x| x.1) });
+            }
+        }
+    }
+    out
 }

@@ -20,7 +20,7 @@
 
 use super::adam::Adam;
 use super::datagen::DataGenerator;
-use super::features::{direction_features, FEATURES};
+use super::features::{cosine_hemisphere, direction_features, view_cosines, FEATURES};
 use super::loss::OUTPUTS;
 use super::mlp::{Mlp, Workspace};
 use super::model::{DECODER_INPUTS, LATENT};
@@ -82,18 +82,6 @@ struct GroupProbe {
 
 /// The R2 sequence's steps (1/g, 1/g² for g³ = g + 1).
 const R2: [f32; 2] = [0.754_877_7, 0.569_840_3];
-
-/// View cosines from 1 down to the decoder's smallest.
-fn view_cosines(views: usize) -> Vec<f32> {
-    let min = super::features::MIN_VIEW_COSINE;
-    (0..views.max(1)).map(|k| if views <= 1 { 1.0 } else { 1.0 - (1.0 - min) * k as f32 / (views - 1) as f32 }).collect()
-}
-
-fn cosine_hemisphere(u1: f32, u2: f32) -> [f32; 3] {
-    let r = u1.sqrt();
-    let phi = 2.0 * PI * u2;
-    [r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt()]
-}
 
 /// The probes of every group (`group_params`: groups × 22).
 fn probes(generator: &DataGenerator, group_params: &[f32], diffuse: &[f32], o: &EnergyOptions) -> Result<Vec<GroupProbe>, String> {

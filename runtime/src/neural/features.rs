@@ -44,6 +44,20 @@ pub fn uniform_cosine_view(u1: f32, u2: f32) -> [f32; 3] {
     [s * phi.cos(), s * phi.sin(), mu]
 }
 
+/// A cosine-weighted direction on the upper hemisphere (pdf μ/π).
+pub fn cosine_hemisphere(u1: f32, u2: f32) -> [f32; 3] {
+    let r = u1.sqrt();
+    let phi = std::f32::consts::TAU * u2;
+    [r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt()]
+}
+
+/// `views` view cosines evenly spaced from 1 down to the smallest the data holds (the white
+/// furnace's and the fit's energy bound's views).
+pub fn view_cosines(views: usize) -> Vec<f32> {
+    let views = views.max(1);
+    (0..views).map(|k| if views == 1 { 1.0 } else { 1.0 - (1.0 - MIN_VIEW_COSINE) * k as f32 / (views - 1) as f32 }).collect()
+}
+
 /// A uniformly distributed direction on the upper hemisphere (μ > 0).
 pub fn uniform_hemisphere(u1: f32, u2: f32) -> [f32; 3] {
     let mu = 1.0 - u1.clamp(0.0, 1.0 - 1e-7);

@@ -22,7 +22,6 @@ use super::scene::Vec3;
 use super::shading::{Model, Shading};
 use super::surface::{SurfaceSample, SurfaceTextures, TEXEL_VALUES};
 use crate::enhance::rules::{mix64, unit_from_key as unit};
-use crate::neural::features::MIN_VIEW_COSINE;
 use std::collections::HashMap;
 
 #[derive(Clone, Debug)]
@@ -67,10 +66,7 @@ pub struct FurnaceResult {
 }
 
 /// The view cosines checked.
-pub fn view_cosines(views: usize) -> Vec<f32> {
-    let views = views.max(1);
-    (0..views).map(|k| if views == 1 { 1.0 } else { 1.0 - (1.0 - MIN_VIEW_COSINE) * k as f32 / (views - 1) as f32 }).collect()
-}
+pub use crate::neural::features::view_cosines;
 
 fn view_direction(mu: f32) -> Vec3 {
     [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu]

@@ -12,7 +12,7 @@
 use super::scene::Vec3;
 use super::shading::{luminance, LobeValue, Shading};
 use super::surface::SurfaceSample;
-use std::f32::consts::{FRAC_1_PI, TAU};
+use std::f32::consts::FRAC_1_PI;
 
 /// The full material at one direction pair.
 #[derive(Clone, Copy, Debug, Default)]
@@ -43,11 +43,7 @@ pub fn combine(v: &LobeValue, diffuse: [f32; 3], select: f32, mu_l: f32) -> Mate
     MaterialValue { fcos, pdf: select * v.pdf + (1.0 - select) * mu_l * FRAC_1_PI }
 }
 
-pub fn cosine_hemisphere(u1: f32, u2: f32) -> Vec3 {
-    let r = u1.sqrt();
-    let phi = TAU * u2;
-    [r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt()]
-}
+pub use crate::neural::features::cosine_hemisphere;
 
 /// Evaluates the material at (wv, wl) per point; returns the values and each point's selection
 /// probability P.
