@@ -102,6 +102,13 @@ impl StackKernel {
     }
 }
 
+/// A `sample` kernel's direction `wl` with its `pdf`, normalised, when the sample is usable:
+/// pdf positive and finite, wl a unit vector (within 1e-3) with cosine above `min_mu`.
+pub fn usable_sample(wl: [f32; 3], pdf: f32, min_mu: f32) -> Option<[f32; 3]> {
+    let len = (wl[0] * wl[0] + wl[1] * wl[1] + wl[2] * wl[2]).sqrt();
+    (pdf > 0.0 && pdf.is_finite() && wl[2] > min_mu && (len - 1.0).abs() < 1e-3).then(|| wl.map(|x| x / len))
+}
+
 /// Three consecutive columns of `out` at row `k`.
 pub fn vec3_at(out: &Columns, at: usize, k: usize) -> [f32; 3] {
     [0, 1, 2].map(|c| out.column(at + c)[k])

@@ -22,6 +22,7 @@ use uplift::enhance::rules::EnhancementType;
 use uplift::neural::classes::DataClass;
 use uplift::neural::datagen::{ClassMix, DataGenerator};
 use uplift::neural::evaluate::{batch_errors, decode, holdout_errors};
+use uplift::cli::fit::FitInputs;
 use uplift::neural::fit::{fit_material, FitOptions};
 use uplift::neural::model::{NeuralModel, LATENT};
 use uplift::neural::params::PARAMETERS;
@@ -71,11 +72,11 @@ fn uniform_params(kind: EnhancementType, dir: &Path) -> (Vec<f32>, Vec<f32>) {
     let out = dir.join(material.name.clone());
     let options = EnhanceOptions { kind: Some(kind), seed: 11, resolution: Some((32, 32)), mask_size: 64 };
     enhance(&material, &options, &out, &CpuEngine::new().unwrap()).unwrap();
-    let (w, h, params) = uplift::cli::fit::read_params(&out.join("params.exr")).unwrap();
+    let FitInputs { width: w, height: h, params, diffuse } = uplift::cli::fit::read_params(&out.join("params.exr")).unwrap();
     // The texel with the most dust or fuzz (the centre when there is none).
     let fuzz = uplift::neural::params::index_of("fuzz_weight").unwrap();
     let t = (0..w * h).fold((h / 2) * w + w / 2, |best, t| if params[t * PARAMETERS + fuzz] > params[best * PARAMETERS + fuzz] { t } else { best });
-    let diffuse = uplift::cli::fit::read_diffuse(&out.join("params.exr")).unwrap().expect("diffuse colour channels");
+    let diffuse = diffuse.expect("diffuse colour channels");
     (params[t * PARAMETERS..(t + 1) * PARAMETERS].to_vec(), diffuse[t * 3..t * 3 + 3].to_vec())
 }
 
@@ -175,13 +176,13 @@ fn fitting_a_512_material_beats_the_encoder() {
     // Type 2 (clearcoat with its damage mask) over textured base colour and roughness.
     let options = EnhanceOptions { kind: Some(EnhancementType::new(2).unwrap()), seed: 5, resolution: Some((512, 512)), mask_size: 256 };
     enhance(&material, &options, &out, &CpuEngine::new().unwrap()).unwrap();
-    let (w, h, params) = uplift::cli::fit::read_params(&out.join("params.exr")).unwrap();
+    let FitInputs { width: w, height: h, params, diffuse } = uplift::cli::fit::read_params(&out.join("params.exr")).unwrap();
     assert_eq!((w, h), (512, 512));
     let model = shipped();
     let g = generator(41);
     // `uplift fit`'s defaults.
     let o = FitOptions { threads: 2, ..Default::default() };
-    let diffuse = uplift::cli::fit::read_diffuse(&out.join("params.exr")).unwrap().expect("diffuse colour channels");
+    let diffuse = diffuse.expect("diffuse colour channels");
     let r = fit_material(&model, &g, &params, Some(&diffuse), w, h, &o, false).unwrap();
     eprintln!(
         "512²: {} groups, {:.1} s; Eq. 3 encoder only {:.5} → fitted {:.5} → within the energy bound {:.5} ({:?})",

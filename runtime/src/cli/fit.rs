@@ -54,8 +54,19 @@ pub fn load_model(path: &Path) -> Result<NeuralModel<f32>, String> {
     Ok(NeuralModel { encoder: f.mlp("encoder").map_err(at)?, decoder: f.mlp("decoder").map_err(at)? })
 }
 
-/// The 22 parameters per texel of an enhanced material's params.exr.
-pub fn read_params(path: &Path) -> Result<(usize, usize, Vec<f32>), String> {
+/// What fitting reads from an enhanced material's params.exr (read once).
+pub struct FitInputs {
+    pub width: usize,
+    pub height: usize,
+    /// The 22 parameters per texel.
+    pub params: Vec<f32>,
+    /// The diffuse colour c per texel (texels × 3), if params.exr has the channels (folders
+    /// written before `uplift enhance` baked them do not; the energy bound then assumes c = 1).
+    pub diffuse: Option<Vec<f32>>,
+}
+
+/// Reads [`FitInputs`] from params.exr.
+pub fn read_params(path: &Path) -> Result<FitInputs, String> {
     let img = exr::read(path)?;
     let n = img.width * img.height;
     let mut params = vec![0.0f32; n * PARAMETERS];
@@ -65,22 +76,11 @@ pub fn read_params(path: &Path) -> Result<(usize, usize, Vec<f32>), String> {
             params[t * PARAMETERS + k] = ch[t];
         }
     }
-    Ok((img.width, img.height, params))
-}
-
-/// The diffuse colour c per texel (texels × 3) of params.exr, if it has the channels (folders
-/// written before `uplift enhance` baked them do not; the energy bound then assumes c = 1).
-pub fn read_diffuse(path: &Path) -> Result<Option<Vec<f32>>, String> {
-    let img = exr::read(path)?;
-    let n = img.width * img.height;
-    let mut diffuse = vec![0.0f32; n * 3];
-    for (c, name) in DIFFUSE_CHANNELS.iter().enumerate() {
-        let Some(ch) = img.channel(name) else { return Ok(None) };
-        for t in 0..n {
-            diffuse[t * 3 + c] = ch[t];
-        }
-    }
-    Ok(Some(diffuse))
+    let diffuse = match DIFFUSE_CHANNELS.map(|name| img.channel(name)) {
+        [Some(r), Some(g), Some(b)] => Some((0..n).flat_map(|t| [r[t], g[t], b[t]]).collect()),
+        _ => None,
+    };
+    Ok(FitInputs { width: img.width, height: img.height, params, diffuse })
 }
 
 fn parts_json(p: &LossParts) -> String {
@@ -135,8 +135,7 @@ pub fn run(args: FitArgs) -> Result<(), String> {
         return Err("--steps and --directions must be at least 1".into());
     }
     let model = load_model(&args.decoder)?;
-    let (w, h, params) = read_params(&args.material.join("params.exr"))?;
-    let diffuse = read_diffuse(&args.material.join("params.exr"))?;
+    let FitInputs { width: w, height: h, params, diffuse } = read_params(&args.material.join("params.exr"))?;
     let generator = DataGenerator::new(CpuEngine::with_threads(threads)?, ClassMix::All, args.seed)?;
     let mut o = FitOptions { steps: args.steps, directions: args.directions, levels: args.levels, seed: args.seed, threads, ..Default::default() };
     if args.no_energy_bound {

@@ -7,7 +7,7 @@
 pub mod pbr_set;
 pub mod report;
 
-use crate::cli::fit::{load_model, read_diffuse, read_params, write_fit};
+use crate::cli::fit::{load_model, read_params, write_fit, FitInputs};
 use crate::cpu_engine::CpuEngine;
 use crate::enhance::pbr_input::PbrChannel;
 use crate::enhance::pipeline::{enhance, EnhanceOptions};
@@ -133,8 +133,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
     for dir in &dirs {
         b.set_message(dir.file_name().unwrap_or_default().to_string_lossy().to_string());
         if !dir.join("latent.exr").is_file() || !dir.join("fit.json").is_file() {
-            let (w, h, params) = read_params(&dir.join("params.exr"))?;
-            let diffuse = read_diffuse(&dir.join("params.exr"))?;
+            let FitInputs { width: w, height: h, params, diffuse } = read_params(&dir.join("params.exr"))?;
             let r = fit_material(&model, &generator, &params, diffuse.as_deref(), w, h, &fit_options, false)?;
             write_fit(dir, &r, &o.decoder, &fit_options)?;
         }

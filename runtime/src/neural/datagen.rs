@@ -12,7 +12,7 @@ use super::features::{cosine_view, direction_features, uniform_cosine_view, unif
 use super::loss::OUTPUTS;
 use super::params::{encode_rows, PARAMETERS};
 use crate::cpu_engine::CpuEngine;
-use crate::stack_kernel::StackKernel;
+use crate::stack_kernel::{usable_sample, StackKernel};
 use crate::enhance::rules::{mix64, unit_from_key as unit};
 use uplift_compiler::ClosureContext;
 
@@ -183,9 +183,8 @@ impl DataGenerator {
                 let wl = [0, 1, 2].map(|c| out.column(wl_at + c)[k]);
                 let pdf = out.column(pdf_at)[k];
                 let resp = [0, 1, 2].map(|c| out.column(resp_at + c)[k]);
-                let len = (wl[0] * wl[0] + wl[1] * wl[1] + wl[2] * wl[2]).sqrt();
-                if pdf > 0.0 && pdf.is_finite() && wl[2] > 1e-4 && (len - 1.0).abs() < 1e-3 && resp.iter().all(|x| x.is_finite()) {
-                    b.wl[r] = wl.map(|x| x / len);
+                if let Some(wl) = usable_sample(wl, pdf, 1e-4).filter(|_| resp.iter().all(|x| x.is_finite())) {
+                    b.wl[r] = wl;
                     b.target[r * OUTPUTS..r * OUTPUTS + 3].copy_from_slice(&resp);
                 } else {
                     uniform.push(r);

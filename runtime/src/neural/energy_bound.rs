@@ -20,13 +20,13 @@
 
 use super::adam::Adam;
 use super::datagen::DataGenerator;
-use super::features::{cosine_hemisphere, direction_features, view_cosines, FEATURES};
+use super::features::{cosine_hemisphere, direction_features, view_cosines, view_direction, FEATURES};
 use super::loss::OUTPUTS;
 use super::mlp::{Mlp, Workspace};
 use super::model::{DECODER_INPUTS, LATENT};
 use super::params::PARAMETERS;
 use crate::enhance::rules::{mix64, unit_from_key as unit};
-use crate::stack_kernel::vec3_at;
+use crate::stack_kernel::{usable_sample, vec3_at};
 use std::f32::consts::PI;
 
 /// How the bound is enforced.
@@ -100,8 +100,7 @@ fn probes(generator: &DataGenerator, group_params: &[f32], diffuse: &[f32], o: &
     for r in 0..rows {
         let (g, k, j) = (r / per_group, (r % per_group) / m, r % m);
         params.extend_from_slice(&group_params[g * PARAMETERS..(g + 1) * PARAMETERS]);
-        let mu = mus[k];
-        wv.push([(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu]);
+        wv.push(view_direction(mus[k]));
         // Each half is an R2 lattice (Roberts' generalised golden ratio) with a seeded shift
         // per (group, view, half): evenly spread in (u.x, u.y), which choose the direction;
         // u.z runs the lobe race.
@@ -127,9 +126,8 @@ fn probes(generator: &DataGenerator, group_params: &[f32], diffuse: &[f32], o: &
             let d = vec3_at(&out, wl_at, k);
             let p = out.column(pdf_at)[k];
             let resp = vec3_at(&out, resp_at, k);
-            let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-            if p > 0.0 && p.is_finite() && d[2] > 1e-4 && (len - 1.0).abs() < 1e-3 && resp.iter().all(|x| x.is_finite()) {
-                wl[r] = d.map(|x| x / len);
+            if let Some(d) = usable_sample(d, p, 1e-4).filter(|_| resp.iter().all(|x| x.is_finite())) {
+                wl[r] = d;
                 stack[r] = Some((p, resp));
             }
         }

@@ -51,6 +51,11 @@ pub fn cosine_hemisphere(u1: f32, u2: f32) -> [f32; 3] {
     [r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt()]
 }
 
+/// The view direction with cosine `mu` in the x–z plane (φv = 0).
+pub fn view_direction(mu: f32) -> [f32; 3] {
+    [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu]
+}
+
 /// `views` view cosines evenly spaced from 1 down to the smallest the data holds (the white
 /// furnace's and the fit's energy bound's views).
 pub fn view_cosines(views: usize) -> Vec<f32> {

@@ -22,6 +22,7 @@ use super::scene::Vec3;
 use super::shading::{Model, Shading};
 use super::surface::{SurfaceSample, SurfaceTextures, TEXEL_VALUES};
 use crate::enhance::rules::{mix64, unit_from_key as unit};
+use crate::neural::features::view_direction;
 use std::collections::HashMap;
 
 #[derive(Clone, Debug)]
@@ -67,10 +68,6 @@ pub struct FurnaceResult {
 
 /// The view cosines checked.
 pub use crate::neural::features::view_cosines;
-
-fn view_direction(mu: f32) -> Vec3 {
-    [(1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu]
-}
 
 /// Monte Carlo estimate of A(wv) per (point, view), `directions` samples each.
 pub fn estimated_albedo(shading: &Shading, points: &[SurfaceSample], wv: &[Vec3], directions: usize, seed: u64) -> Result<Vec<[f32; 3]>, String> {

@@ -72,8 +72,9 @@ impl Mesh {
         }
         let mut mesh = Mesh { order: (0..triangles.len() as u32).collect(), triangles, nodes: Vec::new() };
         let n = mesh.order.len();
+        let centroids: Vec<Vec3> = mesh.triangles.iter().map(centroid).collect();
         mesh.nodes.push(Node { lo: [0.0; 3], hi: [0.0; 3], start: 0, count: 0 });
-        mesh.build(0, 0, n);
+        mesh.build(&centroids, 0, 0, n);
         Ok(mesh)
     }
 
@@ -81,8 +82,9 @@ impl Mesh {
         self.triangles.len()
     }
 
-    /// Fills node `at` with `order[start..end]`, splitting recursively.
-    fn build(&mut self, at: usize, start: usize, end: usize) {
+    /// Fills node `at` with `order[start..end]`, splitting recursively (`centroids` per
+    /// triangle).
+    fn build(&mut self, centroids: &[Vec3], at: usize, start: usize, end: usize) {
         let tris = &self.triangles;
         let (lo, hi) = bounds(self.order[start..end].iter().flat_map(|&i| tris[i as usize].position));
         self.nodes[at].lo = lo;
@@ -92,17 +94,17 @@ impl Mesh {
             self.nodes[at].count = (end - start) as u32;
             return;
         }
-        let (clo, chi) = bounds(self.order[start..end].iter().map(|&i| centroid(&tris[i as usize])));
+        let (clo, chi) = bounds(self.order[start..end].iter().map(|&i| centroids[i as usize]));
         let axis = (0..3).max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b]))).unwrap_or(0);
         let mid = (start + end) / 2;
-        self.order[start..end].select_nth_unstable_by(mid - start, |&a, &b| centroid(&tris[a as usize])[axis].total_cmp(&centroid(&tris[b as usize])[axis]));
+        self.order[start..end].select_nth_unstable_by(mid - start, |&a, &b| centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]));
         let left = self.nodes.len();
         self.nodes.push(Node { lo: [0.0; 3], hi: [0.0; 3], start: 0, count: 0 });
         self.nodes.push(Node { lo: [0.0; 3], hi: [0.0; 3], start: 0, count: 0 });
         self.nodes[at].start = left as u32;
         self.nodes[at].count = 0;
-        self.build(left, start, mid);
-        self.build(left + 1, mid, end);
+        self.build(centroids, left, start, mid);
+        self.build(centroids, left + 1, mid, end);
     }
 
     /// Ray–triangle (Möller–Trumbore): (t, b1, b2) for a hit with t in (t_min, t_max).

@@ -26,7 +26,7 @@ use crate::neural::mlp::Mlp;
 use crate::neural::model::{fill_decoder_input, LATENT};
 use crate::neural::params::PARAMETERS;
 use crate::neural::inference::WgpuDecoder;
-use crate::stack_kernel::{vec3_at, Engine, StackKernel};
+use crate::stack_kernel::{usable_sample, vec3_at, Engine, StackKernel};
 use crate::wgpu_engine::WgpuEngine;
 use uplift_compiler::ClosureContext;
 
@@ -212,11 +212,7 @@ impl Shading {
             .map(|k| {
                 let wl = vec3_at(&out, wl_at, k);
                 let pdf = out.column(pdf_at)[k];
-                let len = (wl[0] * wl[0] + wl[1] * wl[1] + wl[2] * wl[2]).sqrt();
-                if !(pdf > 0.0 && pdf.is_finite() && wl[2] > 1e-6 && (len - 1.0).abs() < 1e-3) {
-                    return ([0.0, 0.0, 1.0], LobeValue::default());
-                }
-                let wl = wl.map(|x| x / len);
+                let Some(wl) = usable_sample(wl, pdf, 1e-6) else { return ([0.0, 0.0, 1.0], LobeValue::default()) };
                 (wl, LobeValue { fcos: finite3(vec3_at(&out, resp_at, k)), throughput: finite3(vec3_at(&out, thr_at, k)), reflectance: 0.0, pdf })
             })
             .collect();
