@@ -1,6 +1,7 @@
 //! Decoder inference: rows of [latent, direction features] → rows of (f RGB, T RGB, R).
-//! - `decode_parallel`: the trainer's own forward pass, split over threads in contiguous
-//!   slices, each slice in blocks so the activations stay in cache;
+//! - `decode_parallel`: the trainer's own forward pass (on AVX-512, the fused kernels of
+//!   dense.rs), split over threads in contiguous slices, each slice in blocks so the activations
+//!   stay in cache;
 //! - the emitted kernels (`uplift_compiler::backend_neural`, askama templates): Rust (the
 //!   shipped decoder is committed as `shipped_decoder.rs`; `uplift emit-decoder` writes any
 //!   other) and WGSL, run here on a wgpu device by [`WgpuDecoder`].
@@ -17,17 +18,25 @@ const BLOCK: usize = 1024;
 
 /// Decodes `dec_in` (rows × 15) into `out` (rows × 7) on `threads` threads.
 pub fn decode_parallel(decoder: &Mlp<f32>, dec_in: &[f32], out: &mut [f32], threads: usize) {
+    decode_parallel_in(&mut Vec::new(), decoder, dec_in, out, threads);
+}
+
+/// [`decode_parallel`] with per-thread workspaces kept by the caller between calls (their
+/// buffers and the packed weights of a frozen decoder are then reused).
+pub fn decode_parallel_in(workspaces: &mut Vec<Workspace<f32>>, decoder: &Mlp<f32>, dec_in: &[f32], out: &mut [f32], threads: usize) {
     let rows = dec_in.len() / DECODER_INPUTS;
     assert_eq!(out.len(), rows * OUTPUTS, "output rows");
     let threads = threads.clamp(1, rows.div_ceil(BLOCK).max(1));
     let per = rows.div_ceil(threads);
+    if workspaces.len() < threads {
+        workspaces.resize_with(threads, Workspace::default);
+    }
     std::thread::scope(|scope| {
-        for (t, chunk) in out.chunks_mut(per * OUTPUTS).enumerate() {
+        for ((t, chunk), ws) in out.chunks_mut(per * OUTPUTS).enumerate().zip(workspaces.iter_mut()) {
             let input = &dec_in[t * per * DECODER_INPUTS..(t * per + chunk.len() / OUTPUTS) * DECODER_INPUTS];
             scope.spawn(move || {
-                let mut ws = Workspace::default();
                 for (i, o) in input.chunks(BLOCK * DECODER_INPUTS).zip(chunk.chunks_mut(BLOCK * OUTPUTS)) {
-                    o.copy_from_slice(decoder.forward(i, i.len() / DECODER_INPUTS, &mut ws));
+                    o.copy_from_slice(decoder.forward(i, i.len() / DECODER_INPUTS, ws));
                 }
             });
         }

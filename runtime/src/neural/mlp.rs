@@ -4,6 +4,7 @@
 //! vector (per layer: the weights, row-major `out × in`, then the biases), which Adam updates
 //! and safetensors stores as one tensor per layer. Activations are rows (`batch × width`).
 
+use super::dense::{self, Epilogue, PackedNetwork};
 use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub};
 
 /// The float types the network runs in.
@@ -17,6 +18,13 @@ pub trait Real:
     /// C (m×n) = alpha·A (m×k)·B (k×n) + beta·C, each matrix given by its row and column strides.
     #[allow(clippy::too_many_arguments)]
     fn gemm(m: usize, k: usize, n: usize, alpha: Self, a: &[Self], rsa: isize, csa: isize, b: &[Self], rsb: isize, csb: isize, beta: Self, c: &mut [Self], rsc: isize, csc: isize);
+    /// The slice as f32 when the type is f32 (the fused kernels' path, dense.rs); `None` otherwise.
+    fn as_f32(_s: &[Self]) -> Option<&[f32]> {
+        None
+    }
+    fn as_f32_mut(_s: &mut [Self]) -> Option<&mut [f32]> {
+        None
+    }
 }
 
 /// Checks that a strided matrix lies inside its slice (the GEMM reads raw pointers).
@@ -28,7 +36,7 @@ fn assert_fits(len: usize, rows: usize, cols: usize, rs: isize, cs: isize) {
 }
 
 macro_rules! real_impl {
-    ($t:ty, $gemm:ident) => {
+    ($t:ty, $gemm:ident $(, { $($extra:tt)* })?) => {
         impl Real for $t {
             fn from_f64(v: f64) -> Self {
                 v as $t
@@ -50,10 +58,22 @@ macro_rules! real_impl {
                 // is borrowed mutably, so it aliases neither input.
                 unsafe { matrixmultiply::$gemm(m, k, n, alpha, a.as_ptr(), rsa, csa, b.as_ptr(), rsb, csb, beta, c.as_mut_ptr(), rsc, csc) }
             }
+            $($($extra)*)?
         }
     };
 }
-real_impl!(f32, sgemm);
+real_impl!(
+    f32,
+    sgemm,
+    {
+        fn as_f32(s: &[f32]) -> Option<&[f32]> {
+            Some(s)
+        }
+        fn as_f32_mut(s: &mut [f32]) -> Option<&mut [f32]> {
+            Some(s)
+        }
+    }
+);
 real_impl!(f64, dgemm);
 
 /// A layer's activation function.
@@ -229,6 +249,8 @@ pub struct Workspace<T: Real> {
     rows: usize,
     /// Whether [`Mlp::backward`] computes ∂loss/∂input (the first layer's dx GEMM).
     pub want_input_gradient: bool,
+    /// The layers packed for the fused kernels (dense.rs).
+    packed: PackedNetwork,
 }
 
 impl<T: Real> Workspace<T> {
@@ -245,7 +267,20 @@ impl<T: Real> Workspace<T> {
 
 impl<T: Real> Default for Workspace<T> {
     fn default() -> Self {
-        Workspace { acts: Vec::new(), grad: Vec::new(), grad_prev: Vec::new(), rows: 0, want_input_gradient: true }
+        Workspace { acts: Vec::new(), grad: Vec::new(), grad_prev: Vec::new(), rows: 0, want_input_gradient: true, packed: PackedNetwork::default() }
+    }
+}
+
+/// Whether a layer `n` wide runs through the fused kernels on this CPU (for f32 networks).
+fn fused(n: usize) -> bool {
+    n <= dense::MAX_WIDTH && dense::available()
+}
+
+/// A LeakyReLU's slope when the fused kernels can apply it (0 ≤ slope ≤ 1).
+fn leaky_slope(a: Activation) -> Option<f32> {
+    match a {
+        Activation::LeakyRelu { slope } if (0.0..=1.0).contains(&slope) => Some(slope as f32),
+        _ => None,
     }
 }
 
@@ -288,6 +323,18 @@ impl<T: Real> Mlp<T> {
         (&self.params[w..b], &self.params[b..b + out])
     }
 
+    /// Packs the layers for the fused kernels (a no-op while the parameters are unchanged, or
+    /// without the kernels).
+    fn pack(&self, packed: &mut PackedNetwork) {
+        if let (true, Some(params)) = (dense::available(), T::as_f32(&self.params)) {
+            let s = &self.shape;
+            packed.update(params, (0..s.layers()).map(|l| {
+                let (w, _) = s.offsets(l);
+                (s.widths[l], s.widths[l + 1], &params[w..w + s.widths[l] * s.widths[l + 1]])
+            }));
+        }
+    }
+
     /// Runs `rows` input rows (`rows × inputs`) forward; returns the output rows, which stay
     /// in `ws` for [`Mlp::backward`].
     pub fn forward<'w>(&self, input: &[T], rows: usize, ws: &'w mut Workspace<T>) -> &'w [T] {
@@ -295,6 +342,7 @@ impl<T: Real> Mlp<T> {
         assert_eq!(input.len(), rows * s.inputs(), "input rows");
         ws.rows = rows;
         ws.acts.resize_with(s.layers(), Vec::new);
+        self.pack(&mut ws.packed);
         for l in 0..s.layers() {
             let (n_in, n_out) = (s.widths[l], s.widths[l + 1]);
             let (w, b) = self.layer(l);
@@ -302,12 +350,26 @@ impl<T: Real> Mlp<T> {
             let x: &[T] = if l == 0 { input } else { &before[l - 1] };
             let y = &mut after[0];
             y.resize(rows * n_out, T::default());
+            let activation = s.activation(l);
+            let fast = if fused(n_out) { T::as_f32(x).zip(T::as_f32(b)) } else { None };
+            if let (Some((x, b)), Some(y)) = (fast, T::as_f32_mut(y)) {
+                // y = act(x · Wᵀ + b), one pass (dense.rs).
+                let epilogue = match activation {
+                    Activation::ExpHead { shift, clamp } => Epilogue::ExpHead { shift: shift as f32, clamp: clamp as f32 },
+                    a => leaky_slope(a).map_or(Epilogue::None, |slope| Epilogue::LeakyRelu { slope }),
+                };
+                dense::dense(x, rows, n_in, ws.packed.forward(l), n_out, b, epilogue, y);
+                if matches!(epilogue, Epilogue::None) {
+                    activation.apply_slice(y);
+                }
+                continue;
+            }
             for r in 0..rows {
                 y[r * n_out..(r + 1) * n_out].copy_from_slice(b);
             }
             // y (rows × out) += x (rows × in) · Wᵀ (in × out).
             T::gemm(rows, n_in, n_out, T::from_f64(1.0), x, n_in as isize, 1, w, 1, n_in as isize, T::from_f64(1.0), y, n_out as isize, 1);
-            s.activation(l).apply_slice(y);
+            activation.apply_slice(y);
         }
         &ws.acts[s.layers() - 1]
     }
@@ -324,10 +386,15 @@ impl<T: Real> Mlp<T> {
         }
         ws.grad.clear();
         ws.grad.extend_from_slice(d_output);
+        // Whether ws.grad already holds dz (the fused dx kernel applied act′).
+        let mut scaled = false;
+        self.pack(&mut ws.packed);
         for l in (0..s.layers()).rev() {
             let (n_in, n_out) = (s.widths[l], s.widths[l + 1]);
             // dz = d_out ⊙ act'(z), from the activations.
-            s.activation(l).scale_by_derivative(&mut ws.grad, &ws.acts[l]);
+            if !std::mem::take(&mut scaled) {
+                s.activation(l).scale_by_derivative(&mut ws.grad, &ws.acts[l]);
+            }
             if let Some(grads) = grads.as_deref_mut() {
                 let x: &[T] = if l == 0 { input } else { &ws.acts[l - 1] };
                 let (w_at, b_at) = s.offsets(l);
@@ -346,6 +413,15 @@ impl<T: Real> Mlp<T> {
             // dx (rows × in) = dz (rows × out) · W (out × in).
             let (w, _) = self.layer(l);
             ws.grad_prev.resize(rows * n_in, T::default());
+            let below = if l > 0 { T::as_f32(&ws.acts[l - 1]).zip(leaky_slope(s.activation(l - 1))) } else { None };
+            if let (true, Some(dz), Some(dx)) = (fused(n_in), T::as_f32(&ws.grad), T::as_f32_mut(&mut ws.grad_prev)) {
+                // With the layer below's LeakyReLU derivative applied: dx is its dz (dense.rs).
+                let epilogue = below.map_or(Epilogue::None, |(a, slope)| Epilogue::LeakyReluGradient { slope, a });
+                dense::dense(dz, rows, n_out, ws.packed.backward(l), n_in, &[], epilogue, dx);
+                scaled = below.is_some();
+                std::mem::swap(&mut ws.grad, &mut ws.grad_prev);
+                continue;
+            }
             T::gemm(rows, n_out, n_in, T::from_f64(1.0), &ws.grad, n_out as isize, 1, w, n_in as isize, 1, T::default(), &mut ws.grad_prev, n_in as isize, 1);
             std::mem::swap(&mut ws.grad, &mut ws.grad_prev);
         }
@@ -361,6 +437,34 @@ mod tests {
     fn activation_names_round_trip() {
         for a in [Activation::Identity, Activation::Sigmoid, Activation::LEAKY_RELU, Activation::EXP_HEAD] {
             assert_eq!(Activation::parse(&a.name()), Some(a), "{}", a.name());
+        }
+    }
+
+    /// The f32 network (the fused kernels of dense.rs, where this CPU has them) against the
+    /// same network in f64 (the GEMM path): outputs, input and weight gradients.
+    #[test]
+    fn f32_layers_agree_with_the_f64_gemm_path() {
+        let mut state = 11u64;
+        for (widths, output) in [(vec![15, 64, 64, 33, 7], Activation::EXP_HEAD), (vec![22, 64, 64, 6], Activation::Sigmoid), (vec![9, 80, 16], Activation::Identity)] {
+            let shape = MlpShape { widths, hidden: Activation::LEAKY_RELU, output };
+            let wide: Mlp<f64> = Mlp::new(shape.clone(), 3);
+            let narrow: Mlp<f32> = Mlp::from_params(shape.clone(), wide.params.iter().map(|p| *p as f32).collect()).unwrap();
+            let rows = 37;
+            let x: Vec<f64> = (0..rows * shape.inputs()).map(|_| 2.0 * splitmix(&mut state) - 1.0).collect();
+            let d: Vec<f64> = (0..rows * shape.outputs()).map(|_| 2.0 * splitmix(&mut state) - 1.0).collect();
+            let (mut w64, mut w32) = (Workspace::default(), Workspace::default());
+            let y64 = wide.forward(&x, rows, &mut w64).to_vec();
+            let x32: Vec<f32> = x.iter().map(|v| *v as f32).collect();
+            let y32 = narrow.forward(&x32, rows, &mut w32).to_vec();
+            let (mut g64, mut g32) = (vec![0.0f64; wide.params.len()], vec![0.0f32; narrow.params.len()]);
+            let dx64 = wide.backward(&x, &d, &mut w64, Some(&mut g64)).to_vec();
+            let d32: Vec<f32> = d.iter().map(|v| *v as f32).collect();
+            let dx32 = narrow.backward(&x32, &d32, &mut w32, Some(&mut g32)).to_vec();
+            for (what, a, b) in [("output", &y64, &y32), ("input gradient", &dx64, &dx32), ("weight gradient", &g64, &g32)] {
+                let scale = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let worst = a.iter().zip(b.iter()).fold(0.0f64, |m, (p, q)| m.max((p - *q as f64).abs()));
+                assert!(worst <= 2e-5 * scale.max(1e-3), "{:?} {what}: worst |Δ| {worst} at scale {scale}", shape.widths);
+            }
         }
     }
 

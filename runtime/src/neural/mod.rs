@@ -8,6 +8,7 @@
 pub mod adam;
 pub mod classes;
 pub mod datagen;
+pub mod dense;
 pub mod energy_bound;
 pub mod evaluate;
 pub mod features;

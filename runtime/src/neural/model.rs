@@ -56,6 +56,30 @@ pub struct Slice<'a, T> {
     pub batch: usize,
 }
 
+/// Rows per block of a slice: every layer's activations of a block (64 wide) take 128 KB, so a
+/// block's forward and backward passes stay in a core's L2 cache.
+pub const BLOCK_ROWS: usize = 512;
+
+impl<'a, T> Slice<'a, T> {
+    /// The slice in consecutive blocks of at most [`BLOCK_ROWS`] rows (same `batch`).
+    pub fn blocks(&self) -> impl Iterator<Item = Slice<'a, T>> + '_ {
+        let rows = self.mu_l.len();
+        let per_row = |v: usize| v / rows.max(1);
+        let (ni, nj, nf) = (per_row(self.input.len()), per_row(self.jitter.len()), per_row(self.features.len()));
+        (0..rows).step_by(BLOCK_ROWS).map(move |a| {
+            let b = (a + BLOCK_ROWS).min(rows);
+            Slice {
+                input: &self.input[a * ni..b * ni],
+                jitter: &self.jitter[a * nj..b * nj],
+                features: &self.features[a * nf..b * nf],
+                target: &self.target[a * OUTPUTS..b * OUTPUTS],
+                mu_l: &self.mu_l[a..b],
+                batch: self.batch,
+            }
+        })
+    }
+}
+
 impl<T: Real> Default for ModelWorkspace<T> {
     fn default() -> Self {
         // The encoder's input gradient (∂loss/∂parameters) is never needed.
@@ -77,8 +101,17 @@ impl<T: Real> NeuralModel<T> {
         NeuralModel { encoder: Mlp::new(encoder_shape(), seed), decoder }
     }
 
-    /// Encoder, jitter, decoder, Eq. 3 and back: adds the gradients of both networks.
+    /// Encoder, jitter, decoder, Eq. 3 and back: adds the gradients of both networks. Runs in
+    /// blocks of [`BLOCK_ROWS`] rows.
     pub fn train_slice(&self, s: &Slice<'_, T>, w: LossWeights, ws: &mut ModelWorkspace<T>, g_enc: &mut [T], g_dec: &mut [T]) -> LossParts {
+        let mut parts = LossParts::default();
+        for b in s.blocks() {
+            parts.add(&self.train_block(&b, w, ws, g_enc, g_dec));
+        }
+        parts
+    }
+
+    fn train_block(&self, s: &Slice<'_, T>, w: LossWeights, ws: &mut ModelWorkspace<T>, g_enc: &mut [T], g_dec: &mut [T]) -> LossParts {
         let rows = s.mu_l.len();
         let z = self.encoder.forward(s.input, rows, &mut ws.enc);
         fill_decoder_input(z, s.jitter, s.features, rows, &mut ws.dec_in);
@@ -123,10 +156,15 @@ fn latent_gradient<T: Real>(d_in: &[T], rows: usize) -> Vec<T> {
 /// returns the loss and ∂loss/∂latent (rows × 6). The decoder's weight gradients are not
 /// computed.
 pub fn latent_slice<T: Real>(decoder: &Mlp<T>, s: &Slice<'_, T>, w: LossWeights, ws: &mut ModelWorkspace<T>) -> (LossParts, Vec<T>) {
-    let rows = s.mu_l.len();
-    fill_decoder_input(s.input, s.jitter, s.features, rows, &mut ws.dec_in);
-    let parts = decode_and_backward(decoder, s, w, ws, None);
-    (parts, latent_gradient(&ws.d_latent, rows))
+    let mut parts = LossParts::default();
+    let mut grad = Vec::with_capacity(s.mu_l.len() * LATENT);
+    for b in s.blocks() {
+        let rows = b.mu_l.len();
+        fill_decoder_input(b.input, b.jitter, b.features, rows, &mut ws.dec_in);
+        parts.add(&decode_and_backward(decoder, &b, w, ws, None));
+        grad.extend(ws.d_latent.chunks(DECODER_INPUTS).flat_map(|row| row[..LATENT].iter().copied()));
+    }
+    (parts, grad)
 }
 
 /// Decodes rows of [latent, features] (rows × 15) into rows of 7 outputs.
