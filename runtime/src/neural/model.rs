@@ -162,7 +162,7 @@ pub fn latent_slice<T: Real>(decoder: &Mlp<T>, s: &Slice<'_, T>, w: LossWeights,
         let rows = b.mu_l.len();
         fill_decoder_input(b.input, b.jitter, b.features, rows, &mut ws.dec_in);
         parts.add(&decode_and_backward(decoder, &b, w, ws, None));
-        grad.extend(ws.d_latent.chunks(DECODER_INPUTS).flat_map(|row| row[..LATENT].iter().copied()));
+        grad.extend(latent_gradient(&ws.d_latent, rows));
     }
     (parts, grad)
 }
