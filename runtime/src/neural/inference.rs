@@ -8,13 +8,10 @@
 
 use super::loss::OUTPUTS;
 use super::mlp::{Activation, Mlp, Workspace};
-use super::model::DECODER_INPUTS;
+use super::model::{BLOCK_ROWS as BLOCK, DECODER_INPUTS};
 use crate::wgpu_engine::WgpuEngine;
 use uplift_compiler::backend_neural::{write_wgsl_decoder, DecoderSpec, NeuralActivation, DECODER_ENTRY_POINT, DECODER_WORKGROUP_SIZE};
 use wgpu::util::DeviceExt;
-
-/// Rows per block of one thread.
-const BLOCK: usize = 1024;
 
 /// Decodes `dec_in` (rows × 15) into `out` (rows × 7) on `threads` threads.
 pub fn decode_parallel(decoder: &Mlp<f32>, dec_in: &[f32], out: &mut [f32], threads: usize) {
