@@ -31,6 +31,7 @@
 //! [`RustError`] naming the construct; the writer never panics.
 
 use crate::kernel::{PatternKernel, BINDING_FIRST_TEXTURE, GEOMETRY_LAYOUT, GEOMETRY_STRIDE};
+use crate::node_library::TABLE_DATA;
 use askama::Template;
 use mtlx::DataType;
 use naga::proc::{CaseInsensitiveKeywordSet, KeywordSet, NameKey, Namer};
@@ -53,11 +54,17 @@ pub struct RustOptions {
     /// The binding of texture index 0 (group 0); a global texture at binding `b` is index
     /// `b - first_texture_binding`.
     pub first_texture_binding: u32,
+    /// A path (for instance `crate::MX_ALBEDO_TABLE_DATA`) of a `static [f32; N]` holding the
+    /// library's albedo tables (`node_library::TABLE_DATA`), which a kernel reading them then
+    /// uses instead of writing its own copy of the array: a crate that ships many BSDF kernels
+    /// holds the tables once ([`write_albedo_table_static`] writes that static). `None` writes
+    /// the array into the module as a constant.
+    pub albedo_table_data: Option<String>,
 }
 
 impl Default for RustOptions {
     fn default() -> Self {
-        RustOptions { textures_trait: None, first_texture_binding: BINDING_FIRST_TEXTURE }
+        RustOptions { textures_trait: None, first_texture_binding: BINDING_FIRST_TEXTURE, albedo_table_data: None }
     }
 }
 
@@ -411,6 +418,10 @@ impl<'m> Writer<'m> {
         // Constants.
         for (h, c) in module.constants.iter() {
             let name = self.names[&NameKey::Constant(h)].clone();
+            if let (Some(TABLE_DATA), Some(path)) = (c.name.as_deref(), &self.options.albedo_table_data) {
+                let _ = writeln!(items, "#[allow(unused_imports)]\npub use {path} as {name};\n");
+                continue;
+            }
             let t = self.type_name(c.ty)?;
             let v = self.const_expr(c.init)?;
             if name.chars().any(|c| c.is_ascii_lowercase()) {
@@ -1821,6 +1832,22 @@ struct RustKernelTemplate<'a> {
 /// (askama template `templates/pattern_kernel.rs`).
 pub fn write_rust_kernel(kernel: &PatternKernel) -> Result<String, RustError> {
     write_rust_kernel_with(kernel, &RustOptions::default())
+}
+
+/// The library's albedo tables as one Rust item, `pub static {name}: [f32; N] = [...];`, for
+/// the kernels written with [`RustOptions::albedo_table_data`] naming it (each value printed
+/// so that it reads back to the same f32).
+pub fn write_albedo_table_static(name: &str, data: &[f32]) -> String {
+    let mut s = format!("pub static {name}: [f32; {}] = [\n", data.len());
+    for row in data.chunks(16) {
+        s.push_str("    ");
+        for v in row {
+            let _ = write!(s, "{v:?}, ");
+        }
+        s.push('\n');
+    }
+    s.push_str("];\n");
+    s
 }
 
 /// [`write_rust_kernel`] with options (for instance a shared texture trait).

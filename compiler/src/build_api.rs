@@ -12,7 +12,7 @@
 //! // src/lib.rs: include!(concat!(env!("OUT_DIR"), "/marble.rs"));
 //! ```
 
-use crate::backend_rust::write_rust_kernel;
+use crate::backend_rust::{write_albedo_table_static, write_rust_kernel, write_rust_kernel_with, RustOptions};
 use crate::compile::{Compiler, OutputSelection};
 use crate::kernel::ClosureContext;
 use std::path::{Path, PathBuf};
@@ -22,6 +22,17 @@ use std::path::{Path, PathBuf};
 pub struct Builder {
     libraries: Vec<PathBuf>,
     graphs: Vec<(PathBuf, OutputSelection, Option<ClosureContext>)>,
+    albedo_table_data: Option<String>,
+}
+
+/// One kernel [`Builder::compile_kernels`] wrote.
+#[derive(Clone, Debug)]
+pub struct BuiltKernel {
+    /// `<stem>.rs` in the output folder.
+    pub file: PathBuf,
+    /// [`kernel_fingerprint`] of the kernel's Rust as [`write_rust_kernel`] writes it (with its
+    /// own albedo tables): what a runtime computes for the same document to find this kernel.
+    pub fingerprint: u64,
 }
 
 impl Builder {
@@ -54,10 +65,31 @@ impl Builder {
         self
     }
 
+    /// Kernels that read the albedo tables use the `static` at `path` (written by
+    /// [`Builder::write_albedo_tables`] into a module of the same crate) instead of each holding
+    /// its own copy of the array.
+    pub fn shared_albedo_tables(mut self, path: impl Into<String>) -> Builder {
+        self.albedo_table_data = Some(path.into());
+        self
+    }
+
+    /// Writes the library's albedo tables as `pub static {name}: [f32; N]` into `file`, for
+    /// [`Builder::shared_albedo_tables`].
+    pub fn write_albedo_tables(&self, name: &str, file: &Path) -> Result<(), String> {
+        let compiler = Compiler::new(&self.libraries);
+        let data = compiler.library.albedo_table_data.as_ref().ok_or("the library has no albedo tables (mx_albedo_table_data)")?;
+        std::fs::write(file, write_albedo_table_static(name, data)).map_err(|e| format!("{}: {e}", file.display()))
+    }
+
     /// Writes `<stem>.rs` for every graph into `out_dir`; returns the files written. Prints
     /// `cargo:rerun-if-changed` for the documents and library folders. Errors are the
     /// compiler's positioned diagnostics, one per line.
     pub fn compile(&self, out_dir: &Path) -> Result<Vec<PathBuf>, String> {
+        Ok(self.compile_kernels(out_dir)?.into_iter().map(|k| k.file).collect())
+    }
+
+    /// [`Builder::compile`], also returning each kernel's fingerprint.
+    pub fn compile_kernels(&self, out_dir: &Path) -> Result<Vec<BuiltKernel>, String> {
         let compiler = Compiler::new(&self.libraries);
         if mtlx::has_errors(&compiler.library.diagnostics) {
             return Err(lines(&compiler.library.diagnostics));
@@ -77,13 +109,21 @@ impl Builder {
                 return Err(msg);
             };
             let rust = write_rust_kernel(&kernel).map_err(|e| format!("{}: {e}", path.display()))?;
+            let fingerprint = kernel_fingerprint(&rust);
+            let rust = match &self.albedo_table_data {
+                Some(p) if kernel.albedo_tables.is_some() => {
+                    let options = RustOptions { albedo_table_data: Some(p.clone()), ..RustOptions::default() };
+                    write_rust_kernel_with(&kernel, &options).map_err(|e| format!("{}: {e}", path.display()))?
+                }
+                _ => rust,
+            };
             let mut stem = path.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "kernel".into());
             if let Some(c) = context {
                 stem = format!("{stem}_{}", c.name());
             }
             let out = out_dir.join(format!("{stem}.rs"));
             std::fs::write(&out, rust).map_err(|e| format!("{}: {e}", out.display()))?;
-            written.push(out);
+            written.push(BuiltKernel { file: out, fingerprint });
         }
         Ok(written)
     }

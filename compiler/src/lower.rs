@@ -4,7 +4,7 @@
 
 use crate::ir::{GeomProp, Graph, InterfaceInput, ValueKind};
 use crate::kernel::*;
-use crate::node_library::NodeLibrary;
+use crate::node_library::{NodeLibrary, TABLE_ACCESSOR, TABLE_DATA};
 use crate::wgsl_types::{constant_expr, wgsl_type};
 use askama::Template;
 use mtlx::DataType;
@@ -363,10 +363,8 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
     })
 }
 
-/// The library function every albedo-table read goes through, the constant array it reads on
-/// the CPU, and its GPU form (reading the storage buffer the kernel template declares).
-pub const TABLE_ACCESSOR: &str = "mx_albedo_table";
-pub const TABLE_DATA: &str = "mx_albedo_table_data";
+/// The albedo-table accessor's GPU form (reading the storage buffer the kernel template
+/// declares).
 const GPU_TABLE_ACCESSOR: &str = "fn mx_albedo_table(i: i32) -> f32 {\n    return mx_albedo_table_buffer[i];\n}";
 
 /// The context numbers of closure.wgsl (MX_CONTEXT_*).

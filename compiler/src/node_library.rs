@@ -108,6 +108,12 @@ impl Definitions {
     }
 }
 
+/// The library function every albedo-table read goes through, and the constant array it reads
+/// on the CPU (pbrlib's `albedo_tables.wgsl`); lowering swaps the accessor for a storage-buffer
+/// read in GPU kernels.
+pub const TABLE_ACCESSOR: &str = "mx_albedo_table";
+pub const TABLE_DATA: &str = "mx_albedo_table_data";
+
 /// The library the compiler works with: definitions plus WGSL items, with library problems.
 #[derive(Clone, Debug)]
 pub struct NodeLibrary {
@@ -152,7 +158,7 @@ impl NodeLibrary {
                 None
             }
         };
-        let albedo_table_data = wgsl.items.get(crate::lower::TABLE_DATA).and_then(|i| const_f32_array(&i.text)).map(std::sync::Arc::from);
+        let albedo_table_data = wgsl.items.get(TABLE_DATA).and_then(|i| const_f32_array(&i.text)).map(std::sync::Arc::from);
         let mut lib = NodeLibrary { defs, wgsl, diagnostics, signatures: HashMap::new(), evaluator, albedo_table_data };
         let checked: HashMap<String, Result<(), String>> = lib
             .defs

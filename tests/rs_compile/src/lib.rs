@@ -63,7 +63,7 @@ impl Checker {
     }
 }
 
-use uplift::batch::Columns;
+use uplift_engines::batch::Columns;
 
 /// Runs `f`, a batch over structure-of-arrays columns (a generated `mx_pattern_batch`), on
 /// row-major buffers: `geom` rows of `geometry_columns` floats, `inputs` rows of
@@ -101,31 +101,17 @@ mod generated {
 
 pub use generated::*;
 
-/// The seeded generator the differential and oracle tests share (SplitMix64).
-pub struct Rng(pub u64);
+/// The seeded generator the differential and oracle tests share: the runtime's SplitMix64.
+pub use uplift_base::rng::SplitMix64 as Rng;
 
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in [lo, hi).
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        let u = (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32;
-        lo + (hi - lo) * u
-    }
-
-    /// Uniform integer in lo..=hi.
-    pub fn int(&mut self, lo: i32, hi: i32) -> i32 {
-        lo + (self.next_u64() % (hi - lo + 1) as u64) as i32
-    }
-
+/// Random unit vectors for the tests' geometry.
+pub trait UnitVector {
     /// A uniformly distributed unit vector (rejection sampling in the unit ball).
-    pub fn unit(&mut self) -> [f32; 3] {
+    fn unit_vector(&mut self) -> [f32; 3];
+}
+
+impl UnitVector for Rng {
+    fn unit_vector(&mut self) -> [f32; 3] {
         loop {
             let v = [self.range(-1.0, 1.0), self.range(-1.0, 1.0), self.range(-1.0, 1.0)];
             let l2 = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];

@@ -8,10 +8,10 @@
 use glam::{UVec2, Vec4};
 use mtlx::DataType;
 use std::path::Path;
-use uplift::batch::{Columns, Geometry, PatternBatch, PatternEngine, TextureData};
-use uplift::wgpu_engine::WgpuEngine;
+use uplift_engines::batch::{Columns, Geometry, PatternBatch, PatternEngine, TextureData};
+use uplift_engines::wgpu_engine::WgpuEngine;
 use uplift_compiler::{Compiler, OutputSelection};
-use uplift_rs_snapshots::{Rng, Textures, KERNELS};
+use uplift_rs_snapshots::{Rng, Textures, UnitVector, KERNELS};
 
 /// Points per kernel.
 const POINTS: usize = 10_240;
@@ -109,8 +109,8 @@ fn every_snapshot_kernel_agrees_on_cpu_and_wgpu() {
         .map(|_| Geometry {
             texcoord: [rng.range(-2.0, 3.0), rng.range(-2.0, 3.0)],
             position: [rng.range(-10.0, 10.0), rng.range(-10.0, 10.0), rng.range(-10.0, 10.0)],
-            normal: rng.unit(),
-            tangent: rng.unit(),
+            normal: rng.unit_vector(),
+            tangent: rng.unit_vector(),
         })
         .collect();
     let geom: Vec<f32> = geometry.iter().flat_map(|g| g.row()).collect();

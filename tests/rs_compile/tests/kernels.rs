@@ -2,7 +2,7 @@
 //! them against closed forms computed here; and runs every snapshot kernel once.
 
 use glam::{Vec2, Vec3};
-use uplift::batch::Geometry;
+use uplift_engines::batch::Geometry;
 use uplift_rs_snapshots::{Checker, Rng, KERNELS};
 
 /// A geometry row (the runtime's `Geometry::row`): texcoord, then position, normal and tangent

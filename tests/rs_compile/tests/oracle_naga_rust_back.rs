@@ -50,7 +50,7 @@ mod oracle {
 }
 
 use naga_rust_rt::Scalar;
-use uplift_rs_snapshots::{Checker, Rng, KERNELS};
+use uplift_rs_snapshots::{Checker, Rng, UnitVector, KERNELS};
 
 /// The value naga-rust-back should give for output component `component` of kernel `name` at
 /// geometry row `g`, where its translation of a builtin is known to be wrong; such components are
@@ -85,7 +85,7 @@ fn generated_rust_matches_naga_rust_back() {
         let mut rng = Rng(0x0dac_1e00_5eed_0000 ^ ki as u64);
         let mut geom = Vec::with_capacity(POINTS * gs);
         for _ in 0..POINTS {
-            let (p, n, t) = ([rng.range(-10.0, 10.0), rng.range(-10.0, 10.0), rng.range(-10.0, 10.0)], rng.unit(), rng.unit());
+            let (p, n, t) = ([rng.range(-10.0, 10.0), rng.range(-10.0, 10.0), rng.range(-10.0, 10.0)], rng.unit_vector(), rng.unit_vector());
             geom.extend([rng.range(-2.0, 3.0), rng.range(-2.0, 3.0)]);
             for v in [p, p, n, n, t, t] {
                 geom.extend(v);

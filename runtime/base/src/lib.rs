@@ -1,0 +1,12 @@
+//! The runtime's bottom layer: what every other runtime crate may use and that depends on no
+//! other uplift crate. Atomic output files (`atomic_write`), seeded random numbers and stable
+//! hashes (`rng`), colour-space transfer functions (`color`), and the file codecs the runtime
+//! reads and writes (`exr`: OpenEXR; `csv_table`: `uplift eval`'s tables).
+//!
+//! Must never: depend on the compiler, an engine or any higher runtime crate.
+
+pub mod atomic_write;
+pub mod color;
+pub mod csv_table;
+pub mod exr;
+pub mod rng;

@@ -1,0 +1,229 @@
+//! Kernels the runtime was not built with (any document, any `--library`): the CPU engine
+//! writes the kernel's generated Rust into a small crate — the runner, `kernel_runner/main.rs`,
+//! with this engine's `driver.rs` and `runner_protocol.rs` — builds it once with cargo into a
+//! cache folder, and runs it as a child process that reads a batch on stdin and writes the
+//! output columns on stdout. Runners are keyed by a fingerprint of everything they are built
+//! from, so a cached one is reused until the kernel, the runner or its dependencies change.
+
+use super::runner_protocol::{decode_floats, encode_request, Request};
+use crate::batch::{Columns, KernelShape, PatternBatch};
+use std::borrow::Cow;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use uplift_compiler::build_api::{fnv1a, FNV1A_START};
+
+const RUNNER_MAIN: &str = include_str!("../../kernel_runner/main.rs");
+const DRIVER: &str = uplift_kernels::DRIVER_SOURCE;
+const PROTOCOL: &str = include_str!("runner_protocol.rs");
+
+/// LLVM's options for kernel code, passed as `-C llvm-args=…` (the workspace's
+/// `.cargo/config.toml` passes the same to the crates it builds, a test checks):
+/// - `-unroll-threshold=6000` (LLVM's default at -O3 is 300). Library loops with a trip count
+///   that is constant once inlined, such as fractal noise's octaves, must be unrolled fully for
+///   the batch loop around them to vectorise: measured on `runtime/kernels/graphs/triplanar_mask.mtlx`
+///   (three 3-octave fractal3d), one thread, AVX2: 0.79 M evals/s at the default, 0.80 at 1000,
+///   6.8 at 3000, 10.9 at 6000.
+/// - `-alias-set-saturation-threshold=10000` (default 250). Past that many pointers in one
+///   alias set LLVM's alias-set tracker gives up and treats every access as aliasing every
+///   other, so the loop vectoriser cannot prove the batch loop safe; a layered BSDF reads its
+///   albedo tables at a few hundred places (`runtime/kernels/graphs/bsdf/bsdf_stack.mtlx`, eval
+///   context: 59 bilinear lookups). Measured on that graph, one thread, AVX-512: 1.2 M evals/s
+///   at the default (scalar), 6.1 M at 10000.
+pub const KERNEL_LLVM_ARGS: [&str; 2] = ["-unroll-threshold=6000", "-alias-set-saturation-threshold=10000"];
+
+/// Where runners are built and how.
+#[derive(Clone, Debug)]
+pub struct RunnerOptions {
+    /// Cache folder (runner crates in `kernels/`, their shared cargo target folders beside).
+    pub cache_dir: PathBuf,
+    /// `false` builds with LLVM's loop and SLP vectorisers off (`-C no-vectorize-loops -C
+    /// no-vectorize-slp`): the benchmark's reference for what vectorisation gains.
+    pub vectorize: bool,
+}
+
+impl Default for RunnerOptions {
+    fn default() -> Self {
+        RunnerOptions { cache_dir: default_cache_dir(), vectorize: true }
+    }
+}
+
+/// `$UPLIFT_CACHE_DIR`, else `$XDG_CACHE_HOME/uplift`, else `~/.cache/uplift`, else a folder in
+/// the system's temporary directory.
+pub fn default_cache_dir() -> PathBuf {
+    if let Some(d) = std::env::var_os("UPLIFT_CACHE_DIR").filter(|d| !d.is_empty()) {
+        return PathBuf::from(d);
+    }
+    if let Some(d) = std::env::var_os("XDG_CACHE_HOME").filter(|d| !d.is_empty()) {
+        return PathBuf::from(d).join("uplift");
+    }
+    if let Some(h) = std::env::var_os("HOME").filter(|d| !d.is_empty()) {
+        return PathBuf::from(h).join(".cache/uplift");
+    }
+    std::env::temp_dir().join("uplift-cache")
+}
+
+/// A built runner for one kernel.
+#[derive(Clone, Debug)]
+pub struct ExternalKernel {
+    pub exe: PathBuf,
+    pub shape: KernelShape,
+}
+
+/// The runner crate's manifest.
+fn manifest(name: &str) -> String {
+    format!(
+        "# Written by uplift's CPU engine (runtime/engines/src/cpu_engine/external.rs): the runner of one kernel.\n\
+         [package]\nname = \"{name}\"\nversion = \"0.0.0\"\nedition = \"2021\"\npublish = false\n\n\
+         [dependencies]\n\
+         glam = {{ version = \"{}\", default-features = false, features = [\"std\"] }}\n\
+         rayon = \"{}\"\n\
+         multiversion = \"{}\"\n\n\
+         [profile.release]\ndebug = false\n\n\
+         # Not part of any enclosing workspace.\n[workspace]\n",
+        env!("UPLIFT_RUNNER_GLAM_VERSION"),
+        env!("UPLIFT_RUNNER_RAYON_VERSION"),
+        env!("UPLIFT_RUNNER_MULTIVERSION_VERSION"),
+    )
+}
+
+/// Builds (or finds in the cache) the runner of the kernel whose generated Rust is `rust`.
+pub fn build(rust: &str, shape: KernelShape, options: &RunnerOptions) -> Result<ExternalKernel, String> {
+    let variant = if options.vectorize { "" } else { "-novec" };
+    let mut h = FNV1A_START;
+    for part in [rust, RUNNER_MAIN, DRIVER, PROTOCOL, &manifest(""), &KERNEL_LLVM_ARGS.join(" ")] {
+        h = fnv1a(h, part.as_bytes());
+        h = fnv1a(h, &[0]);
+    }
+    let name = format!("uplift-kernel-{h:016x}{variant}");
+    let kernels = options.cache_dir.join("kernels");
+    let crate_dir = kernels.join(&name);
+    let target_dir = kernels.join(format!("target{variant}"));
+    let exe = target_dir.join("release").join(format!("{name}{}", std::env::consts::EXE_SUFFIX));
+    let kernel = ExternalKernel { exe: exe.clone(), shape };
+    if exe.is_file() {
+        return Ok(kernel);
+    }
+    let src = crate_dir.join("src");
+    std::fs::create_dir_all(&src).map_err(|e| format!("{}: cannot create the kernel runner's folder: {e}", src.display()))?;
+    for (path, text) in [
+        (crate_dir.join("Cargo.toml"), manifest(&name)),
+        (src.join("main.rs"), RUNNER_MAIN.to_string()),
+        (src.join("driver.rs"), DRIVER.to_string()),
+        (src.join("runner_protocol.rs"), PROTOCOL.to_string()),
+        (src.join("kernel.rs"), rust.to_string()),
+    ] {
+        uplift_base::atomic_write::write_atomically(&path, text.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    let run_cargo = |offline: bool| {
+        let mut c = Command::new(&cargo);
+        c.arg("build").arg("--release").arg("--quiet").arg("--manifest-path").arg(crate_dir.join("Cargo.toml"));
+        if offline {
+            c.arg("--offline");
+        }
+        // Flags are the runner's own: not the caller's RUSTFLAGS, nor a `.cargo/config.toml`
+        // around the caller's working directory.
+        let mut flags: Vec<String> = KERNEL_LLVM_ARGS.iter().map(|a| format!("-Cllvm-args={a}")).collect();
+        if !options.vectorize {
+            flags.extend(["-Cno-vectorize-loops".to_string(), "-Cno-vectorize-slp".to_string()]);
+        }
+        c.current_dir(&crate_dir).env("CARGO_TARGET_DIR", &target_dir).env_remove("RUSTFLAGS").env_remove("CARGO_BUILD_RUSTFLAGS");
+        c.env("CARGO_ENCODED_RUSTFLAGS", flags.join("\u{1f}"));
+        c.stdin(Stdio::null()).output()
+    };
+    let describe = |e: std::io::Error| format!("the CPU engine builds kernels it was not built with by running cargo ({}), which failed to start: {e}; install Rust (rustup) or use --engine wgpu", Path::new(&cargo).display());
+    // Offline first (the dependencies are usually cached); online when they are not.
+    eprintln!("uplift: building the CPU kernel runner {name} with cargo (once per kernel; cached in {})", kernels.display());
+    let mut out = run_cargo(true).map_err(describe)?;
+    if !out.status.success() {
+        out = run_cargo(false).map_err(describe)?;
+    }
+    if !out.status.success() {
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let tail: Vec<&str> = stderr.lines().rev().take(30).collect();
+        return Err(format!(
+            "building the CPU kernel runner in {} failed ({}):\n{}",
+            crate_dir.display(),
+            out.status,
+            tail.into_iter().rev().collect::<Vec<_>>().join("\n")
+        ));
+    }
+    if !exe.is_file() {
+        return Err(format!("cargo built the kernel runner but {} does not exist", exe.display()));
+    }
+    Ok(kernel)
+}
+
+/// The request for `batch` on `threads` threads.
+fn request(k: &ExternalKernel, batch: &PatternBatch, threads: usize) -> Vec<u8> {
+    encode_request(&Request {
+        n: batch.n(),
+        geometry_columns: batch.geometry.width(),
+        input_columns: k.shape.input_columns,
+        output_columns: k.shape.output_columns,
+        threads,
+        textures: batch.textures.iter().map(|t| (t.width, t.height, Cow::Borrowed(t.rgba.as_slice()))).collect(),
+        geometry: Cow::Borrowed(batch.geometry.data()),
+        inputs: Cow::Borrowed(batch.inputs.data()),
+    })
+}
+
+/// Runs the runner with `args`, `input` on stdin; returns its stdout.
+fn exchange(k: &ExternalKernel, args: &[&str], input: Vec<u8>) -> Result<Vec<u8>, String> {
+    let mut child = Command::new(&k.exe)
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("{}: cannot start the kernel runner: {e}", k.exe.display()))?;
+    let mut stdin = child.stdin.take().expect("piped stdin");
+    let writer = std::thread::spawn(move || stdin.write_all(&input));
+    let mut stdout = Vec::new();
+    child.stdout.take().expect("piped stdout").read_to_end(&mut stdout).map_err(|e| format!("reading the kernel runner's output: {e}"))?;
+    let mut stderr = String::new();
+    let _ = child.stderr.take().expect("piped stderr").read_to_string(&mut stderr);
+    let status = child.wait().map_err(|e| format!("waiting for the kernel runner: {e}"))?;
+    let written = writer.join().map_err(|_| "the request writer panicked".to_string())?;
+    if !status.success() {
+        return Err(format!("the kernel runner {} failed ({status}): {}", k.exe.display(), stderr.trim()));
+    }
+    written.map_err(|e| format!("writing the request to the kernel runner: {e}"))?;
+    Ok(stdout)
+}
+
+/// Evaluates `batch` with the runner, on `threads` threads.
+pub fn run(k: &ExternalKernel, batch: &PatternBatch, threads: usize) -> Result<Columns, String> {
+    let n = batch.n();
+    if n == 0 {
+        return Ok(Columns::zeros(0, k.shape.output_columns));
+    }
+    let out = exchange(k, &[], request(k, batch, threads))?;
+    Columns::from_column_major(n, k.shape.output_columns, decode_floats(&out)?).map_err(|e| format!("the kernel runner's output: {e}"))
+}
+
+/// Evaluations per second of the runner over `batch` on `threads` threads (at least `seconds`
+/// of repeated runs after a warm-up), and the CPU level it dispatched to.
+pub fn bench(k: &ExternalKernel, batch: &PatternBatch, threads: usize, seconds: f64) -> Result<(f64, String), String> {
+    let out = exchange(k, &["bench", &seconds.to_string()], request(k, batch, threads))?;
+    let text = String::from_utf8_lossy(&out);
+    let rate = text.split_whitespace().find_map(|w| w.strip_prefix("evals_per_second=")).and_then(|v| v.parse().ok());
+    let level = text.split_once("level=").map(|(_, l)| l.trim().to_string());
+    match (rate, level) {
+        (Some(r), Some(l)) => Ok((r, l)),
+        _ => Err(format!("unexpected benchmark output from the kernel runner: {text}")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_workspace_builds_kernels_with_the_runners_llvm_options() {
+        let config = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../.cargo/config.toml")).expect(".cargo/config.toml");
+        for arg in super::KERNEL_LLVM_ARGS {
+            let flag = format!("\"-Cllvm-args={arg}\"");
+            assert!(config.lines().any(|l| l.starts_with("rustflags") && l.contains(&flag)), "{flag} not in .cargo/config.toml");
+        }
+    }
+}

@@ -1,0 +1,130 @@
+//! The CPU engine: generated Rust kernels, parallel over blocks of points with rayon, each batch
+//! loop compiled for several CPU levels with runtime dispatch (`uplift_kernels::driver`). A
+//! kernel the runtime ships (`uplift_kernels::shipped`, built by `runtime/kernels/build.rs`)
+//! runs in-process; any other kernel is built once with cargo into a cached runner and run as a
+//! child process (`external.rs`). Both paths run the same generated `mx_pattern_batch` through
+//! the same driver.
+
+pub use uplift_kernels::{driver, shipped};
+pub mod external;
+pub mod runner_protocol;
+
+use crate::batch::{Columns, KernelShape, PatternBatch, PatternEngine};
+use driver::{TextureImage, TextureSet};
+use external::{ExternalKernel, RunnerOptions};
+use uplift_compiler::backend_rust::write_rust_kernel;
+use uplift_compiler::build_api::kernel_fingerprint;
+use uplift_compiler::kernel::GEOMETRY_STRIDE;
+use uplift_compiler::PatternKernel;
+
+/// A kernel ready to run on the CPU.
+pub enum CpuKernel {
+    /// Shipped with the runtime: runs in-process.
+    Builtin(&'static shipped::BuiltinKernel),
+    /// Built on demand: runs in a cached runner process.
+    External(ExternalKernel),
+}
+
+impl CpuKernel {
+    pub fn shape(&self) -> &KernelShape {
+        match self {
+            CpuKernel::Builtin(k) => &k.shape,
+            CpuKernel::External(k) => &k.shape,
+        }
+    }
+
+    /// Where the kernel's code comes from.
+    pub fn describe(&self) -> String {
+        match self {
+            CpuKernel::Builtin(k) => format!("built-in kernel `{}` ({})", k.name, k.source),
+            CpuKernel::External(k) => format!("kernel runner {}", k.exe.display()),
+        }
+    }
+}
+
+/// The CPU engine: a rayon pool and where to build runners.
+pub struct CpuEngine {
+    pool: rayon::ThreadPool,
+    threads: usize,
+    runner: RunnerOptions,
+}
+
+impl CpuEngine {
+    /// An engine on every available core.
+    pub fn new() -> Result<CpuEngine, String> {
+        Self::with_threads(std::thread::available_parallelism().map_or(1, |n| n.get()))
+    }
+
+    /// An engine on `threads` threads (at least one).
+    pub fn with_threads(threads: usize) -> Result<CpuEngine, String> {
+        let threads = threads.max(1);
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| format!("cannot start the CPU engine's threads: {e}"))?;
+        Ok(CpuEngine { pool, threads, runner: RunnerOptions::default() })
+    }
+
+    /// Builds kernel runners under `dir` instead of the default cache folder.
+    pub fn with_cache_dir(mut self, dir: impl Into<std::path::PathBuf>) -> CpuEngine {
+        self.runner.cache_dir = dir.into();
+        self
+    }
+
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// The CPU level the batch loops dispatch to on this machine.
+    pub fn cpu_level(&self) -> &'static str {
+        driver::cpu_level()
+    }
+
+    /// Finds `kernel` among the shipped ones (by the fingerprint of its generated Rust), or
+    /// builds its runner (the first time for a given kernel: a cargo build).
+    pub fn prepare(&self, kernel: &PatternKernel) -> Result<CpuKernel, String> {
+        let rust = rust_of(kernel)?;
+        match shipped::find(kernel_fingerprint(&rust)) {
+            Some(k) => Ok(CpuKernel::Builtin(k)),
+            None => external::build(&rust, KernelShape::of(kernel), &self.runner).map(CpuKernel::External),
+        }
+    }
+
+    /// Builds `kernel`'s runner even when it is shipped, with `options` (the benchmark builds
+    /// one with vectorisation off).
+    pub fn prepare_runner(&self, kernel: &PatternKernel, options: &RunnerOptions) -> Result<ExternalKernel, String> {
+        external::build(&rust_of(kernel)?, KernelShape::of(kernel), options)
+    }
+
+    /// Evaluates a prepared kernel for every point of `batch` (checked against its shape).
+    pub fn run_prepared(&self, kernel: &CpuKernel, batch: &PatternBatch) -> Result<Columns, String> {
+        let n = batch.check_shape(kernel.shape())?;
+        match kernel {
+            CpuKernel::Builtin(k) => {
+                let textures = TextureSet(batch.textures.iter().map(|t| TextureImage { width: t.width, height: t.height, rgba: &t.rgba }).collect());
+                let s = &k.shape;
+                let mut out = Columns::zeros(n, s.output_columns);
+                let inputs: &[f32] = if s.input_columns == 0 { &[] } else { batch.inputs.data() };
+                self.pool.install(|| {
+                    driver::run_blocks(k.batch, n, batch.geometry.data(), GEOMETRY_STRIDE, inputs, s.input_columns, out.data_mut(), s.output_columns, &textures)
+                });
+                Ok(out)
+            }
+            CpuKernel::External(k) => external::run(k, batch, self.threads),
+        }
+    }
+}
+
+/// The kernel's generated Rust (what both the shipped table and the runners are built from).
+fn rust_of(kernel: &PatternKernel) -> Result<String, String> {
+    write_rust_kernel(kernel).map_err(|e| format!("the kernel cannot be written as Rust: {e}"))
+}
+
+impl PatternEngine for CpuEngine {
+    fn describe(&self) -> String {
+        format!("CPU, {} thread(s), {}", self.threads, self.cpu_level())
+    }
+
+    fn run_pattern(&self, kernel: &PatternKernel, batch: &PatternBatch) -> Result<Columns, String> {
+        batch.check(kernel)?;
+        let k = self.prepare(kernel)?;
+        self.run_prepared(&k, batch)
+    }
+}

@@ -1,0 +1,113 @@
+//! The `uplift_stack` closure kernels (runtime/kernels/graphs/bsdf/uplift_stack.mtlx, shipped as CPU
+//! kernels in every closure context): one prepared kernel per context, on the CPU engine or
+//! the wgpu engine, run on rows of the 22 parameters (`stack_params::PARAMETER_TABLE` order)
+//! with per-row directions in the local frame (normal +z). The training-data generator, the
+//! renderer's reference material and the white furnace check evaluate the stack through it.
+
+use crate::batch::{Columns, Geometry, PatternBatch};
+use crate::cpu_engine::{CpuEngine, CpuKernel};
+use crate::wgpu_engine::{WgpuEngine, WgpuPipeline};
+use crate::stack_params::{PARAMETERS, PARAMETER_TABLE};
+use uplift_compiler::{ClosureContext, Compiler, OutputSelection, PatternKernel};
+
+
+/// The engine a stack kernel runs on.
+#[derive(Clone, Copy)]
+pub enum Engine<'a> {
+    Cpu(&'a CpuEngine),
+    Wgpu(&'a WgpuEngine),
+}
+
+enum Prepared {
+    Cpu(CpuKernel),
+    Wgpu(WgpuPipeline),
+}
+
+/// One closure context of the stack, prepared on an engine.
+pub struct StackKernel {
+    kernel: PatternKernel,
+    prepared: Prepared,
+}
+
+impl StackKernel {
+    /// The kernel on the CPU engine.
+    pub fn new(engine: &CpuEngine, context: ClosureContext) -> Result<StackKernel, String> {
+        Self::on(Engine::Cpu(engine), context)
+    }
+
+    /// The kernel on either engine.
+    pub fn on(engine: Engine<'_>, context: ClosureContext) -> Result<StackKernel, String> {
+        let (source, text) = uplift_kernels::shipped::UPLIFT_STACK_GRAPH;
+        let (doc, diags) = mtlx::read_str(text, source);
+        let c = Compiler::builtin().compile_document_in(doc, diags, source, &OutputSelection::AllNumeric, Some(context));
+        let kernel = c.kernel.ok_or_else(|| c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n"))?;
+        let prepared = match engine {
+            Engine::Cpu(e) => Prepared::Cpu(e.prepare(&kernel)?),
+            Engine::Wgpu(e) => Prepared::Wgpu(e.prepare(&kernel)),
+        };
+        Ok(StackKernel { kernel, prepared })
+    }
+
+    /// Where the kernel comes from (shipped or built; or the wgpu engine).
+    pub fn describe(&self) -> String {
+        match &self.prepared {
+            Prepared::Cpu(k) => k.describe(),
+            Prepared::Wgpu(_) => "the wgpu engine (generated WGSL)".into(),
+        }
+    }
+
+    fn input_offset(&self, name: &str) -> usize {
+        self.kernel.inputs.iter().find(|i| i.input.name == name).unwrap_or_else(|| panic!("uplift_stack kernel has no input `{name}`")).offset
+    }
+
+    /// The first column of output `name` (`response`, `throughput`, `albedo`, `wl`, `pdf`).
+    pub fn output_offset(&self, name: &str) -> usize {
+        self.kernel.outputs.iter().find(|o| o.name == name).unwrap_or_else(|| panic!("uplift_stack kernel has no output `{name}`")).offset
+    }
+
+    /// Runs the kernel on `rows` (indices into `params`, rows × 22) with per-row directions
+    /// (`wv`, `wl` or `u`, indexed like `params`).
+    pub fn run(&self, engine: &CpuEngine, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])]) -> Result<Columns, String> {
+        self.run_on(Engine::Cpu(engine), params, rows, directions)
+    }
+
+    /// [`run`](Self::run) on the engine the kernel was prepared on (`engine` must be it).
+    pub fn run_on(&self, engine: Engine<'_>, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])]) -> Result<Columns, String> {
+        let n = rows.len();
+        let mut inputs = Columns::zeros(n, self.kernel.input_stride);
+        for (name, dirs) in directions {
+            let at = self.input_offset(name);
+            for c in 0..3 {
+                let col = inputs.column_mut(at + c);
+                for (x, &r) in col.iter_mut().zip(rows) {
+                    *x = dirs[r][c];
+                }
+            }
+        }
+        for (k, p) in PARAMETER_TABLE.iter().enumerate() {
+            let col = inputs.column_mut(self.input_offset(p.input) + p.component);
+            for (x, &r) in col.iter_mut().zip(rows) {
+                *x = params[r * PARAMETERS + k];
+            }
+        }
+        let geometry = Geometry::columns(&vec![Geometry::default(); n]);
+        let batch = PatternBatch { geometry, inputs, textures: vec![] };
+        match (&self.prepared, engine) {
+            (Prepared::Cpu(k), Engine::Cpu(e)) => e.run_prepared(k, &batch),
+            (Prepared::Wgpu(p), Engine::Wgpu(e)) => e.run_prepared(p, &batch),
+            _ => Err("uplift_stack kernel run on another engine than it was prepared on".into()),
+        }
+    }
+}
+
+/// A `sample` kernel's direction `wl` with its `pdf`, normalised, when the sample is usable:
+/// pdf positive and finite, wl a unit vector (within 1e-3) with cosine above `min_mu`.
+pub fn usable_sample(wl: [f32; 3], pdf: f32, min_mu: f32) -> Option<[f32; 3]> {
+    let len = (wl[0] * wl[0] + wl[1] * wl[1] + wl[2] * wl[2]).sqrt();
+    (pdf > 0.0 && pdf.is_finite() && wl[2] > min_mu && (len - 1.0).abs() < 1e-3).then(|| wl.map(|x| x / len))
+}
+
+/// Three consecutive columns of `out` at row `k`.
+pub fn vec3_at(out: &Columns, at: usize, k: usize) -> [f32; 3] {
+    [0, 1, 2].map(|c| out.column(at + c)[k])
+}

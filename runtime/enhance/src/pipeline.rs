@@ -1,0 +1,423 @@
+//! Enhancing one PBR material, and a batch of them: choose the Type, draw the rule's scalars,
+//! write the textures, masks and self-contained `material.mtlx`, bake every `uplift_stack`
+//! input per texel into `params.exr` with the rule's compiled pattern kernel, and write
+//! `meta.json`. Everything is written into a staging folder that is renamed into place at the
+//! end, so an output folder either is complete or does not exist; a batch skips finished ones.
+
+use crate::gltf_input;
+use crate::masks::{self, MaskKind};
+use crate::material_writer::{format_value, material_document, MaterialSpec, PbrValue};
+use crate::pbr_input::{PbrChannel, PbrMaterial, Surface};
+use crate::rules::{self, uniform, EnhancementType, RuleInterface};
+use uplift_base::rng::{hash_str, mix64};
+use uplift_base::atomic_write::write_atomically;
+use uplift_engines::batch::{Columns, Geometry, PatternBatch, TextureData};
+use uplift_engines::cpu_engine::{CpuEngine, CpuKernel};
+use uplift_base::exr::{self, Compression, ExrImage};
+use uplift_engines::texture_loader::load_texture;
+use std::path::{Path, PathBuf};
+use uplift_compiler::{Compiler, OutputSelection};
+
+/// How to enhance.
+#[derive(Clone, Debug)]
+pub struct EnhanceOptions {
+    /// A fixed Type, or `None` to draw one in the paper's proportions.
+    pub kind: Option<EnhancementType>,
+    pub seed: u64,
+    /// Bake resolution (width, height); default: the largest input texture, else 256².
+    pub resolution: Option<(usize, usize)>,
+    /// Width of the square masks.
+    pub mask_size: usize,
+}
+
+/// What was written for one material.
+#[derive(Clone, Debug)]
+pub struct Enhanced {
+    pub kind: EnhancementType,
+    pub out_dir: PathBuf,
+    pub scalars: Vec<(String, f64)>,
+}
+
+/// Mean of a channel's first component (constants: the value).
+fn channel_mean(c: &PbrChannel) -> Result<f32, String> {
+    Ok(match c {
+        PbrChannel::Constant(v) => v[0],
+        PbrChannel::File { path, colorspace } => mean_first(&load_texture(path, Some(colorspace))?),
+        PbrChannel::Pixels(t) => mean_first(t),
+    })
+}
+
+fn mean_first(t: &TextureData) -> f32 {
+    let n = (t.width * t.height) as f64;
+    (t.rgba.chunks(4).map(|p| p[0] as f64).sum::<f64>() / n) as f32
+}
+
+/// The Type for a material: the requested one (refused for metals when dielectric-only), or a
+/// draw in the paper's proportions from the seed.
+pub fn choose_type(material: &PbrMaterial, options: &EnhanceOptions) -> Result<EnhancementType, String> {
+    let metallic = channel_mean(&material.metalness)? >= 0.5;
+    match options.kind {
+        Some(t) if t.dielectric_only() && metallic => Err(format!(
+            "{}: Type {} is for dielectric materials, and this material's mean metalness is at least 0.5",
+            material.source,
+            t.index()
+        )),
+        Some(t) => Ok(t),
+        None => Ok(EnhancementType::draw(uniform(options.seed, hash_str("enhancement type"), 0), metallic)),
+    }
+}
+
+fn texture_size(c: &PbrChannel) -> Result<Option<(usize, usize)>, String> {
+    Ok(match c {
+        PbrChannel::Constant(_) => None,
+        PbrChannel::File { path, .. } => {
+            let (w, h) = image::image_dimensions(path).map_err(|e| format!("{}: cannot read texture: {e}", path.display()))?;
+            Some((w as usize, h as usize))
+        }
+        PbrChannel::Pixels(t) => Some((t.width as usize, t.height as usize)),
+    })
+}
+
+/// Bilinear resampling of linear RGBA to `w × h` (texel centres to texel centres, clamped).
+fn resample(t: &TextureData, w: usize, h: usize) -> TextureData {
+    let (sw, sh) = (t.width as usize, t.height as usize);
+    let mut rgba = vec![0.0f32; w * h * 4];
+    for y in 0..h {
+        let fy = ((y as f32 + 0.5) * sh as f32 / h as f32 - 0.5).clamp(0.0, (sh - 1) as f32);
+        let (y0, ty) = (fy.floor() as usize, fy.fract());
+        let y1 = (y0 + 1).min(sh - 1);
+        for x in 0..w {
+            let fx = ((x as f32 + 0.5) * sw as f32 / w as f32 - 0.5).clamp(0.0, (sw - 1) as f32);
+            let (x0, tx) = (fx.floor() as usize, fx.fract());
+            let x1 = (x0 + 1).min(sw - 1);
+            for c in 0..4 {
+                let at = |xx: usize, yy: usize| t.rgba[(yy * sw + xx) * 4 + c];
+                let top = at(x0, y0) * (1.0 - tx) + at(x1, y0) * tx;
+                let bottom = at(x0, y1) * (1.0 - tx) + at(x1, y1) * tx;
+                rgba[(y * w + x) * 4 + c] = top * (1.0 - ty) + bottom * ty;
+            }
+        }
+    }
+    TextureData { width: w as u32, height: h as u32, rgba }
+}
+
+/// Linear RGBA as a 16-bit PNG: grey for float inputs, RGB otherwise (the encoder takes
+/// native-endian samples).
+fn png16(t: &TextureData, grey: bool) -> Result<Vec<u8>, String> {
+    let q = |v: f32| (v.clamp(0.0, 1.0) * 65535.0).round() as u16;
+    let mut bytes = Vec::new();
+    let encoder = image::codecs::png::PngEncoder::new(&mut bytes);
+    let (w, h) = (t.width, t.height);
+    let result = if grey {
+        let data: Vec<u16> = t.rgba.chunks(4).map(|p| q(p[0])).collect();
+        image::ImageEncoder::write_image(encoder, bytemuck::cast_slice(&data), w, h, image::ExtendedColorType::L16)
+    } else {
+        let data: Vec<u16> = t.rgba.chunks(4).flat_map(|p| [q(p[0]), q(p[1]), q(p[2])]).collect();
+        image::ImageEncoder::write_image(encoder, bytemuck::cast_slice(&data), w, h, image::ExtendedColorType::Rgb16)
+    };
+    result.map_err(|e| format!("encoding a PNG: {e}"))?;
+    Ok(bytes)
+}
+
+/// Writes one PBR channel into `dir/textures/` at `size` (copying a file that already has that
+/// size, resampling otherwise); returns its value in the document.
+fn write_channel(input: &str, c: &PbrChannel, size: (usize, usize), dir: &Path) -> Result<PbrValue, String> {
+    let grey = input != "base_color" && input != "normal_map";
+    let textures = dir.join("textures");
+    let save = |name: String, bytes: &[u8], colorspace: &str| -> Result<PbrValue, String> {
+        std::fs::create_dir_all(&textures).map_err(|e| format!("{}: {e}", textures.display()))?;
+        let path = textures.join(&name);
+        write_atomically(&path, bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        Ok(PbrValue::Texture { file: format!("textures/{name}"), colorspace: colorspace.into() })
+    };
+    match c {
+        PbrChannel::Constant(v) => Ok(PbrValue::Constant(v.clone())),
+        PbrChannel::File { path, colorspace } if texture_size(c)? == Some(size) => {
+            let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("png").to_ascii_lowercase();
+            let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            save(format!("{input}.{ext}"), &bytes, colorspace)
+        }
+        PbrChannel::File { path, colorspace } => {
+            let t = resample(&load_texture(path, Some(colorspace))?, size.0, size.1);
+            save(format!("{input}.png"), &png16(&t, grey)?, "lin_rec709")
+        }
+        PbrChannel::Pixels(t) => {
+            let t = if (t.width as usize, t.height as usize) == size { (**t).clone() } else { resample(t, size.0, size.1) };
+            save(format!("{input}.png"), &png16(&t, grey)?, "lin_rec709")
+        }
+    }
+}
+
+/// Per-texel geometry of the material's texture space and the object's size.
+fn surface_geometry(material: &PbrMaterial, w: usize, h: usize) -> Result<(Vec<Geometry>, f32), String> {
+    let texcoord = |x: usize, y: usize| [(x as f32 + 0.5) / w as f32, 1.0 - (y as f32 + 0.5) / h as f32];
+    match &material.surface {
+        Surface::Plane => {
+            let mut g = Vec::with_capacity(w * h);
+            for y in 0..h {
+                for x in 0..w {
+                    let position = [(x as f32 + 0.5) / w as f32 - 0.5, 0.0, (y as f32 + 0.5) / h as f32 - 0.5];
+                    g.push(Geometry { texcoord: texcoord(x, y), position, normal: [0.0, 1.0, 0.0], tangent: [1.0, 0.0, 0.0] });
+                }
+            }
+            Ok((g, std::f32::consts::SQRT_2))
+        }
+        Surface::Gltf { asset, material: k } => {
+            let bake = gltf_input::rasterize_uv(asset, *k, w, h)?;
+            let d: f32 = (0..3).map(|i| (bake.bbox_max[i] - bake.bbox_min[i]).powi(2)).sum::<f32>().sqrt();
+            let g = (0..w * h)
+                .map(|i| Geometry { texcoord: texcoord(i % w, i / w), position: bake.position[i], normal: bake.normal[i], tangent: bake.tangent[i] })
+                .collect();
+            Ok((g, d.max(1e-6)))
+        }
+    }
+}
+
+/// The seed of a mask of a material.
+fn mask_seed(seed: u64, kind: MaskKind) -> u64 {
+    mix64(seed ^ hash_str(kind.file_stem()))
+}
+
+/// Compiles the rule's pattern outputs as if the rule document sat in `dir` (so its
+/// `masks/*.png` are the material's): the same kernel `runtime/kernels/build.rs` ships.
+pub fn rule_kernel(rule: &RuleInterface, dir: &Path) -> Result<uplift_compiler::PatternKernel, String> {
+    let name = dir.join(rule.kind.file_name()).display().to_string();
+    let (doc, diags) = mtlx::read_str(&rule.kind.standalone_text(), &name);
+    let outputs: Vec<String> = stack_outputs(&rule.document).into_iter().map(|o| format!("{}/{o}", rules::RULE_GRAPH)).collect();
+    let c = Compiler::builtin().compile_document(doc, diags, &name, &OutputSelection::Named(outputs));
+    if mtlx::has_errors(&c.diagnostics) {
+        return Err(c.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.to_string()).collect::<Vec<_>>().join("\n"));
+    }
+    c.kernel.ok_or_else(|| format!("{name}: no pattern outputs"))
+}
+
+/// The rule's baked outputs (`<name>_out`, not closures), in document order.
+pub fn stack_outputs(rule: &mtlx::Document) -> Vec<String> {
+    let Some(graph) = rule.top_level().iter().copied().find(|&id| rule.get(id).name() == rules::RULE_GRAPH) else { return Vec::new() };
+    rule.children_of(graph, "output")
+        .map(|id| rule.get(id))
+        .filter(|e| e.name().ends_with("_out") && e.attr("type") != Some("BSDF"))
+        .map(|e| e.name().to_string())
+        .collect()
+}
+
+/// An output's EXR channel names: `name` for floats, `name.R/G/B` for colors, `name.X/Y/Z`
+/// for vectors.
+pub fn channel_names(output: &str, components: usize, is_color: bool) -> Vec<String> {
+    let base = output.rsplit('/').next().unwrap_or(output).trim_end_matches("_out");
+    match components {
+        1 => vec![base.to_string()],
+        _ => (if is_color { ["R", "G", "B"] } else { ["X", "Y", "Z"] }).iter().take(components).map(|c| format!("{base}.{c}")).collect(),
+    }
+}
+
+/// Enhances one material into `out` (replaced if it exists).
+pub fn enhance(material: &PbrMaterial, options: &EnhanceOptions, out: &Path, engine: &CpuEngine) -> Result<Enhanced, String> {
+    let kind = choose_type(material, options)?;
+    let rule = rules::interface(kind)?;
+    let scalars = rules::draw_all(&rule.random, options.seed);
+    let parent = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
+    let leaf = out.file_name().map(|n| n.to_string_lossy().to_string()).ok_or_else(|| format!("{}: not a folder name", out.display()))?;
+    let staging = parent.join(format!(".{leaf}.staging-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&staging);
+    std::fs::create_dir_all(&staging).map_err(|e| format!("{}: {e}", staging.display()))?;
+    let result = write_outputs(material, options, kind, &rule, &scalars, &staging, engine);
+    if let Err(e) = result {
+        let _ = std::fs::remove_dir_all(&staging);
+        return Err(e);
+    }
+    if out.exists() {
+        let old = parent.join(format!(".{leaf}.old-{}", std::process::id()));
+        std::fs::rename(out, &old).map_err(|e| format!("{}: {e}", out.display()))?;
+        let _ = std::fs::remove_dir_all(&old);
+    }
+    std::fs::rename(&staging, out).map_err(|e| format!("{}: {e}", out.display()))?;
+    Ok(Enhanced { kind, out_dir: out.to_path_buf(), scalars })
+}
+
+fn write_outputs(
+    material: &PbrMaterial,
+    options: &EnhanceOptions,
+    kind: EnhancementType,
+    rule: &RuleInterface,
+    scalars: &[(String, f64)],
+    dir: &Path,
+    engine: &CpuEngine,
+) -> Result<(), String> {
+    // Resolution: the largest texture, unless given.
+    let mut size = options.resolution;
+    if size.is_none() {
+        for (_, c) in material.channels() {
+            if let Some(s) = texture_size(c)? {
+                size = Some(size.map_or(s, |(w, h): (usize, usize)| (w.max(s.0), h.max(s.1))));
+            }
+        }
+    }
+    let (w, h) = size.unwrap_or((256, 256));
+    if w == 0 || h == 0 || w > 8192 || h > 8192 {
+        return Err(format!("bake resolution {w}x{h}: 1 to 8192 texels per side"));
+    }
+
+    let (geometry, object_size) = surface_geometry(material, w, h)?;
+    let mut pbr: Vec<(String, PbrValue)> = Vec::new();
+    for (input, c) in material.channels() {
+        pbr.push((input.to_string(), write_channel(input, c, (w, h), dir)?));
+    }
+    pbr.push(("object_size".into(), PbrValue::Constant(vec![object_size])));
+
+    let masks_dir = dir.join("masks");
+    std::fs::create_dir_all(&masks_dir).map_err(|e| format!("{}: {e}", masks_dir.display()))?;
+    for (_, kind) in &rule.masks {
+        masks::generate(*kind, mask_seed(options.seed, *kind), options.mask_size).write_png(&masks_dir.join(format!("{}.png", kind.file_stem())))?;
+    }
+
+    let doc = material_document(&MaterialSpec { rule, scalars, pbr: &pbr })?;
+    let path = dir.join("material.mtlx");
+    write_atomically(&path, mtlx::write_string(&doc).as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
+
+    let params = bake(rule, scalars, &pbr, dir, &geometry, w, h, engine)?;
+    exr::write(&dir.join("params.exr"), &params, Compression::Zip)?;
+
+    let meta = meta_json(material, kind, options.seed, scalars, (w, h), object_size, rule);
+    let path = dir.join("meta.json");
+    write_atomically(&path, meta.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Evaluates the rule's kernel at every texel: the PBR inputs read from the written textures
+/// (exactly what the document's image nodes read at texel centres), the drawn scalars, and the
+/// texel's geometry.
+#[allow(clippy::too_many_arguments)]
+fn bake(
+    rule: &RuleInterface,
+    scalars: &[(String, f64)],
+    pbr: &[(String, PbrValue)],
+    dir: &Path,
+    geometry: &[Geometry],
+    w: usize,
+    h: usize,
+    engine: &CpuEngine,
+) -> Result<ExrImage, String> {
+    let kernel = rule_kernel(rule, dir)?;
+    let prepared = engine.prepare(&kernel)?;
+    if matches!(prepared, CpuKernel::External(_)) {
+        eprintln!("note: rule {} is not among the shipped kernels; it ran in a separately built runner", rule.kind.name());
+    }
+    let n = w * h;
+    let mut rows = vec![0.0f32; n * kernel.input_stride];
+    for input in &kernel.inputs {
+        let name = input.input.name.as_str();
+        let width = input.input.default.len().max(1);
+        let constant = |v: &[f32], rows: &mut Vec<f32>| {
+            for r in 0..n {
+                rows[r * kernel.input_stride + input.offset..][..width].copy_from_slice(&v[..width]);
+            }
+        };
+        if let Some((_, v)) = scalars.iter().find(|(s, _)| s == name) {
+            constant(&[*v as f32], &mut rows);
+        } else if let Some((_, value)) = pbr.iter().find(|(p, _)| p == name) {
+            match value {
+                PbrValue::Constant(v) => constant(v, &mut rows),
+                PbrValue::Texture { file, colorspace } => {
+                    let t = load_texture(&dir.join(file), Some(colorspace))?;
+                    if (t.width as usize, t.height as usize) != (w, h) {
+                        return Err(format!("{file}: {}x{} texels, the bake is {w}x{h}", t.width, t.height));
+                    }
+                    for r in 0..n {
+                        rows[r * kernel.input_stride + input.offset..][..width].copy_from_slice(&t.rgba[r * 4..r * 4 + width]);
+                    }
+                }
+            }
+        } else {
+            constant(&input.input.default, &mut rows);
+        }
+    }
+    let textures = kernel
+        .textures
+        .iter()
+        .map(|t| load_texture(&t.path, t.colorspace.as_deref()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let batch = PatternBatch { geometry: Geometry::columns(geometry), inputs: Columns::from_rows(&rows, kernel.input_stride), textures };
+    let out = engine.run_prepared(&prepared, &batch)?;
+    let mut img = ExrImage::new(w, h);
+    for o in &kernel.outputs {
+        let components = o.ty.components().unwrap_or(1);
+        let is_color = o.ty.is_color();
+        for (c, name) in channel_names(&o.name, components, is_color).iter().enumerate() {
+            img.push(name, out.column(o.offset + c).to_vec())?;
+        }
+    }
+    img.attributes.push(("uplift_rule".into(), rule.kind.name().into()));
+    Ok(img)
+}
+
+fn json_string(s: &str) -> String {
+    let mut out = String::from("\"");
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+fn meta_json(material: &PbrMaterial, kind: EnhancementType, seed: u64, scalars: &[(String, f64)], size: (usize, usize), object_size: f32, rule: &RuleInterface) -> String {
+    let scalar_lines: Vec<String> = scalars.iter().map(|(k, v)| format!("    {}: {}", json_string(k), format_value(&[*v as f32]))).collect();
+    let masks: Vec<String> = rule
+        .masks
+        .iter()
+        .map(|(input, k)| format!("    {}: {{ \"file\": \"masks/{}.png\", \"seed\": {} }}", json_string(input), k.file_stem(), mask_seed(seed, *k)))
+        .collect();
+    format!(
+        "{{\n  \"type\": {},\n  \"rule\": {},\n  \"seed\": {seed},\n  \"source\": {},\n  \"name\": {},\n  \"resolution\": [{}, {}],\n  \"object_size\": {},\n  \"normal_space\": {},\n  \"scalars\": {{\n{}\n  }},\n  \"masks\": {{\n{}\n  }},\n  \"uplift\": {}\n}}\n",
+        kind.index(),
+        json_string(&format!("mtlx/rules/{}", kind.file_name())),
+        json_string(&material.source),
+        json_string(&material.name),
+        size.0,
+        size.1,
+        format_value(&[object_size]),
+        json_string(match material.surface {
+            Surface::Plane => "plane",
+            Surface::Gltf { .. } => "world",
+        }),
+        scalar_lines.join(",\n"),
+        masks.join(",\n"),
+        json_string(env!("CARGO_PKG_VERSION")),
+    )
+}
+
+/// Enhances every material into `out/<name>/` (names made unique), one seed per material
+/// derived from `options.seed` and its name; finished outputs (a `meta.json` present) are
+/// skipped. Shows a progress bar. Returns (enhanced, skipped) counts.
+pub fn enhance_batch(materials: &[PbrMaterial], options: &EnhanceOptions, out: &Path, engine: &CpuEngine) -> Result<(usize, usize), String> {
+    let bar = indicatif::ProgressBar::new(materials.len() as u64);
+    bar.set_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}").map_err(|e| e.to_string())?);
+    let mut used: Vec<String> = Vec::new();
+    let (mut done, mut skipped) = (0, 0);
+    for m in materials {
+        let mut name = m.name.clone();
+        let mut k = 2;
+        while used.contains(&name) {
+            name = format!("{}_{k}", m.name);
+            k += 1;
+        }
+        used.push(name.clone());
+        let dir = out.join(&name);
+        bar.set_message(name.clone());
+        if dir.join("meta.json").is_file() {
+            skipped += 1;
+        } else {
+            let o = EnhanceOptions { seed: mix64(options.seed ^ hash_str(&name)), ..options.clone() };
+            enhance(m, &o, &dir, engine).map_err(|e| format!("{name}: {e}"))?;
+            done += 1;
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok((done, skipped))
+}

@@ -1,0 +1,40 @@
+//! The CPU kernels built into the runtime: `build.rs` compiles every shipped graph
+//! (`runtime/kernels/graphs/*.mtlx`, `examples/marble.mtlx`, the uplift rules) with
+//! `uplift_compiler::build_api` and writes the table included here. The CPU engine finds a
+//! kernel by the fingerprint of its generated Rust, so a document that compiles to the same code
+//! runs in-process.
+
+use crate::driver::{BatchFn, TextureSet};
+use crate::KernelShape;
+use crate::cpu_batch_fn;
+
+/// One shipped kernel.
+pub struct BuiltinKernel {
+    /// The generated module's name (the document's stem).
+    pub name: &'static str,
+    /// The document, relative to the repository root.
+    pub source: &'static str,
+    /// The closure context (`eval`, `albedo`, `sample`) of a BSDF graph's kernel.
+    pub context: Option<&'static str>,
+    /// `uplift_compiler::build_api::kernel_fingerprint` of its generated Rust.
+    pub fingerprint: u64,
+    pub shape: KernelShape,
+    /// `mx_pattern_batch` behind runtime CPU dispatch.
+    pub batch: BatchFn,
+}
+
+/// The `uplift_stack` closure graph (source path, text): the stack every enhanced material
+/// shades with, shipped in every closure context.
+pub const UPLIFT_STACK_GRAPH: (&str, &str) = ("runtime/kernels/graphs/bsdf/uplift_stack.mtlx", include_str!("../graphs/bsdf/uplift_stack.mtlx"));
+
+include!(concat!(env!("OUT_DIR"), "/builtin_kernels.rs"));
+
+/// The shipped kernel whose generated Rust has this fingerprint.
+pub fn find(fingerprint: u64) -> Option<&'static BuiltinKernel> {
+    BUILTIN_KERNELS.iter().find(|k| k.fingerprint == fingerprint)
+}
+
+/// The shipped kernel named `name` (a document stem).
+pub fn by_name(name: &str) -> Option<&'static BuiltinKernel> {
+    BUILTIN_KERNELS.iter().find(|k| k.name == name)
+}

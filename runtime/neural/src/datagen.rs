@@ -1,0 +1,224 @@
+//! Training data from the compiled `uplift_stack` kernels (runtime/kernels/graphs/bsdf/uplift_stack.mtlx,
+//! shipped in the eval, albedo and sample contexts). A batch is a pure function of (seed, batch
+//! index, size): each row draws its class (20 % each, or one class), tile and cell from a
+//! counter-based hash, its parameters from `classes`, its view cosine-weighted (θv ≤ 87°) and
+//! its light from a mixture — half uniform on the hemisphere, half from the stack's own
+//! `sample` (falling back to uniform where a sample leaves the hemisphere). No importance weights:
+//! the mixture itself is the regression weighting (lobes.md §4.3). Targets: f·μl (RGB) from
+//! `eval` (or `sample`, whose response is the same), T (RGB) and R = Y(albedo) from `albedo`.
+
+use crate::classes::{class_parameters, DataClass};
+use crate::features::{cosine_view, direction_features, uniform_cosine_view, uniform_hemisphere, FEATURES};
+use crate::loss::OUTPUTS;
+use uplift_engines::stack_params::{encode_rows, PARAMETERS};
+use uplift_engines::cpu_engine::CpuEngine;
+use uplift_engines::stack_kernel::{usable_sample, StackKernel};
+use uplift_base::rng::{mix64, unit_from_key as unit};
+use uplift_compiler::ClosureContext;
+
+/// Base materials (tiles) per themed class.
+pub const TILES_PER_CLASS: u64 = 1 << 16;
+
+/// Which classes a generator draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ClassMix {
+    /// Every class with probability 1/5 (paper §4.2: infill ≈ 20 %).
+    All,
+    Only(DataClass),
+}
+
+impl ClassMix {
+    pub fn parse(text: &str) -> Result<ClassMix, String> {
+        if text == "all" {
+            Ok(ClassMix::All)
+        } else {
+            DataClass::parse(text).map(ClassMix::Only)
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            ClassMix::All => "all",
+            ClassMix::Only(c) => c.name(),
+        }
+    }
+}
+
+/// A batch of training rows.
+#[derive(Clone, Debug, Default)]
+pub struct TrainingBatch {
+    pub rows: usize,
+    pub class: Vec<u8>,
+    /// rows × 22 parameters (physical values).
+    pub params: Vec<f32>,
+    /// rows × 22 encoder inputs.
+    pub encoded: Vec<f32>,
+    pub wv: Vec<[f32; 3]>,
+    pub wl: Vec<[f32; 3]>,
+    /// rows × 9 direction features.
+    pub features: Vec<f32>,
+    pub mu_l: Vec<f32>,
+    /// rows × 7: f·μl RGB, T RGB, R.
+    pub target: Vec<f32>,
+}
+
+/// Generates training batches.
+pub struct DataGenerator {
+    engine: CpuEngine,
+    eval: StackKernel,
+    albedo: StackKernel,
+    sample: StackKernel,
+    pdf: StackKernel,
+    pub mix: ClassMix,
+    pub seed: u64,
+    pub views: ViewDistribution,
+}
+
+/// How training views are drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViewDistribution {
+    /// Cosine-weighted, θv ≤ 87° (a sphere's pixels see views this way).
+    Cosine,
+    /// Half cosine-weighted, half with μv uniform: more grazing views.
+    Mixed,
+}
+
+impl ViewDistribution {
+    pub fn parse(s: &str) -> Result<ViewDistribution, String> {
+        match s {
+            "cosine" => Ok(ViewDistribution::Cosine),
+            "mixed" => Ok(ViewDistribution::Mixed),
+            _ => Err(format!("`{s}` is not cosine or mixed")),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ViewDistribution::Cosine => "cosine",
+            ViewDistribution::Mixed => "mixed",
+        }
+    }
+}
+
+impl DataGenerator {
+    pub fn new(engine: CpuEngine, mix: ClassMix, seed: u64) -> Result<DataGenerator, String> {
+        Ok(DataGenerator {
+            eval: StackKernel::new(&engine, ClosureContext::Eval)?,
+            albedo: StackKernel::new(&engine, ClosureContext::Albedo)?,
+            sample: StackKernel::new(&engine, ClosureContext::Sample)?,
+            pdf: StackKernel::new(&engine, ClosureContext::Pdf)?,
+            engine,
+            mix,
+            seed,
+            views: ViewDistribution::Cosine,
+        })
+    }
+
+    /// The engine the reference kernels run on.
+    pub fn engine(&self) -> &CpuEngine {
+        &self.engine
+    }
+
+    /// The stack's `sample` kernel (wv, u → wl, pdf, response, throughput).
+    pub fn sample_kernel(&self) -> &StackKernel {
+        &self.sample
+    }
+
+    /// The stack's `pdf` kernel (wv, wl → pdf, response, throughput).
+    pub fn pdf_kernel(&self) -> &StackKernel {
+        &self.pdf
+    }
+
+    /// The stack's `albedo` kernel (wv → albedo, throughput).
+    pub fn albedo_kernel(&self) -> &StackKernel {
+        &self.albedo
+    }
+
+    /// Where the stack's kernels come from (shipped or built).
+    pub fn describe(&self) -> String {
+        self.eval.describe()
+    }
+
+    /// Batch `index` of `rows` rows.
+    pub fn batch(&self, index: u64, rows: usize) -> Result<TrainingBatch, String> {
+        let key = mix64(self.seed ^ 0x6461_7461) ^ mix64(index.wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        let mut params = vec![0.0; rows * PARAMETERS];
+        let mut classes = Vec::with_capacity(rows);
+        for r in 0..rows {
+            let rk = mix64(key.wrapping_add(r as u64));
+            let class = match self.mix {
+                ClassMix::All => DataClass::ALL[(unit(rk ^ 1) * 5.0) as usize % 5],
+                ClassMix::Only(c) => c,
+            };
+            classes.push(class.index() as u8);
+            let tile = mix64(rk ^ 2) % TILES_PER_CLASS;
+            let cell = mix64(rk ^ 3) % (super::classes::TILE * super::classes::TILE);
+            params[r * PARAMETERS..(r + 1) * PARAMETERS].copy_from_slice(&class_parameters(class, self.seed, tile, cell));
+        }
+        let mut b = self.evaluate(params, key)?;
+        b.class = classes;
+        Ok(b)
+    }
+
+    /// Directions and reference targets for given parameter rows (rows × 22), drawn from `key`.
+    pub fn evaluate(&self, params: Vec<f32>, key: u64) -> Result<TrainingBatch, String> {
+        let rows = params.len() / PARAMETERS;
+        let mut b = TrainingBatch { rows, params, class: vec![0; rows], ..Default::default() };
+        let mut sampled = Vec::new();
+        let mut uniform = Vec::new();
+        let mut u3 = vec![[0.0f32; 3]; rows];
+        for r in 0..rows {
+            let rk = mix64(key.wrapping_add(r as u64)) ^ 0x5eed;
+            let grazing = self.views == ViewDistribution::Mixed && unit(rk ^ 12) < 0.5;
+            b.wv.push(if grazing { uniform_cosine_view(unit(rk ^ 4), unit(rk ^ 5)) } else { cosine_view(unit(rk ^ 4), unit(rk ^ 5)) });
+            b.wl.push(uniform_hemisphere(unit(rk ^ 6), unit(rk ^ 7)));
+            u3[r] = [unit(rk ^ 8), unit(rk ^ 9), unit(rk ^ 10)];
+            if unit(rk ^ 11) < 0.5 { sampled.push(r) } else { uniform.push(r) }
+        }
+        b.target = vec![0.0; rows * OUTPUTS];
+        // Lights from the stack's sampler; rows whose sample fails fall back to uniform.
+        if !sampled.is_empty() {
+            let out = self.sample.run(&self.engine, &b.params, &sampled, &[("wv", &b.wv), ("u", &u3)])?;
+            let (wl_at, pdf_at, resp_at) = (self.sample.output_offset("wl"), self.sample.output_offset("pdf"), self.sample.output_offset("response"));
+            for (k, &r) in sampled.iter().enumerate() {
+                let wl = [0, 1, 2].map(|c| out.column(wl_at + c)[k]);
+                let pdf = out.column(pdf_at)[k];
+                let resp = [0, 1, 2].map(|c| out.column(resp_at + c)[k]);
+                if let Some(wl) = usable_sample(wl, pdf, 1e-4).filter(|_| resp.iter().all(|x| x.is_finite())) {
+                    b.wl[r] = wl;
+                    b.target[r * OUTPUTS..r * OUTPUTS + 3].copy_from_slice(&resp);
+                } else {
+                    uniform.push(r);
+                }
+            }
+        }
+        if !uniform.is_empty() {
+            let out = self.eval.run(&self.engine, &b.params, &uniform, &[("wv", &b.wv), ("wl", &b.wl)])?;
+            let resp_at = self.eval.output_offset("response");
+            for (k, &r) in uniform.iter().enumerate() {
+                for c in 0..3 {
+                    b.target[r * OUTPUTS + c] = out.column(resp_at + c)[k];
+                }
+            }
+        }
+        let all: Vec<usize> = (0..rows).collect();
+        let out = self.albedo.run(&self.engine, &b.params, &all, &[("wv", &b.wv)])?;
+        let (alb_at, thr_at) = (self.albedo.output_offset("albedo"), self.albedo.output_offset("throughput"));
+        for r in 0..rows {
+            let t = &mut b.target[r * OUTPUTS..(r + 1) * OUTPUTS];
+            for c in 0..3 {
+                t[c] = t[c].max(0.0);
+                t[3 + c] = out.column(thr_at + c)[r];
+            }
+            let a = [0, 1, 2].map(|c| out.column(alb_at + c)[r]);
+            t[6] = 0.2126 * a[0] + 0.7152 * a[1] + 0.0722 * a[2];
+        }
+        b.encoded = vec![0.0; rows * PARAMETERS];
+        encode_rows(&b.params, &mut b.encoded);
+        b.features = Vec::with_capacity(rows * FEATURES);
+        for r in 0..rows {
+            b.features.extend_from_slice(&direction_features(b.wv[r], b.wl[r]));
+            b.mu_l.push(b.wl[r][2]);
+        }
+        Ok(b)
+    }
+}

@@ -1,0 +1,23 @@
+//! Neural materials (paper §4, lobes.md §3.3–4; docs/neural.md), over the 22 parameters of
+//! `uplift_engines::stack_params`: direction features (`features`), training data generated on the fly from the compiled
+//! `uplift_stack` kernels (`classes`, `datagen`), the hand-written networks and their training
+//! (`mlp`, `model`, `loss`, `adam`, `trainer`), weights as safetensors (`weights`), held-out
+//! errors (`evaluate`), per-material latent fitting (`fit`) and its energy bound (`energy_bound`) and inference (`inference`; the
+//! shipped decoder's generated Rust in `shipped_decoder`).
+
+pub mod adam;
+pub mod classes;
+pub mod datagen;
+pub mod dense;
+pub mod energy_bound;
+pub mod evaluate;
+pub mod features;
+pub mod fit;
+pub mod fit_files;
+pub mod inference;
+pub mod loss;
+pub mod mlp;
+pub mod model;
+pub mod shipped_decoder;
+pub mod trainer;
+pub mod weights;

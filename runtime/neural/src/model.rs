@@ -1,0 +1,174 @@
+//! The neural material model (lobes.md §4): the encoder (22 encoded parameters → 64 → 64 → 64
+//! → 6, LeakyReLU hidden, sigmoid out, so latents are image-like values in (0, 1)) and the
+//! universal decoder (6-D latent + 9 direction features → 4 × 64 LeakyReLU → 7, exp head:
+//! f RGB, T RGB, R). One training slice runs encoder → jitter → decoder → Eq. 3 → back again;
+//! latent fitting runs the frozen decoder alone and returns ∂loss/∂latent.
+
+use crate::features::FEATURES;
+use crate::loss::{eq3_loss, LossParts, LossWeights, OUTPUTS};
+use crate::mlp::{Activation, Mlp, MlpShape, Real, Workspace};
+use uplift_engines::stack_params::PARAMETERS;
+
+/// Latent dimensions: two RGB textures.
+pub const LATENT: usize = 6;
+
+/// The decoder's inputs per query: latent, then direction features.
+pub const DECODER_INPUTS: usize = LATENT + FEATURES;
+
+/// The encoder's shape (lobes.md §4.2).
+pub fn encoder_shape() -> MlpShape {
+    MlpShape { widths: vec![PARAMETERS, 64, 64, 64, LATENT], hidden: Activation::LEAKY_RELU, output: Activation::Sigmoid }
+}
+
+/// The decoder's shape (paper §4.1: 4 hidden layers of 64).
+pub fn decoder_shape() -> MlpShape {
+    MlpShape { widths: vec![DECODER_INPUTS, 64, 64, 64, 64, OUTPUTS], hidden: Activation::LEAKY_RELU, output: Activation::EXP_HEAD }
+}
+
+/// Encoder and decoder.
+#[derive(Clone, Debug)]
+pub struct NeuralModel<T: Real> {
+    pub encoder: Mlp<T>,
+    pub decoder: Mlp<T>,
+}
+
+/// Per-thread buffers for one slice of a batch.
+pub struct ModelWorkspace<T: Real> {
+    pub enc: Workspace<T>,
+    pub dec: Workspace<T>,
+    pub dec_in: Vec<T>,
+    pub d_out: Vec<T>,
+    pub d_latent: Vec<T>,
+}
+
+/// One slice of a batch: the rows the loss sees.
+pub struct Slice<'a, T> {
+    /// Encoded parameters (rows × 22) for training, or latents (rows × 6) for fitting.
+    pub input: &'a [T],
+    /// Added to the latent (rows × 6): the ±0.005 jitter.
+    pub jitter: &'a [T],
+    /// Direction features (rows × 9).
+    pub features: &'a [T],
+    /// f·μl RGB, T RGB, R (rows × 7).
+    pub target: &'a [f32],
+    pub mu_l: &'a [f32],
+    /// Rows in the whole batch (the loss is a mean over it).
+    pub batch: usize,
+}
+
+/// Rows per block of a slice: every layer's activations of a block (64 wide) take 128 KB, so a
+/// block's forward and backward passes stay in a core's L2 cache.
+pub const BLOCK_ROWS: usize = 512;
+
+impl<'a, T> Slice<'a, T> {
+    /// The slice in consecutive blocks of at most [`BLOCK_ROWS`] rows (same `batch`).
+    pub fn blocks(&self) -> impl Iterator<Item = Slice<'a, T>> + '_ {
+        let rows = self.mu_l.len();
+        let per_row = |v: usize| v / rows.max(1);
+        let (ni, nj, nf) = (per_row(self.input.len()), per_row(self.jitter.len()), per_row(self.features.len()));
+        (0..rows).step_by(BLOCK_ROWS).map(move |a| {
+            let b = (a + BLOCK_ROWS).min(rows);
+            Slice {
+                input: &self.input[a * ni..b * ni],
+                jitter: &self.jitter[a * nj..b * nj],
+                features: &self.features[a * nf..b * nf],
+                target: &self.target[a * OUTPUTS..b * OUTPUTS],
+                mu_l: &self.mu_l[a..b],
+                batch: self.batch,
+            }
+        })
+    }
+}
+
+impl<T: Real> Default for ModelWorkspace<T> {
+    fn default() -> Self {
+        // The encoder's input gradient (∂loss/∂parameters) is never needed.
+        ModelWorkspace { enc: Workspace::without_input_gradient(), dec: Workspace::default(), dec_in: Vec::new(), d_out: Vec::new(), d_latent: Vec::new() }
+    }
+}
+
+impl<T: Real> NeuralModel<T> {
+    /// Xavier-uniform weights; the decoder's T and R output biases start at exp(b − 3) = ½, the
+    /// middle of their range (from e⁻³ ≈ 0.05, the exp head's rate of change in log space would
+    /// take thousands of steps at their small loss weights to get there).
+    pub fn new(seed: u64) -> NeuralModel<T> {
+        let mut decoder = Mlp::new(decoder_shape(), seed.wrapping_add(1));
+        let last = decoder.shape.layers() - 1;
+        let (_, b) = decoder.shape.offsets(last);
+        for k in 3..OUTPUTS {
+            decoder.params[b + k] = T::from_f64(3.0 + 0.5f64.ln());
+        }
+        NeuralModel { encoder: Mlp::new(encoder_shape(), seed), decoder }
+    }
+
+    /// Encoder, jitter, decoder, Eq. 3 and back: adds the gradients of both networks. Runs in
+    /// blocks of [`BLOCK_ROWS`] rows.
+    pub fn train_slice(&self, s: &Slice<'_, T>, w: LossWeights, ws: &mut ModelWorkspace<T>, g_enc: &mut [T], g_dec: &mut [T]) -> LossParts {
+        let mut parts = LossParts::default();
+        for b in s.blocks() {
+            parts.add(&self.train_block(&b, w, ws, g_enc, g_dec));
+        }
+        parts
+    }
+
+    fn train_block(&self, s: &Slice<'_, T>, w: LossWeights, ws: &mut ModelWorkspace<T>, g_enc: &mut [T], g_dec: &mut [T]) -> LossParts {
+        let rows = s.mu_l.len();
+        let z = self.encoder.forward(s.input, rows, &mut ws.enc);
+        fill_decoder_input(z, s.jitter, s.features, rows, &mut ws.dec_in);
+        let parts = decode_and_backward(&self.decoder, s, w, ws, Some(g_dec));
+        let d_z = latent_gradient(&ws.d_latent, rows);
+        self.encoder.backward(s.input, &d_z, &mut ws.enc, Some(g_enc));
+        parts
+    }
+}
+
+/// Rows of [latent + jitter, features].
+pub fn fill_decoder_input<T: Real>(z: &[T], jitter: &[T], features: &[T], rows: usize, dec_in: &mut Vec<T>) {
+    dec_in.resize(rows * DECODER_INPUTS, T::default());
+    for r in 0..rows {
+        let row = &mut dec_in[r * DECODER_INPUTS..(r + 1) * DECODER_INPUTS];
+        for k in 0..LATENT {
+            row[k] = z[r * LATENT + k] + jitter[r * LATENT + k];
+        }
+        row[LATENT..].copy_from_slice(&features[r * FEATURES..(r + 1) * FEATURES]);
+    }
+}
+
+/// The decoder forward on `ws.dec_in`, Eq. 3, and the decoder backward: adds the decoder's
+/// gradient into `g_dec` and leaves ∂loss/∂(decoder input) in `ws.d_latent` (all 15 columns).
+fn decode_and_backward<T: Real>(decoder: &Mlp<T>, s: &Slice<'_, T>, w: LossWeights, ws: &mut ModelWorkspace<T>, g_dec: Option<&mut [T]>) -> LossParts {
+    let rows = s.mu_l.len();
+    let out = decoder.forward(&ws.dec_in, rows, &mut ws.dec);
+    ws.d_out.resize(rows * OUTPUTS, T::default());
+    let parts = eq3_loss(out, s.target, s.mu_l, s.batch, w, &mut ws.d_out);
+    let d_in = decoder.backward(&ws.dec_in, &ws.d_out, &mut ws.dec, g_dec);
+    ws.d_latent.clear();
+    ws.d_latent.extend_from_slice(d_in);
+    parts
+}
+
+/// The latent columns of ∂loss/∂(decoder input).
+fn latent_gradient<T: Real>(d_in: &[T], rows: usize) -> Vec<T> {
+    (0..rows).flat_map(|r| d_in[r * DECODER_INPUTS..r * DECODER_INPUTS + LATENT].iter().copied()).collect()
+}
+
+/// Latent fitting against a frozen decoder: Eq. 3 of `decoder(latent + jitter, features)`;
+/// returns the loss and ∂loss/∂latent (rows × 6). The decoder's weight gradients are not
+/// computed.
+pub fn latent_slice<T: Real>(decoder: &Mlp<T>, s: &Slice<'_, T>, w: LossWeights, ws: &mut ModelWorkspace<T>) -> (LossParts, Vec<T>) {
+    let mut parts = LossParts::default();
+    let mut grad = Vec::with_capacity(s.mu_l.len() * LATENT);
+    for b in s.blocks() {
+        let rows = b.mu_l.len();
+        fill_decoder_input(b.input, b.jitter, b.features, rows, &mut ws.dec_in);
+        parts.add(&decode_and_backward(decoder, &b, w, ws, None));
+        grad.extend(latent_gradient(&ws.d_latent, rows));
+    }
+    (parts, grad)
+}
+
+/// Decodes rows of [latent, features] (rows × 15) into rows of 7 outputs.
+pub fn decode<T: Real>(decoder: &Mlp<T>, dec_in: &[T], ws: &mut Workspace<T>) -> Vec<T> {
+    let rows = dec_in.len() / DECODER_INPUTS;
+    decoder.forward(dec_in, rows, ws).to_vec()
+}

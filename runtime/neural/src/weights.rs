@@ -1,0 +1,146 @@
+//! Networks and their training state as safetensors (loadable by PyTorch's `safetensors`):
+//! each layer as `<net>.layers.<l>.weight` (`out × in`, PyTorch `nn.Linear` layout) and
+//! `<net>.layers.<l>.bias`, f32 little-endian; the shapes and activations in the header's
+//! metadata (`<net>.widths`, `<net>.hidden`, `<net>.output`), with any other string entries the
+//! caller adds (training command, losses). A checkpoint also holds Adam's moments
+//! (`adam.<net>.m`, `adam.<net>.v`) and its step count.
+
+use crate::adam::Adam;
+use crate::mlp::{Activation, Mlp, MlpShape};
+use uplift_base::atomic_write::write_atomically;
+use safetensors::tensor::{Dtype, SafeTensors, TensorView};
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+/// Named f32 tensors and string metadata, read from or written to one file.
+#[derive(Clone, Debug, Default)]
+pub struct TensorFile {
+    pub tensors: BTreeMap<String, (Vec<usize>, Vec<f32>)>,
+    pub metadata: BTreeMap<String, String>,
+}
+
+impl TensorFile {
+    pub fn put(&mut self, name: &str, shape: Vec<usize>, data: Vec<f32>) {
+        assert_eq!(shape.iter().product::<usize>(), data.len(), "{name}: shape {shape:?}");
+        self.tensors.insert(name.to_string(), (shape, data));
+    }
+
+    pub fn get(&self, name: &str) -> Result<&(Vec<usize>, Vec<f32>), String> {
+        self.tensors.get(name).ok_or_else(|| format!("no tensor `{name}`"))
+    }
+
+    pub fn meta(&self, key: &str) -> Result<&str, String> {
+        self.metadata.get(key).map(String::as_str).ok_or_else(|| format!("no metadata entry `{key}`"))
+    }
+
+    pub fn to_bytes(&self) -> Result<Vec<u8>, String> {
+        let bytes: Vec<(String, Vec<usize>, Vec<u8>)> = self.tensors.iter().map(|(n, (s, d))| (n.clone(), s.clone(), d.iter().flat_map(|x| x.to_le_bytes()).collect())).collect();
+        let views: Vec<(String, TensorView<'_>)> =
+            bytes.iter().map(|(n, s, b)| TensorView::new(Dtype::F32, s.clone(), b).map(|v| (n.clone(), v)).map_err(|e| format!("{n}: {e}"))).collect::<Result<_, _>>()?;
+        let meta: HashMap<String, String> = self.metadata.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
+        safetensors::serialize(views, Some(meta)).map_err(|e| e.to_string())
+    }
+
+    pub fn from_bytes(bytes: &[u8]) -> Result<TensorFile, String> {
+        let st = SafeTensors::deserialize(bytes).map_err(|e| format!("not a safetensors file: {e}"))?;
+        let (_, header) = SafeTensors::read_metadata(bytes).map_err(|e| e.to_string())?;
+        let mut file = TensorFile::default();
+        if let Some(m) = header.metadata() {
+            file.metadata = m.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
+        }
+        for (name, view) in st.tensors() {
+            if view.dtype() != Dtype::F32 {
+                return Err(format!("tensor `{name}` is {:?}; uplift reads f32 tensors", view.dtype()));
+            }
+            let data = view.data().chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+            file.tensors.insert(name, (view.shape().to_vec(), data));
+        }
+        Ok(file)
+    }
+
+    pub fn write(&self, path: &Path) -> Result<(), String> {
+        write_atomically(path, &self.to_bytes()?).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    pub fn read(path: &Path) -> Result<TensorFile, String> {
+        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        TensorFile::from_bytes(&bytes).map_err(|e| format!("{}: {e}", path.display()))
+    }
+
+    /// Stores `net` under `prefix`.
+    pub fn put_mlp(&mut self, prefix: &str, net: &Mlp<f32>) {
+        let s = &net.shape;
+        for l in 0..s.layers() {
+            let (w, b) = net.layer(l);
+            self.put(&format!("{prefix}.layers.{l}.weight"), vec![s.widths[l + 1], s.widths[l]], w.to_vec());
+            self.put(&format!("{prefix}.layers.{l}.bias"), vec![s.widths[l + 1]], b.to_vec());
+        }
+        self.metadata.insert(format!("{prefix}.widths"), s.widths.iter().map(|w| w.to_string()).collect::<Vec<_>>().join(","));
+        self.metadata.insert(format!("{prefix}.hidden"), s.hidden.name());
+        self.metadata.insert(format!("{prefix}.output"), s.output.name());
+    }
+
+    /// The network stored under `prefix`.
+    pub fn mlp(&self, prefix: &str) -> Result<Mlp<f32>, String> {
+        let widths: Vec<usize> = self.meta(&format!("{prefix}.widths"))?.split(',').map(|w| w.trim().parse().map_err(|_| format!("{prefix}.widths: `{w}` is not a width"))).collect::<Result<_, _>>()?;
+        if widths.len() < 2 {
+            return Err(format!("{prefix}.widths: a network needs at least two widths"));
+        }
+        let act = |k: &str| -> Result<Activation, String> {
+            let text = self.meta(&format!("{prefix}.{k}"))?;
+            Activation::parse(text).ok_or_else(|| format!("{prefix}.{k}: unknown activation `{text}`"))
+        };
+        let shape = MlpShape { widths, hidden: act("hidden")?, output: act("output")? };
+        let mut params = Vec::with_capacity(shape.parameter_count());
+        for l in 0..shape.layers() {
+            for (part, want) in [("weight", vec![shape.widths[l + 1], shape.widths[l]]), ("bias", vec![shape.widths[l + 1]])] {
+                let name = format!("{prefix}.layers.{l}.{part}");
+                let (s, d) = self.get(&name)?;
+                if *s != want {
+                    return Err(format!("{name}: shape {s:?}, expected {want:?}"));
+                }
+                if let Some(bad) = d.iter().find(|x| !x.is_finite()) {
+                    return Err(format!("{name}: holds a non-finite value ({bad})"));
+                }
+                params.extend_from_slice(d);
+            }
+        }
+        Mlp::from_params(shape, params)
+    }
+
+    pub fn put_adam(&mut self, prefix: &str, adam: &Adam) {
+        self.put(&format!("adam.{prefix}.m"), vec![adam.m.len()], adam.m.clone());
+        self.put(&format!("adam.{prefix}.v"), vec![adam.v.len()], adam.v.clone());
+        self.metadata.insert(format!("adam.{prefix}.t"), adam.t.to_string());
+    }
+
+    pub fn adam(&self, prefix: &str, n: usize) -> Result<Adam, String> {
+        let mut adam = Adam::new(n);
+        for (part, dst) in [("m", &mut adam.m), ("v", &mut adam.v)] {
+            let (_, d) = self.get(&format!("adam.{prefix}.{part}"))?;
+            if d.len() != n {
+                return Err(format!("adam.{prefix}.{part}: {} values for {n} parameters", d.len()));
+            }
+            dst.copy_from_slice(d);
+        }
+        adam.t = self.meta(&format!("adam.{prefix}.t"))?.parse().map_err(|_| format!("adam.{prefix}.t is not a step count"))?;
+        Ok(adam)
+    }
+}
+
+/// The decoder the repository ships (`runtime/weights/`).
+pub const SHIPPED_DECODER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../weights/decoder.safetensors");
+
+/// The encoder and decoder of a weights file.
+pub fn load_model(path: &Path) -> Result<crate::model::NeuralModel<f32>, String> {
+    let f = TensorFile::read(path)?;
+    let at = |e: String| format!("{}: {e}", path.display());
+    Ok(crate::model::NeuralModel { encoder: f.mlp("encoder").map_err(at)?, decoder: f.mlp("decoder").map_err(at)? })
+}
+
+/// How generated files name the weights: relative to the repository when inside it.
+pub fn source_name(path: &Path) -> String {
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let (abs, repo) = (std::fs::canonicalize(path).unwrap_or(path.to_path_buf()), std::fs::canonicalize(&repo).unwrap_or(repo));
+    abs.strip_prefix(&repo).map(|p| p.to_string_lossy().replace('\\', "/")).unwrap_or_else(|_| path.display().to_string())
+}

@@ -1,0 +1,272 @@
+//! Triangle meshes for the renderer: a glTF scene's world-space triangles
+//! (enhance::gltf_input::WorldTriangle), moved and scaled into the preview ball's unit sphere
+//! (bounding-box centre at the origin, farthest vertex at distance 1) so the preview camera
+//! frames them like the ball, behind a bounding-volume hierarchy.
+//!
+//! BVH: binary, built top-down by splitting each node's triangles at the median centroid along
+//! the longest axis of the centroids' box, leaves of at most 4 triangles; traversal is
+//! front-to-back-agnostic with an explicit stack and slab tests, pruned by the nearest hit so
+//! far. Ray–triangle: Möller–Trumbore. A hit interpolates the vertex normals, tangents and uvs
+//! barycentrically; the shading frame is the interpolated normal (turned to the geometric
+//! normal's side) with the tangent made orthogonal to it. uv is converted from glTF's
+//! convention ((0, 0) at the image's top-left) to MaterialX's (v = 1 at the top), which the
+//! surface textures use.
+
+use crate::scene::{add_scaled, cross, dot, normalize, Hit, Scene, Vec3};
+use uplift_enhance::gltf_input::WorldTriangle;
+
+/// A BVH node: its box, and either two children or a range of `order`.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    lo: Vec3,
+    hi: Vec3,
+    /// Leaf: first index into `order` and count; inner: left child index and 0 (the right
+    /// child is at `left + 1`).
+    start: u32,
+    count: u32,
+}
+
+/// A triangle mesh in the unit sphere.
+pub struct Mesh {
+    triangles: Vec<WorldTriangle>,
+    nodes: Vec<Node>,
+    order: Vec<u32>,
+}
+
+const LEAF: usize = 4;
+
+fn bounds(points: impl Iterator<Item = Vec3>) -> (Vec3, Vec3) {
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in points {
+        for c in 0..3 {
+            lo[c] = lo[c].min(p[c]);
+            hi[c] = hi[c].max(p[c]);
+        }
+    }
+    (lo, hi)
+}
+
+fn centroid(t: &WorldTriangle) -> Vec3 {
+    [0, 1, 2].map(|c| (t.position[0][c] + t.position[1][c] + t.position[2][c]) / 3.0)
+}
+
+impl Mesh {
+    /// The mesh of `triangles`, moved and scaled so that its bounding box's centre is the
+    /// origin and its farthest vertex from there is at distance 1 (directions, hence normals and
+    /// tangents, are unchanged; a unit sphere stays the preview ball).
+    pub fn new(mut triangles: Vec<WorldTriangle>) -> Result<Mesh, String> {
+        if triangles.is_empty() {
+            return Err("the mesh has no triangles".into());
+        }
+        let (lo, hi) = bounds(triangles.iter().flat_map(|t| t.position));
+        let centre = [0, 1, 2].map(|c| 0.5 * (lo[c] + hi[c]));
+        let radius = triangles.iter().flat_map(|t| t.position).map(|p| dot(add_scaled(p, centre, -1.0), add_scaled(p, centre, -1.0))).fold(0.0f32, f32::max).sqrt();
+        if !(radius > 0.0 && radius.is_finite()) {
+            return Err(format!("the mesh's bounding box is degenerate ({lo:?} – {hi:?})"));
+        }
+        for t in &mut triangles {
+            for p in &mut t.position {
+                *p = [0, 1, 2].map(|c| (p[c] - centre[c]) / radius);
+            }
+        }
+        let mut mesh = Mesh { order: (0..triangles.len() as u32).collect(), triangles, nodes: Vec::new() };
+        let n = mesh.order.len();
+        let centroids: Vec<Vec3> = mesh.triangles.iter().map(centroid).collect();
+        mesh.nodes.push(Node { lo: [0.0; 3], hi: [0.0; 3], start: 0, count: 0 });
+        mesh.build(&centroids, 0, 0, n);
+        Ok(mesh)
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Fills node `at` with `order[start..end]`, splitting recursively (`centroids` per
+    /// triangle).
+    fn build(&mut self, centroids: &[Vec3], at: usize, start: usize, end: usize) {
+        let tris = &self.triangles;
+        let (lo, hi) = bounds(self.order[start..end].iter().flat_map(|&i| tris[i as usize].position));
+        self.nodes[at].lo = lo;
+        self.nodes[at].hi = hi;
+        if end - start <= LEAF {
+            self.nodes[at].start = start as u32;
+            self.nodes[at].count = (end - start) as u32;
+            return;
+        }
+        let (clo, chi) = bounds(self.order[start..end].iter().map(|&i| centroids[i as usize]));
+        let axis = (0..3).max_by(|&a, &b| (chi[a] - clo[a]).total_cmp(&(chi[b] - clo[b]))).unwrap_or(0);
+        let mid = (start + end) / 2;
+        self.order[start..end].select_nth_unstable_by(mid - start, |&a, &b| centroids[a as usize][axis].total_cmp(&centroids[b as usize][axis]));
+        let left = self.nodes.len();
+        self.nodes.push(Node { lo: [0.0; 3], hi: [0.0; 3], start: 0, count: 0 });
+        self.nodes.push(Node { lo: [0.0; 3], hi: [0.0; 3], start: 0, count: 0 });
+        self.nodes[at].start = left as u32;
+        self.nodes[at].count = 0;
+        self.build(centroids, left, start, mid);
+        self.build(centroids, left + 1, mid, end);
+    }
+
+    /// Ray–triangle (Möller–Trumbore): (t, b1, b2) for a hit with t in (t_min, t_max).
+    fn hit_triangle(&self, i: usize, o: Vec3, d: Vec3, t_max: f32) -> Option<(f32, f32, f32)> {
+        let p = &self.triangles[i].position;
+        let e1 = add_scaled(p[1], p[0], -1.0);
+        let e2 = add_scaled(p[2], p[0], -1.0);
+        let q = cross(d, e2);
+        let det = dot(e1, q);
+        if det.abs() < 1e-12 {
+            return None;
+        }
+        let inv = 1.0 / det;
+        let s = add_scaled(o, p[0], -1.0);
+        let b1 = dot(s, q) * inv;
+        if !(0.0..=1.0).contains(&b1) {
+            return None;
+        }
+        let r = cross(s, e1);
+        let b2 = dot(d, r) * inv;
+        if b2 < 0.0 || b1 + b2 > 1.0 {
+            return None;
+        }
+        let t = dot(e2, r) * inv;
+        (t > 1e-6 && t < t_max).then_some((t, b1, b2))
+    }
+
+    /// The nearest (triangle, t, b1, b2) along o + t·d.
+    fn nearest(&self, o: Vec3, d: Vec3) -> Option<(usize, f32, f32, f32)> {
+        let inv = d.map(|x| 1.0 / x);
+        let mut best: Option<(usize, f32, f32, f32)> = None;
+        let mut t_max = f32::INFINITY;
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = self.nodes[stack[top] as usize];
+            // Slab test.
+            let (mut t0, mut t1) = (0.0f32, t_max);
+            for c in 0..3 {
+                let (a, b) = ((node.lo[c] - o[c]) * inv[c], (node.hi[c] - o[c]) * inv[c]);
+                let (a, b) = if a <= b { (a, b) } else { (b, a) };
+                // NaN (0·∞ on a box face) keeps the interval: `max`/`min` ignore NaN.
+                t0 = t0.max(a);
+                t1 = t1.min(b);
+            }
+            if t0 > t1 {
+                continue;
+            }
+            if node.count > 0 {
+                for k in node.start..node.start + node.count {
+                    let i = self.order[k as usize] as usize;
+                    if let Some((t, b1, b2)) = self.hit_triangle(i, o, d, t_max) {
+                        t_max = t;
+                        best = Some((i, t, b1, b2));
+                    }
+                }
+            } else if top + 2 <= stack.len() {
+                stack[top] = node.start;
+                stack[top + 1] = node.start + 1;
+                top += 2;
+            }
+        }
+        best
+    }
+
+    /// The nearest hit by testing every triangle (the BVH's reference in tests).
+    pub fn intersect_brute_force(&self, o: Vec3, d: Vec3) -> Option<(usize, f32)> {
+        let mut best = None;
+        let mut t_max = f32::INFINITY;
+        for i in 0..self.triangles.len() {
+            if let Some((t, _, _)) = self.hit_triangle(i, o, d, t_max) {
+                t_max = t;
+                best = Some((i, t));
+            }
+        }
+        best
+    }
+
+    /// The nearest hit's triangle and distance through the BVH.
+    pub fn intersect_triangle(&self, o: Vec3, d: Vec3) -> Option<(usize, f32)> {
+        self.nearest(o, d).map(|(i, t, _, _)| (i, t))
+    }
+}
+
+impl Scene for Mesh {
+    fn intersect(&self, o: Vec3, d: Vec3) -> Option<Hit> {
+        let (i, t, b1, b2) = self.nearest(o, d)?;
+        let tri = &self.triangles[i];
+        let b0 = 1.0 - b1 - b2;
+        let lerp3 = |v: &[Vec3; 3]| [0, 1, 2].map(|c| b0 * v[0][c] + b1 * v[1][c] + b2 * v[2][c]);
+        let p = &tri.position;
+        let face = normalize(cross(add_scaled(p[1], p[0], -1.0), add_scaled(p[2], p[0], -1.0)));
+        let geometric_normal = if dot(face, d) > 0.0 { face.map(|x| -x) } else { face };
+        let mut n = normalize(lerp3(&tri.normal));
+        if dot(n, geometric_normal) < 0.0 {
+            n = n.map(|x| -x);
+        }
+        let t_raw = lerp3(&tri.tangent);
+        let t_orth = add_scaled(t_raw, n, -dot(t_raw, n));
+        let tangent = if dot(t_orth, t_orth) > 1e-12 { normalize(t_orth) } else { any_orthonormal(n) };
+        let bitangent = cross(n, tangent);
+        let uv = [0, 1].map(|c| b0 * tri.uv[0][c] + b1 * tri.uv[1][c] + b2 * tri.uv[2][c]);
+        Some(Hit { t, position: add_scaled(o, d, t), geometric_normal, frame: [tangent, bitangent, n], uv: [uv[0], 1.0 - uv[1]] })
+    }
+
+    fn world_space_normals(&self) -> bool {
+        true
+    }
+}
+
+fn any_orthonormal(n: Vec3) -> Vec3 {
+    let a = if n[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
+    normalize(add_scaled(a, n, -dot(a, n)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit(k: u64) -> f32 {
+        uplift_base::rng::unit_from_key(uplift_base::rng::mix64(k))
+    }
+
+    /// A soup of random small triangles in a box.
+    fn soup(n: usize) -> Vec<WorldTriangle> {
+        (0..n)
+            .map(|i| {
+                let c = [0, 1, 2].map(|a| 4.0 * unit((i * 16 + a) as u64) - 2.0);
+                let position = [0, 1, 2].map(|v| [0, 1, 2].map(|a| c[a] + 0.6 * (unit((i * 16 + 3 + v * 3 + a) as u64) - 0.5)));
+                WorldTriangle { position, normal: [[0.0, 0.0, 1.0]; 3], tangent: [[1.0, 0.0, 0.0]; 3], uv: [[0.0; 2]; 3] }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn bvh_finds_the_same_nearest_hit_as_testing_every_triangle() {
+        let mesh = Mesh::new(soup(2000)).unwrap();
+        let mut hits = 0;
+        for r in 0..4000u64 {
+            let o = [0, 1, 2].map(|a| 3.0 * (unit(r * 8 + a) - 0.5));
+            // Half the rays aim at a triangle's centroid (the nearest hit may be another one).
+            let d = if r % 2 == 0 {
+                normalize(add_scaled(centroid(&mesh.triangles[(r as usize * 7) % mesh.triangles.len()]), o, -1.0))
+            } else {
+                normalize([0, 1, 2].map(|a| unit(r * 8 + 3 + a) - 0.5))
+            };
+            let (a, b) = (mesh.intersect_triangle(o, d), mesh.intersect_brute_force(o, d));
+            assert_eq!(a.map(|x| x.0), b.map(|x| x.0), "ray {r}");
+            if let (Some(a), Some(b)) = (a, b) {
+                assert!((a.1 - b.1).abs() <= 1e-6 * b.1.max(1.0));
+                hits += 1;
+            }
+        }
+        assert!(hits > 2000, "only {hits} of 4000 rays hit: the test would prove little");
+    }
+
+    #[test]
+    fn mesh_is_scaled_into_the_unit_sphere() {
+        let mesh = Mesh::new(soup(50)).unwrap();
+        let r = mesh.triangles.iter().flat_map(|t| t.position).map(|p| dot(p, p).sqrt()).fold(0.0f32, f32::max);
+        assert!((r - 1.0).abs() < 1e-4, "{r}");
+        assert!(Mesh::new(vec![]).is_err());
+    }
+}

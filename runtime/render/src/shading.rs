@@ -1,0 +1,240 @@
+//! The non-diffuse part of a material as the renderer evaluates it, in batches of surface points:
+//! f·cos θl (RGB), the throughput T (RGB) that scales the Lambertian base, R = Y(albedo) of the
+//! non-diffuse part, and the pdf of the non-diffuse sampling strategy.
+//!
+//! - `Reference`: the compiled `uplift_stack` kernels on the 22 interpolated parameters (the
+//!   `pdf` context returns response, throughput and pdf in one call; `albedo` gives R).
+//! - `Neural`: the frozen decoder on the interpolated latents: its outputs are f (so f·cos θl
+//!   is f̂·μl, as Eq. 3 compares it), T and R (paper Eq. 2).
+//!
+//! Both run on the CPU engine (generated Rust kernels, the trainer's forward pass) or on the
+//! wgpu engine (generated WGSL kernels, the emitted WGSL decoder).
+//!
+//! Both sample the non-diffuse part with the stack's own `sample` kernel on the material's
+//! parameters (no sampling decoder exists yet, lobes.md §4.5): any proposal keeps the estimator
+//! unbiased, and sharing it gives reference and neural renders correlated noise, which lowers the
+//! FLIP noise floor. The integrator (integrator.rs) adds the diffuse base and chooses between the
+//! parts by R.
+
+use crate::scene::Vec3;
+use crate::surface::SurfaceSample;
+use uplift_engines::cpu_engine::CpuEngine;
+use uplift_neural::features::{direction_features, FEATURES};
+use uplift_neural::inference::decode_parallel;
+use uplift_neural::loss::OUTPUTS;
+use uplift_neural::mlp::Mlp;
+use uplift_neural::model::{fill_decoder_input, LATENT};
+use uplift_engines::stack_params::PARAMETERS;
+use uplift_neural::inference::WgpuDecoder;
+use uplift_engines::stack_kernel::{usable_sample, vec3_at, Engine, StackKernel};
+use uplift_engines::wgpu_engine::WgpuEngine;
+use uplift_compiler::ClosureContext;
+
+/// The non-diffuse part's values at one direction pair.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct LobeValue {
+    /// f·cos θl.
+    pub fcos: [f32; 3],
+    pub throughput: [f32; 3],
+    /// Luminance of the non-diffuse albedo (only when asked for).
+    pub reflectance: f32,
+    /// Density of the non-diffuse sampling strategy at wl.
+    pub pdf: f32,
+}
+
+/// Which evaluation of the non-diffuse part.
+pub enum Model {
+    Reference,
+    Neural(Mlp<f32>),
+}
+
+/// Where the kernels run.
+pub enum ShadingEngine {
+    Cpu(CpuEngine),
+    /// The wgpu engine: the stack's WGSL kernels and the emitted WGSL decoder.
+    Wgpu(WgpuEngine),
+}
+
+/// The stack's kernels and, for the neural model, the decoder.
+pub struct Shading {
+    engine: ShadingEngine,
+    wgpu_decoder: Option<WgpuDecoder>,
+    pdf: StackKernel,
+    sample: StackKernel,
+    albedo: StackKernel,
+    pub model: Model,
+    threads: usize,
+}
+
+fn params_of(points: &[SurfaceSample]) -> Vec<f32> {
+    let mut p = Vec::with_capacity(points.len() * PARAMETERS);
+    for s in points {
+        p.extend_from_slice(&s.params);
+    }
+    p
+}
+
+fn finite3(v: [f32; 3]) -> [f32; 3] {
+    v.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 })
+}
+
+impl Shading {
+    /// Shading on the CPU engine (generated Rust; the decoder is the trainer's forward pass).
+    pub fn new(engine: CpuEngine, model: Model) -> Result<Shading, String> {
+        Ok(Shading {
+            pdf: StackKernel::new(&engine, ClosureContext::Pdf)?,
+            sample: StackKernel::new(&engine, ClosureContext::Sample)?,
+            albedo: StackKernel::new(&engine, ClosureContext::Albedo)?,
+            threads: engine.threads(),
+            engine: ShadingEngine::Cpu(engine),
+            wgpu_decoder: None,
+            model,
+        })
+    }
+
+    /// Shading on the wgpu engine (the stack's WGSL kernels, the emitted WGSL decoder).
+    pub fn new_wgpu(engine: WgpuEngine, model: Model) -> Result<Shading, String> {
+        let e = Engine::Wgpu(&engine);
+        let wgpu_decoder = match &model {
+            Model::Neural(d) => Some(WgpuDecoder::new(&engine, d, "render")?),
+            Model::Reference => None,
+        };
+        Ok(Shading {
+            pdf: StackKernel::on(e, ClosureContext::Pdf)?,
+            sample: StackKernel::on(e, ClosureContext::Sample)?,
+            albedo: StackKernel::on(e, ClosureContext::Albedo)?,
+            threads: 1,
+            engine: ShadingEngine::Wgpu(engine),
+            wgpu_decoder,
+            model,
+        })
+    }
+
+    fn engine(&self) -> Engine<'_> {
+        match &self.engine {
+            ShadingEngine::Cpu(e) => Engine::Cpu(e),
+            ShadingEngine::Wgpu(e) => Engine::Wgpu(e),
+        }
+    }
+
+    /// Which engine, in words.
+    pub fn engine_name(&self) -> &'static str {
+        match self.engine {
+            ShadingEngine::Cpu(_) => "CPU",
+            ShadingEngine::Wgpu(_) => "wgpu",
+        }
+    }
+
+    /// Decoder outputs (rows × 7) at (latent, wv, wl) per row.
+    fn decode(&self, decoder: &Mlp<f32>, points: &[SurfaceSample], wv: &[Vec3], wl: &[Vec3]) -> Result<Vec<f32>, String> {
+        let n = points.len();
+        let mut z = Vec::with_capacity(n * LATENT);
+        let mut features = Vec::with_capacity(n * FEATURES);
+        for r in 0..n {
+            z.extend_from_slice(&points[r].latent);
+            features.extend_from_slice(&direction_features(wv[r], wl[r]));
+        }
+        let mut dec_in = Vec::new();
+        fill_decoder_input(&z, &vec![0.0; z.len()], &features, n, &mut dec_in);
+        if let (ShadingEngine::Wgpu(e), Some(d)) = (&self.engine, &self.wgpu_decoder) {
+            return d.decode(e, &dec_in);
+        }
+        let mut out = vec![0.0f32; n * OUTPUTS];
+        decode_parallel(decoder, &dec_in, &mut out, self.threads);
+        Ok(out)
+    }
+
+    /// The non-diffuse part at (wv, wl) per point (local frame, both above the surface).
+    /// `reflectance` is filled only when `want_reflectance`.
+    pub fn evaluate(&self, points: &[SurfaceSample], wv: &[Vec3], wl: &[Vec3], want_reflectance: bool) -> Result<Vec<LobeValue>, String> {
+        let n = points.len();
+        if n == 0 {
+            return Ok(vec![]);
+        }
+        let params = params_of(points);
+        let rows: Vec<usize> = (0..n).collect();
+        let out = self.pdf.run_on(self.engine(), &params, &rows, &[("wv", wv), ("wl", wl)])?;
+        let (resp_at, thr_at, pdf_at) = (self.pdf.output_offset("response"), self.pdf.output_offset("throughput"), self.pdf.output_offset("pdf"));
+        let mut values: Vec<LobeValue> = (0..n)
+            .map(|k| LobeValue {
+                fcos: finite3(vec3_at(&out, resp_at, k)),
+                throughput: finite3(vec3_at(&out, thr_at, k)),
+                reflectance: 0.0,
+                pdf: out.column(pdf_at)[k].max(0.0),
+            })
+            .collect();
+        match &self.model {
+            Model::Reference => {
+                if want_reflectance {
+                    for (v, (albedo, _)) in values.iter_mut().zip(self.reference_albedo(points, wv)?) {
+                        v.reflectance = luminance(albedo);
+                    }
+                }
+            }
+            Model::Neural(decoder) => {
+                let out = self.decode(decoder, points, wv, wl)?;
+                for (k, v) in values.iter_mut().enumerate() {
+                    let o = &out[k * OUTPUTS..(k + 1) * OUTPUTS];
+                    set_from_decoder(v, o, wl[k][2]);
+                    v.reflectance = if o[6].is_finite() { o[6].max(0.0) } else { 0.0 };
+                }
+            }
+        }
+        Ok(values)
+    }
+
+    /// The reference non-diffuse part's directional albedo and throughput at wv per point (the
+    /// stack's albedo kernel, whatever the model).
+    pub fn reference_albedo(&self, points: &[SurfaceSample], wv: &[Vec3]) -> Result<Vec<([f32; 3], [f32; 3])>, String> {
+        if points.is_empty() {
+            return Ok(vec![]);
+        }
+        let params = params_of(points);
+        let rows: Vec<usize> = (0..points.len()).collect();
+        let a = self.albedo.run_on(self.engine(), &params, &rows, &[("wv", wv)])?;
+        let (alb_at, thr_at) = (self.albedo.output_offset("albedo"), self.albedo.output_offset("throughput"));
+        Ok((0..points.len()).map(|k| (finite3(vec3_at(&a, alb_at, k)), finite3(vec3_at(&a, thr_at, k)))).collect())
+    }
+
+    /// Draws wl from the non-diffuse strategy with three uniforms per point; returns wl and the
+    /// part's values there (`reflectance` not filled). A failed sample has pdf 0.
+    pub fn sample(&self, points: &[SurfaceSample], wv: &[Vec3], u: &[Vec3]) -> Result<Vec<(Vec3, LobeValue)>, String> {
+        let n = points.len();
+        if n == 0 {
+            return Ok(vec![]);
+        }
+        let params = params_of(points);
+        let rows: Vec<usize> = (0..n).collect();
+        let out = self.sample.run_on(self.engine(), &params, &rows, &[("wv", wv), ("u", u)])?;
+        let (wl_at, pdf_at, resp_at, thr_at) =
+            (self.sample.output_offset("wl"), self.sample.output_offset("pdf"), self.sample.output_offset("response"), self.sample.output_offset("throughput"));
+        let mut result: Vec<(Vec3, LobeValue)> = (0..n)
+            .map(|k| {
+                let wl = vec3_at(&out, wl_at, k);
+                let pdf = out.column(pdf_at)[k];
+                let Some(wl) = usable_sample(wl, pdf, 1e-6) else { return ([0.0, 0.0, 1.0], LobeValue::default()) };
+                (wl, LobeValue { fcos: finite3(vec3_at(&out, resp_at, k)), throughput: finite3(vec3_at(&out, thr_at, k)), reflectance: 0.0, pdf })
+            })
+            .collect();
+        if let Model::Neural(decoder) = &self.model {
+            let wl: Vec<Vec3> = result.iter().map(|r| r.0).collect();
+            let dec = self.decode(decoder, points, wv, &wl)?;
+            for (k, r) in result.iter_mut().enumerate() {
+                set_from_decoder(&mut r.1, &dec[k * OUTPUTS..(k + 1) * OUTPUTS], r.0[2]);
+            }
+        }
+        Ok(result)
+    }
+}
+
+/// f·cos and T from a decoder output row at light cosine `mu_l`: the decoder predicts f, and
+/// Eq. 3 compares μl·f̂ with the reference's f·cos.
+fn set_from_decoder(v: &mut LobeValue, o: &[f32], mu_l: f32) {
+    let mu = mu_l.max(0.0);
+    v.fcos = finite3([o[0] * mu, o[1] * mu, o[2] * mu]);
+    v.throughput = finite3([o[3], o[4], o[5]]);
+}
+
+pub fn luminance(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}

@@ -1,0 +1,86 @@
+//! `uplift datagen --class C --count N -o DIR`: writes generated training data as safetensors
+//! shards for use outside uplift (training itself generates on the fly and stores nothing).
+//! Each shard `DIR/<class>-<k>.safetensors` holds `params` (rows × 22, physical values, the
+//! parameter names in the metadata), `encoded` (the encoder's inputs), `wv`, `wl` (local frame,
+//! normal +z), `features` (the decoder's 9 direction features), `target` (f·μl RGB, T RGB, R)
+//! and `class`. Shards already written are skipped, so an interrupted run resumes.
+
+use uplift_engines::cpu_engine::CpuEngine;
+use uplift_neural::datagen::{ClassMix, DataGenerator};
+use uplift_engines::stack_params::PARAMETER_TABLE;
+use uplift_neural::weights::TensorFile;
+use clap::Args;
+use std::path::PathBuf;
+
+/// Rows per generated batch (a shard is a whole number of them).
+const CHUNK: usize = 16384;
+
+#[derive(Args)]
+pub struct DatagenArgs {
+    /// `haze`, `dust`, `clearcoat`, `inner`, `infill`, or `all` (20 % each).
+    #[arg(long, default_value = "all")]
+    pub class: String,
+    /// Rows to write.
+    #[arg(long)]
+    pub count: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Rows per shard (a multiple of 16384).
+    #[arg(long, default_value_t = 1 << 20)]
+    pub shard_rows: usize,
+    /// Output folder.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+pub fn run(args: DatagenArgs) -> Result<(), String> {
+    let mix = ClassMix::parse(&args.class).map_err(|e| format!("--class: {e}"))?;
+    if args.count == 0 {
+        return Err("--count must be at least 1".into());
+    }
+    if args.shard_rows == 0 || args.shard_rows % CHUNK != 0 {
+        return Err(format!("--shard-rows {}: a shard holds a positive multiple of {CHUNK} rows", args.shard_rows));
+    }
+    std::fs::create_dir_all(&args.output).map_err(|e| format!("{}: {e}", args.output.display()))?;
+    let generator = DataGenerator::new(CpuEngine::new()?, mix, args.seed)?;
+    let shards = args.count.div_ceil(args.shard_rows);
+    let bar = indicatif::ProgressBar::new(args.count as u64);
+    bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows, eta {eta}").unwrap());
+    let names = PARAMETER_TABLE.iter().map(|p| p.channel).collect::<Vec<_>>().join(",");
+    for shard in 0..shards {
+        let rows = args.shard_rows.min(args.count - shard * args.shard_rows);
+        let path = args.output.join(format!("{}-{shard:05}.safetensors", mix.name()));
+        if path.exists() {
+            bar.inc(rows as u64);
+            continue;
+        }
+        let mut file = TensorFile::default();
+        let mut cols: [Vec<f32>; 8] = Default::default();
+        let first_chunk = (shard * args.shard_rows / CHUNK) as u64;
+        for k in 0..rows.div_ceil(CHUNK) {
+            let n = CHUNK.min(rows - k * CHUNK);
+            let b = generator.batch(first_chunk + k as u64, n)?;
+            cols[0].extend_from_slice(&b.params);
+            cols[1].extend_from_slice(&b.encoded);
+            cols[2].extend(b.wv.iter().flatten());
+            cols[3].extend(b.wl.iter().flatten());
+            cols[4].extend_from_slice(&b.features);
+            cols[5].extend_from_slice(&b.target);
+            cols[6].extend(b.class.iter().map(|&c| c as f32));
+            bar.inc(n as u64);
+        }
+        for (name, width, data) in [("params", 22, 0), ("encoded", 22, 1), ("wv", 3, 2), ("wl", 3, 3), ("features", 9, 4), ("target", 7, 5), ("class", 1, 6)] {
+            let v = std::mem::take(&mut cols[data]);
+            file.put(name, if width == 1 { vec![rows] } else { vec![rows, width] }, v);
+        }
+        let m = &mut file.metadata;
+        m.insert("params".into(), names.clone());
+        m.insert("target".into(), "fcos.R,fcos.G,fcos.B,T.R,T.G,T.B,R (fcos = f * mu_l, R = luminance of the albedo)".into());
+        m.insert("class".into(), "0 haze, 1 dust, 2 clearcoat, 3 inner, 4 infill".into());
+        m.insert("generator".into(), format!("uplift datagen --class {} --seed {} (shard {shard}, first batch {first_chunk} of {CHUNK} rows)", mix.name(), args.seed));
+        file.write(&path)?;
+    }
+    bar.finish();
+    eprintln!("wrote {shards} shard(s) to {}", args.output.display());
+    Ok(())
+}

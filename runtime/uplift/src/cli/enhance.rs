@@ -1,0 +1,93 @@
+//! `uplift enhance INPUT --type auto|0..5 --seed S -o OUT/`: enhances a PBR material by an
+//! uplift rule (mtlx/rules/). INPUT is a .gltf/.glb or .mtlx file, a folder of conventionally
+//! named textures, or a folder of those (batch: one output folder per material under OUT,
+//! Types drawn in the paper's proportions, finished outputs skipped on re-run); or give the
+//! textures with --base-color, --roughness, --metalness [--normal]. One material writes
+//! OUT/material.mtlx, OUT/textures/, OUT/masks/*.png, OUT/params.exr and OUT/meta.json.
+
+use uplift_engines::cpu_engine::CpuEngine;
+use uplift_enhance::pbr_input::{self, PbrMaterial};
+use uplift_enhance::pipeline::{enhance, enhance_batch, EnhanceOptions};
+use uplift_enhance::rules::EnhancementType;
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct EnhanceArgs {
+    /// A .gltf/.glb or .mtlx material file, a texture folder, or a folder of those.
+    pub input: Option<PathBuf>,
+    /// Base color texture (sRGB), instead of INPUT.
+    #[arg(long, requires_all = ["roughness", "metalness"], conflicts_with = "input")]
+    pub base_color: Option<PathBuf>,
+    /// Roughness texture (linear; first channel).
+    #[arg(long, requires = "base_color")]
+    pub roughness: Option<PathBuf>,
+    /// Metalness texture (linear; first channel).
+    #[arg(long, requires = "base_color")]
+    pub metalness: Option<PathBuf>,
+    /// Tangent-space normal map (linear), optional.
+    #[arg(long, requires = "base_color")]
+    pub normal: Option<PathBuf>,
+    /// Enhancement Type: `auto` (drawn in the paper's proportions) or 0 to 5.
+    #[arg(long = "type", default_value = "auto")]
+    pub kind: String,
+    /// Seed of every random choice.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Bake resolution WxH (default: the largest input texture, else 256x256).
+    #[arg(long)]
+    pub resolution: Option<String>,
+    /// Width of the square procedural masks.
+    #[arg(long, default_value_t = 512)]
+    pub mask_size: usize,
+    /// Output folder.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+fn parse_type(s: &str) -> Result<Option<EnhancementType>, String> {
+    if s == "auto" {
+        return Ok(None);
+    }
+    let k: u32 = s.parse().map_err(|_| format!("--type {s}: expected auto or 0 to 5"))?;
+    EnhancementType::new(k).map(Some).map_err(|e| format!("--type {s}: {e}"))
+}
+
+fn parse_resolution(s: &str) -> Result<(usize, usize), String> {
+    let bad = || format!("--resolution {s}: expected WxH, e.g. 512x512, 1 to 8192 per side");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h): (usize, usize) = (w.trim().parse().map_err(|_| bad())?, h.trim().parse().map_err(|_| bad())?);
+    if w == 0 || h == 0 || w > 8192 || h > 8192 {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+pub fn run(args: EnhanceArgs) -> Result<(), String> {
+    let options = EnhanceOptions {
+        kind: parse_type(&args.kind)?,
+        seed: args.seed,
+        resolution: args.resolution.as_deref().map(parse_resolution).transpose()?,
+        mask_size: args.mask_size,
+    };
+    if options.mask_size == 0 || options.mask_size > 8192 {
+        return Err(format!("--mask-size {}: 1 to 8192", options.mask_size));
+    }
+    let materials: Vec<PbrMaterial> = match (&args.input, &args.base_color) {
+        (Some(input), None) => pbr_input::discover(input)?,
+        (None, Some(base)) => {
+            let name = args.output.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_else(|| "material".into());
+            vec![pbr_input::from_files(base, args.roughness.as_ref().unwrap(), args.metalness.as_ref().unwrap(), args.normal.as_deref(), &name)?]
+        }
+        _ => return Err("give INPUT, or --base-color, --roughness and --metalness".into()),
+    };
+    let engine = CpuEngine::new()?;
+    if materials.len() == 1 {
+        let e = enhance(&materials[0], &options, &args.output, &engine)?;
+        eprintln!("wrote {} (Type {}, {})", e.out_dir.display(), e.kind.index(), e.kind.name());
+    } else {
+        let (done, skipped) = enhance_batch(&materials, &options, &args.output, &engine)?;
+        eprintln!("enhanced {done} material(s) into {}; {skipped} already finished", args.output.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,209 @@
+//! `uplift demo`, the main job: from a procedural PBR set (`pbr_set`), enhance every material
+//! with its Type, fit its latents against the shipped decoder, render reference vs neural
+//! preview balls, measure FLIP and the white furnace, and write `report/index.html`
+//! (`report`). Each stage shows progress; enhanced and fitted materials already on disk are
+//! reused, so an interrupted run resumes.
+
+pub mod pbr_set;
+pub mod report;
+
+use uplift_neural::fit_files::{read_params, write_fit, FitInputs};
+use uplift_neural::weights::load_model;
+use uplift_engines::cpu_engine::CpuEngine;
+use uplift_enhance::pbr_input::PbrChannel;
+use uplift_enhance::pipeline::{enhance, EnhanceOptions};
+use uplift_neural::datagen::{ClassMix, DataGenerator};
+use uplift_neural::fit::{fit_material, FitOptions};
+use uplift_neural::weights::TensorFile;
+use uplift_render::environment::Environment;
+use uplift_render::evaluation::{evaluate_material, per_type, write_eval_images, TypeRow};
+use uplift_render::furnace::{white_furnace, FurnaceOptions};
+use uplift_render::image_files::write_png;
+use uplift_render::integrator::RenderOptions;
+use uplift_render::shading::{Model, Shading};
+use uplift_render::surface::SurfaceTextures;
+use uplift_base::atomic_write::write_atomically;
+use indicatif::{ProgressBar, ProgressStyle};
+use report::{parse_history, render_html, Report, ReportMaterial};
+use std::path::{Path, PathBuf};
+
+#[derive(Clone, Debug)]
+pub struct DemoOptions {
+    pub out: PathBuf,
+    pub decoder: PathBuf,
+    pub per_type: usize,
+    pub texture_size: usize,
+    pub render_size: usize,
+    pub spp: usize,
+    pub fit_steps: u64,
+    pub seed: u64,
+    pub threads: usize,
+}
+
+/// What the demo measured.
+pub struct DemoSummary {
+    pub table: Vec<TypeRow>,
+    pub materials: usize,
+    pub furnace_reference_passed: usize,
+    pub furnace_neural_passed: usize,
+    pub report: PathBuf,
+}
+
+fn bar(len: usize, stage: &str) -> ProgressBar {
+    let style = ProgressStyle::with_template("{prefix:>8} [{bar:30}] {pos}/{len} {msg} {elapsed}").expect("valid template").progress_chars("=> ");
+    let b = ProgressBar::new(len as u64).with_style(style);
+    b.set_prefix(stage.to_string());
+    b
+}
+
+/// The `total` figure of an entry of fit.json (`"eq3_fitted": {"total": X, …}`).
+fn fit_json_total(text: &str, entry: &str) -> f64 {
+    text.find(&format!("\"{entry}\""))
+        .and_then(|at| text[at..].find("\"total\":").map(|t| at + t + 8))
+        .and_then(|at| text[at..].trim_start().split([',', '}']).next().and_then(|v| v.trim().parse().ok()))
+        .unwrap_or(f64::NAN)
+}
+
+fn srgb(x: f32) -> u8 {
+    let x = x.clamp(0.0, 1.0);
+    let v = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+    (v * 255.0 + 0.5) as u8
+}
+
+/// The PBR input as an image: base colour (sRGB) on the left half, roughness on the right.
+fn pbr_image(base: &PbrChannel, rough: &PbrChannel, size: usize) -> Vec<u8> {
+    let sample = |c: &PbrChannel, u: f32, v: f32| -> [f32; 3] {
+        match c {
+            PbrChannel::Pixels(t) => {
+                let (w, h) = (t.width as usize, t.height as usize);
+                let (x, y) = (((u * w as f32) as usize).min(w - 1), ((v * h as f32) as usize).min(h - 1));
+                let p = &t.rgba[4 * (y * w + x)..];
+                [p[0], p[1], p[2]]
+            }
+            PbrChannel::Constant(v) => [v[0], v[v.len().min(2) - 1], v[v.len() - 1]],
+            PbrChannel::File { .. } => [0.5; 3],
+        }
+    };
+    let mut px = Vec::with_capacity(size * size * 3);
+    for y in 0..size {
+        for x in 0..size {
+            let half = size / 2;
+            let (u, v) = (((x % half.max(1)) as f32 + 0.5) / half.max(1) as f32, (y as f32 + 0.5) / size as f32);
+            if x < half {
+                px.extend(sample(base, u, v).map(srgb));
+            } else {
+                px.extend(sample(rough, u, v).map(|r| (r.clamp(0.0, 1.0) * 255.0 + 0.5) as u8));
+            }
+        }
+    }
+    px
+}
+
+/// Runs the demo.
+pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
+    let start = std::time::Instant::now();
+    if o.per_type == 0 || o.texture_size < 4 || o.render_size < 8 || o.spp == 0 || o.fit_steps == 0 {
+        return Err("demo: --per-type, --spp and --fit-steps must be at least 1, --texture-size at least 4, --render-size at least 8".into());
+    }
+    let materials_dir = o.out.join("materials");
+    let img_dir = o.out.join("report").join("img");
+    std::fs::create_dir_all(&img_dir).map_err(|e| format!("{}: {e}", img_dir.display()))?;
+    let set = pbr_set::procedural_set(o.per_type, o.texture_size, o.seed);
+    let engine = CpuEngine::with_threads(o.threads)?;
+
+    // 1. Enhance.
+    let b = bar(set.len(), "enhance");
+    let mut dirs = Vec::new();
+    for m in &set {
+        let dir = materials_dir.join(&m.material.name);
+        b.set_message(m.material.name.clone());
+        if !dir.join("meta.json").is_file() {
+            let options = EnhanceOptions { kind: Some(m.kind), seed: o.seed ^ uplift_base::rng::mix64(dirs.len() as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64) };
+            enhance(&m.material, &options, &dir, &engine)?;
+        }
+        dirs.push(dir);
+        b.inc(1);
+    }
+    b.finish();
+
+    // 2. Fit.
+    let model = load_model(&o.decoder)?;
+    let generator = DataGenerator::new(CpuEngine::with_threads(o.threads)?, ClassMix::All, o.seed)?;
+    let fit_options = FitOptions { steps: o.fit_steps, seed: o.seed, threads: o.threads, ..Default::default() };
+    let b = bar(dirs.len(), "fit");
+    for dir in &dirs {
+        b.set_message(dir.file_name().unwrap_or_default().to_string_lossy().to_string());
+        if !dir.join("latent.exr").is_file() || !dir.join("fit.json").is_file() {
+            let FitInputs { width: w, height: h, params, diffuse } = read_params(&dir.join("params.exr"))?;
+            let r = fit_material(&model, &generator, &params, diffuse.as_deref(), w, h, &fit_options, false)?;
+            write_fit(dir, &r, &o.decoder, &fit_options)?;
+        }
+        b.inc(1);
+    }
+    b.finish();
+
+    // 3. Render and compare; 4. white furnace.
+    let env = Environment::studio();
+    let reference = Shading::new(CpuEngine::with_threads(o.threads)?, Model::Reference)?;
+    let neural = Shading::new(CpuEngine::with_threads(o.threads)?, Model::Neural(model.decoder.clone()))?;
+    let ro = RenderOptions { width: o.render_size, height: o.render_size, spp: o.spp, seed: o.seed, ..Default::default() };
+    let fo = FurnaceOptions { directions: 512, max_texels: 64, seed: o.seed, ..Default::default() };
+    let b = bar(dirs.len(), "evaluate");
+    let mut rows = Vec::new();
+    for (m, dir) in set.iter().zip(&dirs) {
+        let name = m.material.name.clone();
+        b.set_message(name.clone());
+        let (eval, images) = evaluate_material(dir, &reference, &neural, &env, &ro, 1.0)?;
+        write_eval_images(&img_dir, &name, &images, (ro.width, ro.height))?;
+        write_png(&img_dir.join(format!("{name}_pbr.png")), &pbr_image(&m.material.base_color, &m.material.roughness, o.render_size), o.render_size, o.render_size)?;
+        let surface = SurfaceTextures::load(dir, true)?;
+        let fr = white_furnace(&surface, &reference, &fo)?;
+        let fneu = white_furnace(&surface, &neural, &fo)?;
+        let fit_json = std::fs::read_to_string(dir.join("fit.json")).unwrap_or_default();
+        rows.push(ReportMaterial {
+            eval,
+            pbr_image: format!("{name}_pbr.png"),
+            reference_image: format!("{name}_reference.png"),
+            neural_image: format!("{name}_neural.png"),
+            flip_image: format!("{name}_flip.png"),
+            furnace_reference: fr.passed,
+            furnace_neural: fneu.passed,
+            furnace_neural_worst: fneu.worst,
+            fit_before: fit_json_total(&fit_json, "eq3_encoder_only"),
+            fit_after: fit_json_total(&fit_json, "eq3_fitted"),
+        });
+        b.inc(1);
+    }
+    b.finish();
+
+    // 5. Report.
+    let evals: Vec<_> = rows.iter().map(|r| r.eval.clone()).collect();
+    let table = per_type(&evals);
+    let weights = TensorFile::read(&o.decoder)?;
+    let history = weights.metadata.get("history").map(|h| parse_history(h)).unwrap_or_default();
+    let summary = DemoSummary {
+        table: table.clone(),
+        materials: rows.len(),
+        furnace_reference_passed: rows.iter().filter(|r| r.furnace_reference).count(),
+        furnace_neural_passed: rows.iter().filter(|r| r.furnace_neural).count(),
+        report: o.out.join("report").join("index.html"),
+    };
+    let report = Report {
+        materials: rows,
+        table,
+        history,
+        decoder: weights.metadata.get("command").cloned().unwrap_or_else(|| o.decoder.display().to_string()),
+        settings: format!(
+            "{} procedural PBR materials per Type ({}² textures, seed {}), fitted with {} Adam steps; preview balls {}² at {} spp under the built-in studio environment, AgX; FLIP: LDR-FLIP at 67 pixels per degree.",
+            o.per_type, o.texture_size, o.seed, o.fit_steps, o.render_size, o.spp
+        ),
+        seconds: start.elapsed().as_secs_f64(),
+    };
+    write_atomically(&summary.report, render_html(&report).as_bytes()).map_err(|e| format!("{}: {e}", summary.report.display()))?;
+    Ok(summary)
+}
+
+/// Where the demo's report is under `out`.
+pub fn report_path(out: &Path) -> PathBuf {
+    out.join("report").join("index.html")
+}

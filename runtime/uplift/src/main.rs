@@ -1,0 +1,80 @@
+//! The `uplift` command line: `check` and `compile` (the compiler spine) and `eval` (run an
+//! output over CSV rows); `enhance` and `masks` (uplift rules);
+//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render`, `eval-fit`, `furnace` and `flip` (evaluation); `demo` (the main job).
+
+mod cli;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(name = "uplift", version, about = "MaterialX → naga compiler and runtime for uplifted materials")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Read a document, resolve every node, and report all diagnostics (exit 1 on error).
+    Check(cli::check::CheckArgs),
+    /// Compile a document's outputs to a pattern kernel.
+    Compile(cli::compile::CompileArgs),
+    /// Evaluate one output for every row of a CSV file of inputs; write a CSV of results.
+    Eval(cli::eval::EvalArgs),
+    /// Regenerate the pbrlib albedo tables by quasi-Monte-Carlo integration.
+    Tables(cli::tables::TablesArgs),
+    /// Enhance PBR materials into uplifted ones by an uplift rule (Types 0–5).
+    Enhance(cli::enhance::EnhanceArgs),
+    /// Write the uplift rules' procedural masks (dust, clearcoat damage) for a seed.
+    Masks(cli::masks::MasksArgs),
+    /// Write generated neural-material training data as safetensors shards.
+    Datagen(cli::datagen::DatagenArgs),
+    /// Train the universal encoder and decoder (paper §4.2) on generated data.
+    Train(cli::train::TrainArgs),
+    /// Fit an enhanced material's latent textures against the frozen decoder (paper §4.3).
+    Fit(cli::fit::FitArgs),
+    /// Write a trained decoder's inference code (Rust and WGSL).
+    EmitDecoder(cli::emit_decoder::EmitDecoderArgs),
+    /// Render an enhanced material on the preview ball (reference kernels or neural).
+    Render(cli::render::RenderArgs),
+    /// The per-texel white furnace test of enhanced materials; --filter moves failures aside.
+    Furnace(cli::furnace::FurnaceArgs),
+    /// Render fitted materials reference vs neural; FLIP per Type in the paper's Table 1 format.
+    EvalFit(cli::eval_fit::EvalFitArgs),
+    /// The main job: enhance a procedural PBR set across all Types, fit, render, FLIP, furnace, report.
+    Demo(cli::demo::DemoArgs),
+    /// LDR-FLIP (and PSNR) of two images.
+    Flip(cli::flip::FlipArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Check(a) => cli::check::run(a),
+        Command::Compile(a) => cli::compile::run(a),
+        Command::Eval(a) => cli::eval::run(a),
+        Command::Tables(a) => cli::tables::run(a),
+        Command::Enhance(a) => cli::enhance::run(a),
+        Command::Masks(a) => cli::masks::run(a),
+        Command::Datagen(a) => cli::datagen::run(a),
+        Command::Train(a) => cli::train::run(a),
+        Command::Fit(a) => cli::fit::run(a),
+        Command::EmitDecoder(a) => cli::emit_decoder::run(a),
+        Command::Render(a) => cli::render::run(a),
+        Command::Furnace(a) => cli::furnace::run(a),
+        Command::Flip(a) => cli::flip::run(a),
+        Command::Demo(a) => cli::demo::run(a),
+        Command::EvalFit(a) => cli::eval_fit::run(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            if !message.is_empty() {
+                eprintln!("{message}");
+            }
+            ExitCode::from(1)
+        }
+    }
+}
+
