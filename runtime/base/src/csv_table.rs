@@ -1,7 +1,7 @@
-//! A small CSV reader and writer for `uplift eval`: a header row of column names, then rows of
-//! plain numbers. No quoting: names and numbers never contain commas. Cells are trimmed; blank
-//! lines (and a trailing newline) are skipped; `\r\n` line ends are accepted. Every error names
-//! the file, the 1-based line and the column, never panics.
+//! `uplift eval`'s tables, read and written through the `csv` crate: a header row of column
+//! names, then rows of numbers. Cells are trimmed; blank lines (and a trailing newline) are
+//! skipped; `\r\n` line ends and quoted cells are accepted. Every error names the file, the
+//! 1-based line and the column, never panics.
 
 /// A parsed table: column names and rows of numbers, each with the line it came from.
 #[derive(Clone, Debug, PartialEq)]
@@ -17,11 +17,24 @@ pub struct Table {
 
 /// Parses `text`; `file` names the source in error messages (`file:line: …`).
 pub fn parse(file: &str, text: &str) -> Result<Table, String> {
-    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l.trim_end_matches('\r'))).filter(|(_, l)| !l.trim().is_empty());
-    let Some((header_line, header_text)) = lines.next() else {
+    let mut reader = csv::ReaderBuilder::new().has_headers(false).flexible(true).trim(csv::Trim::All).from_reader(text.as_bytes());
+    let mut records = reader.records().filter_map(|r| match r {
+        // A line of blanks is a record of one empty field: skipped like an empty line.
+        Ok(rec) if rec.iter().all(str::is_empty) => None,
+        Ok(rec) => {
+            let line = rec.position().map_or(0, |p| line_at(text, p.byte() as usize));
+            Some(Ok((line, rec)))
+        }
+        Err(e) => Some(Err(match e.position() {
+            Some(p) => format!("{file}:{}: {e}", line_at(text, p.byte() as usize)),
+            None => format!("{file}: {e}"),
+        })),
+    });
+    let Some(first) = records.next() else {
         return Err(format!("{file}: empty file: expected a header row of column names"));
     };
-    let header: Vec<String> = header_text.split(',').map(|c| c.trim().to_string()).collect();
+    let (header_line, header_record) = first?;
+    let header: Vec<String> = header_record.iter().map(str::to_string).collect();
     for (k, name) in header.iter().enumerate() {
         if name.is_empty() {
             return Err(format!("{file}:{header_line}: column {} of the header has no name", k + 1));
@@ -32,8 +45,8 @@ pub fn parse(file: &str, text: &str) -> Result<Table, String> {
     }
     let mut rows = Vec::new();
     let mut row_lines = Vec::new();
-    for (line, text) in lines {
-        let cells: Vec<&str> = text.split(',').map(str::trim).collect();
+    for record in records {
+        let (line, cells) = record?;
         if cells.len() < header.len() {
             return Err(format!(
                 "{file}:{line}: {} fields, but the header has {} columns: column `{}` has no value",
@@ -47,7 +60,7 @@ pub fn parse(file: &str, text: &str) -> Result<Table, String> {
                 "{file}:{line}: {} fields, but the header has {} columns: an extra field `{}` after column `{}`",
                 cells.len(),
                 header.len(),
-                cells[header.len()],
+                &cells[header.len()],
                 header[header.len() - 1]
             ));
         }
@@ -67,24 +80,29 @@ pub fn parse(file: &str, text: &str) -> Result<Table, String> {
     Ok(Table { header, header_line, rows, lines: row_lines })
 }
 
+/// The 1-based line of the record starting at byte `at` (the csv crate places a record's start
+/// before the line ends that precede it).
+fn line_at(text: &str, at: usize) -> usize {
+    let bytes = text.as_bytes();
+    let mut at = at.min(bytes.len());
+    while at < bytes.len() && matches!(bytes[at], b'\n' | b'\r') {
+        at += 1;
+    }
+    1 + bytes[..at].iter().filter(|&&c| c == b'\n').count()
+}
+
 /// Writes a header and `values` (row-major, `header.len()` per row) as CSV text. Numbers are
 /// written in Rust's shortest round-trip form, so reading them back gives the same `f32`s.
 pub fn write(header: &[String], values: &[f32]) -> String {
-    let mut s = header.join(",");
-    s.push('\n');
-    if header.is_empty() {
-        return s;
-    }
-    for row in values.chunks(header.len()) {
-        for (k, v) in row.iter().enumerate() {
-            if k > 0 {
-                s.push(',');
-            }
-            s.push_str(&v.to_string());
+    let mut w = csv::WriterBuilder::new().terminator(csv::Terminator::Any(b'\n')).flexible(true).from_writer(Vec::new());
+    // Writing into memory cannot fail.
+    let _ = w.write_record(header);
+    if !header.is_empty() {
+        for row in values.chunks(header.len()) {
+            let _ = w.write_record(row.iter().map(|v| v.to_string()));
         }
-        s.push('\n');
     }
-    s
+    String::from_utf8(w.into_inner().unwrap_or_default()).unwrap_or_default()
 }
 
 #[cfg(test)]
@@ -106,6 +124,13 @@ mod tests {
         assert!(parse("t.csv", "a,b\n1,2\n1,2,3\n").unwrap_err().contains("t.csv:3:"));
         assert!(parse("t.csv", "a,a\n").unwrap_err().contains("`a` appears twice"));
         assert!(parse("t.csv", "\n").unwrap_err().contains("empty file"));
+    }
+
+    #[test]
+    fn quoted_cells_and_quoted_names_are_read() {
+        let t = parse("t.csv", "\"a\",b\n\"1.5\", 2\n").unwrap();
+        assert_eq!((t.header.clone(), t.rows.clone()), (vec!["a".to_string(), "b".to_string()], vec![vec![1.5, 2.0]]));
+        assert!(parse("t.csv", "a,b\n\"1,2\n").is_err(), "an unterminated quote is an error");
     }
 
     #[test]

@@ -6,14 +6,16 @@
 
 use crate::gltf_input;
 use crate::masks::{self, MaskKind};
-use crate::material_writer::{format_value, material_document, MaterialSpec, PbrValue};
+use crate::material_writer::{material_document, MaterialSpec, PbrValue};
 use crate::pbr_input::{PbrChannel, PbrMaterial, Surface};
 use crate::rules::{self, uniform, EnhancementType, RuleInterface};
 use uplift_base::rng::{hash_str, mix64};
 use uplift_base::atomic_write::write_atomically;
 use uplift_engines::batch::{Columns, Geometry, PatternBatch, TextureData};
 use uplift_engines::cpu_engine::{CpuEngine, CpuKernel};
-use uplift_base::exr::{self, Compression, ExrImage};
+use uplift_base::exr::ExrImage;
+use uplift_material::meta::META_FORMAT;
+use uplift_material::{MaskRecord, MaterialFolder, Meta, NormalSpace};
 use uplift_engines::texture_loader::load_texture;
 use std::path::{Path, PathBuf};
 use uplift_compiler::{Compiler, OutputSelection};
@@ -276,12 +278,11 @@ fn write_outputs(
     let path = dir.join("material.mtlx");
     write_atomically(&path, mtlx::write_string(&doc).as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
 
+    let folder = MaterialFolder::create(dir);
     let params = bake(rule, scalars, &pbr, dir, &geometry, w, h, engine)?;
-    exr::write(&dir.join("params.exr"), &params, Compression::Zip)?;
-
-    let meta = meta_json(material, kind, options.seed, scalars, (w, h), object_size, rule);
-    let path = dir.join("meta.json");
-    write_atomically(&path, meta.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))
+    folder.write_params_image(&params)?;
+    // meta.json last: its presence marks a finished material.
+    folder.write_meta(&meta(material, kind, options.seed, scalars, (w, h), object_size, rule))
 }
 
 /// Evaluates the rule's kernel at every texel: the PBR inputs read from the written textures
@@ -351,44 +352,25 @@ fn bake(
     Ok(img)
 }
 
-fn json_string(s: &str) -> String {
-    let mut out = String::from("\"");
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
-            c => out.push(c),
-        }
+/// meta.json of a material enhanced by `kind` with `seed`.
+fn meta(material: &PbrMaterial, kind: EnhancementType, seed: u64, scalars: &[(String, f64)], size: (usize, usize), object_size: f32, rule: &RuleInterface) -> Meta {
+    Meta {
+        format: META_FORMAT,
+        kind: kind.index() as u32,
+        rule: format!("mtlx/rules/{}", kind.file_name()),
+        seed,
+        source: material.source.clone(),
+        name: material.name.clone(),
+        resolution: [size.0, size.1],
+        object_size,
+        normal_space: match material.surface {
+            Surface::Plane => NormalSpace::Plane,
+            Surface::Gltf { .. } => NormalSpace::World,
+        },
+        scalars: scalars.iter().map(|(k, v)| (k.clone(), *v as f32)).collect(),
+        masks: rule.masks.iter().map(|(input, k)| (input.clone(), MaskRecord { file: format!("masks/{}.png", k.file_stem()), seed: mask_seed(seed, *k) })).collect(),
+        uplift: env!("CARGO_PKG_VERSION").to_string(),
     }
-    out.push('"');
-    out
-}
-
-fn meta_json(material: &PbrMaterial, kind: EnhancementType, seed: u64, scalars: &[(String, f64)], size: (usize, usize), object_size: f32, rule: &RuleInterface) -> String {
-    let scalar_lines: Vec<String> = scalars.iter().map(|(k, v)| format!("    {}: {}", json_string(k), format_value(&[*v as f32]))).collect();
-    let masks: Vec<String> = rule
-        .masks
-        .iter()
-        .map(|(input, k)| format!("    {}: {{ \"file\": \"masks/{}.png\", \"seed\": {} }}", json_string(input), k.file_stem(), mask_seed(seed, *k)))
-        .collect();
-    format!(
-        "{{\n  \"type\": {},\n  \"rule\": {},\n  \"seed\": {seed},\n  \"source\": {},\n  \"name\": {},\n  \"resolution\": [{}, {}],\n  \"object_size\": {},\n  \"normal_space\": {},\n  \"scalars\": {{\n{}\n  }},\n  \"masks\": {{\n{}\n  }},\n  \"uplift\": {}\n}}\n",
-        kind.index(),
-        json_string(&format!("mtlx/rules/{}", kind.file_name())),
-        json_string(&material.source),
-        json_string(&material.name),
-        size.0,
-        size.1,
-        format_value(&[object_size]),
-        json_string(match material.surface {
-            Surface::Plane => "plane",
-            Surface::Gltf { .. } => "world",
-        }),
-        scalar_lines.join(",\n"),
-        masks.join(",\n"),
-        json_string(env!("CARGO_PKG_VERSION")),
-    )
 }
 
 /// Enhances every material into `out/<name>/` (names made unique), one seed per material
@@ -409,7 +391,7 @@ pub fn enhance_batch(materials: &[PbrMaterial], options: &EnhanceOptions, out: &
         used.push(name.clone());
         let dir = out.join(&name);
         bar.set_message(name.clone());
-        if dir.join("meta.json").is_file() {
+        if MaterialFolder::is_finished(&dir) {
             skipped += 1;
         } else {
             let o = EnhanceOptions { seed: mix64(options.seed ^ hash_str(&name)), ..options.clone() };

@@ -239,6 +239,31 @@ impl MaterialFolder {
     }
 }
 
+/// The material folders under the arguments (a folder with params.exr, or its subfolders that
+/// have one), sorted.
+pub fn find_material_folders(args: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
+    let mut out = Vec::new();
+    for a in args {
+        if is_material(a) {
+            out.push(a.clone());
+            continue;
+        }
+        let entries = std::fs::read_dir(a).map_err(|e| format!("{}: {e}", a.display()))?;
+        let mut found: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| is_material(p)).collect();
+        if found.is_empty() {
+            return Err(format!("{}: neither an enhanced material (no params.exr) nor a folder of them", a.display()));
+        }
+        found.sort();
+        out.extend(found);
+    }
+    Ok(out)
+}
+
+/// Whether `dir` looks like an enhanced material (it holds params.exr).
+fn is_material(dir: &Path) -> bool {
+    dir.join("params.exr").is_file()
+}
+
 /// A JSON file as `T`; errors name the file (and serde's line and column).
 fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;

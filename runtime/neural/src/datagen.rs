@@ -140,7 +140,7 @@ impl DataGenerator {
 
     /// Batch `index` of `rows` rows.
     pub fn batch(&self, index: u64, rows: usize) -> Result<TrainingBatch, String> {
-        let key = mix64(self.seed ^ 0x6461_7461) ^ mix64(index.wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        let key = mix64(self.seed ^ 0x6461_7461) ^ mix64(index.wrapping_mul(uplift_base::rng::GOLDEN_GAMMA));
         let mut params = vec![0.0; rows * PARAMETERS];
         let mut classes = Vec::with_capacity(rows);
         for r in 0..rows {

@@ -13,6 +13,8 @@
 //! clamped to [0, 1] after every Adam step. The report compares the encoder-only and the fitted
 //! latents on other directions at sampled texels with their own (unquantised) parameters.
 
+use uplift_material::fit_record::{round_to, FIT_FORMAT};
+use uplift_material::{EnergyRecord, FitRecord, LatentImage, LossRecord};
 use crate::adam::{cosine_lr, Adam};
 use crate::datagen::{DataGenerator, TrainingBatch};
 use crate::energy_bound::{enforce_energy_bound, EnergyOptions, EnergyReport};
@@ -267,4 +269,36 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     let after_unbounded = if energy.is_some() { loss_of(&lat(&texel_latents(&z_unbounded))) } else { after };
     debug_assert_eq!(OUTPUTS, 7);
     Ok(FitResult { width, height, latents, groups, before, after, after_unbounded, first_step, last_step, energy, seconds: start.elapsed().as_secs_f64() })
+}
+
+// latent.exr holds exactly the model's latents.
+const _: () = assert!(LATENT == uplift_material::folder::LATENTS);
+
+impl FitResult {
+    /// The fit's record for the material folder's fit.json (`decoder` names the weights it was
+    /// fitted against; losses to 6 decimals, time to 0.01 s).
+    pub fn record(&self, decoder: &std::path::Path, o: &FitOptions) -> FitRecord {
+        let loss = |p: &LossParts| LossRecord::new(p.total, p.f, p.t, p.r);
+        FitRecord {
+            format: FIT_FORMAT,
+            decoder: decoder.display().to_string(),
+            texels: self.width * self.height,
+            groups: self.groups,
+            steps: o.steps,
+            directions: o.directions,
+            levels: o.levels,
+            seconds: round_to(self.seconds, 2),
+            eq3_encoder_only: loss(&self.before),
+            eq3_fitted: loss(&self.after),
+            eq3_fitted_before_energy_bound: loss(&self.after_unbounded),
+            fitting_loss_first_step: loss(&self.first_step),
+            fitting_loss_last_step: loss(&self.last_step),
+            energy_bound: self.energy.as_ref().map(|e| EnergyRecord::new(e.groups, e.over_before, e.over_after, e.worst_before.into(), e.worst_after.into(), e.steps)),
+        }
+    }
+
+    /// The fitted latents as latent.exr holds them.
+    pub fn latent_image(&self) -> LatentImage {
+        LatentImage { width: self.width, height: self.height, latents: self.latents.clone() }
+    }
 }

@@ -13,7 +13,6 @@ pub mod energy_bound;
 pub mod evaluate;
 pub mod features;
 pub mod fit;
-pub mod fit_files;
 pub mod inference;
 pub mod loss;
 pub mod mlp;

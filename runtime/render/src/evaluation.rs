@@ -44,14 +44,9 @@ pub struct EvalImages {
     pub flip_magma: Vec<u8>,
 }
 
-/// A material's Type from its meta.json (`"type": N`).
+/// A material's Type from its meta.json.
 pub fn material_type(dir: &Path) -> Result<usize, String> {
-    let path = dir.join("meta.json");
-    let text = std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let at = text.find("\"type\":").ok_or_else(|| format!("{}: no \"type\" entry", path.display()))?;
-    let rest = text[at + 7..].trim_start();
-    let digits: String = rest.chars().take_while(|c| c.is_ascii_digit()).collect();
-    digits.parse().map_err(|_| format!("{}: \"type\" is not a number", path.display()))
+    Ok(uplift_material::MaterialFolder::open(dir)?.read_meta()?.kind as usize)
 }
 
 /// Renders one fitted material both ways and compares.

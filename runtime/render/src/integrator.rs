@@ -100,7 +100,7 @@ fn path_key(seed: u64, pixel: u32) -> u64 {
 
 /// Uniform `dim` of path depth `depth` in sample `pass` of the pixel whose stream is `key`.
 fn rand(key: u64, pass: usize, depth: usize, dim: u64) -> f32 {
-    unit(mix64(key ^ pass as u64) ^ ((depth as u64 * 16 + dim + 1).wrapping_mul(0x9e37_79b9_7f4a_7c15)))
+    unit(mix64(key ^ pass as u64) ^ ((depth as u64 * 16 + dim + 1).wrapping_mul(uplift_base::rng::GOLDEN_GAMMA)))
 }
 
 fn power_heuristic(a: f32, b: f32) -> f32 {

@@ -12,30 +12,15 @@
 //! channels or the field render without a normal map (or as `plane`).
 
 use crate::scene::Hit;
-use uplift_base::exr;
-use uplift_neural::model::LATENT;
-use uplift_engines::stack_params::{PARAMETERS, PARAMETER_TABLE};
+use uplift_engines::stack_params::PARAMETERS;
 use std::path::Path;
+use uplift_material::MaterialFolder;
+use uplift_neural::model::LATENT;
 
-pub use uplift_neural::fit_files::DIFFUSE_CHANNELS;
-
-/// The latent channels of latent.exr.
-pub const LATENT_CHANNELS: [&str; LATENT] = ["latent0.R", "latent0.G", "latent0.B", "latent1.R", "latent1.G", "latent1.B"];
+pub use uplift_material::NormalSpace;
 
 /// Values per texel: parameters, diffuse colour, latents.
 pub const TEXEL_VALUES: usize = PARAMETERS + 3 + LATENT;
-
-/// The baked normal channels of params.exr.
-pub const NORMAL_CHANNELS: [&str; 3] = ["normal.X", "normal.Y", "normal.Z"];
-
-/// The frame params.exr's normals are expressed in (see the module doc).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum NormalSpace {
-    /// The unit square's frame: tangent +X, bitangent −Z, normal +Y.
-    Plane,
-    /// World space of the glTF asset the material was baked on.
-    World,
-}
 
 /// Per-texel material data, row-major (row 0 at the top), `TEXEL_VALUES` floats per texel.
 pub struct SurfaceTextures {
@@ -68,44 +53,28 @@ impl SurfaceTextures {
     /// An enhanced material's folder: params.exr (parameters and diffuse colour) and, if
     /// `latents`, latent.exr of the same size.
     pub fn load(dir: &Path, latents: bool) -> Result<SurfaceTextures, String> {
-        let path = dir.join("params.exr");
-        let img = exr::read(&path)?;
-        let (w, h) = (img.width, img.height);
+        let folder = MaterialFolder::open(dir)?;
+        let p = folder.read_params()?;
+        let (w, h) = (p.width, p.height);
         let n = w * h;
+        let diffuse = p.diffuse.ok_or_else(|| format!("{}: no channel `diffuse_color.R/G/B` (written by `uplift enhance`; re-run it if the folder predates the diffuse_color channels)", folder.params_path().display()))?;
         let mut values = vec![0.0f32; n * TEXEL_VALUES];
-        let names = PARAMETER_TABLE.iter().map(|p| p.channel).chain(DIFFUSE_CHANNELS);
-        for (k, name) in names.enumerate() {
-            let ch = img.channel(name).ok_or_else(|| format!("{}: no channel `{name}` (written by `uplift enhance`; re-run it if the folder predates the diffuse_color channels)", path.display()))?;
-            for t in 0..n {
-                values[t * TEXEL_VALUES + k] = ch[t];
-            }
+        for t in 0..n {
+            let v = &mut values[t * TEXEL_VALUES..(t + 1) * TEXEL_VALUES];
+            v[..PARAMETERS].copy_from_slice(&p.params[t * PARAMETERS..(t + 1) * PARAMETERS]);
+            v[PARAMETERS..PARAMETERS + 3].copy_from_slice(&diffuse[t * 3..t * 3 + 3]);
         }
         if latents {
-            let path = dir.join("latent.exr");
-            let lat = exr::read(&path)?;
+            let lat = folder.read_latents()?;
             if (lat.width, lat.height) != (w, h) {
-                return Err(format!("{}: {}×{} texels, but params.exr has {w}×{h}", path.display(), lat.width, lat.height));
+                return Err(format!("{}: {}×{} texels, but params.exr has {w}×{h}", folder.latent_path().display(), lat.width, lat.height));
             }
-            for (k, name) in LATENT_CHANNELS.iter().enumerate() {
-                let ch = lat.channel(name).ok_or_else(|| format!("{}: no channel `{name}` (written by `uplift fit`)", path.display()))?;
-                for t in 0..n {
-                    values[t * TEXEL_VALUES + PARAMETERS + 3 + k] = ch[t];
-                }
+            for t in 0..n {
+                values[t * TEXEL_VALUES + PARAMETERS + 3..(t + 1) * TEXEL_VALUES].copy_from_slice(&lat.latents[t * LATENT..(t + 1) * LATENT]);
             }
         }
-        let mut normals = Vec::new();
-        if let [Some(x), Some(y), Some(z)] = NORMAL_CHANNELS.map(|c| img.channel(c)) {
-            normals = (0..n).map(|t| [x[t], y[t], z[t]]).collect();
-            if let Some(t) = normals.iter().position(|v| !v.iter().all(|x| x.is_finite())) {
-                return Err(format!("{}: texel ({}, {}) holds a non-finite normal", path.display(), t % w, t / w));
-            }
-        }
-        let normal_space = read_normal_space(&dir.join("meta.json"))?;
-        if let Some(i) = values.iter().position(|x| !x.is_finite()) {
-            let t = i / TEXEL_VALUES;
-            return Err(format!("{}: texel ({}, {}) holds a non-finite value", dir.display(), t % w, t / w));
-        }
-        Ok(SurfaceTextures { width: w, height: h, values, has_latents: latents, normals, normal_space })
+        let normal_space = folder.read_meta_if_any()?.map_or(NormalSpace::Plane, |m| m.normal_space);
+        Ok(SurfaceTextures { width: w, height: h, values, has_latents: latents, normals: p.normals.unwrap_or_default(), normal_space })
     }
 
     /// The data of texel `t` (row-major index).
@@ -169,19 +138,5 @@ impl SurfaceTextures {
             (Some(n), NormalSpace::World) if world_normals => hit.with_shading_normal(n),
             _ => *hit,
         }
-    }
-}
-
-/// meta.json's `normal_space` (`plane` when the file or the field is absent; meta.json is
-/// written by `uplift enhance`, one `"key": value` per line).
-fn read_normal_space(path: &Path) -> Result<NormalSpace, String> {
-    let Ok(text) = std::fs::read_to_string(path) else { return Ok(NormalSpace::Plane) };
-    let Some(at) = text.find("\"normal_space\"") else { return Ok(NormalSpace::Plane) };
-    let rest = text[at + "\"normal_space\"".len()..].trim_start().trim_start_matches(':').trim_start();
-    let value = rest.strip_prefix('"').and_then(|r| r.split('"').next()).unwrap_or("");
-    match value {
-        "plane" => Ok(NormalSpace::Plane),
-        "world" => Ok(NormalSpace::World),
-        other => Err(format!("{}: normal_space `{other}` is not plane or world", path.display())),
     }
 }

@@ -22,7 +22,7 @@ use uplift_enhance::rules::EnhancementType;
 use uplift_neural::classes::DataClass;
 use uplift_neural::datagen::{ClassMix, DataGenerator};
 use uplift_neural::evaluate::{batch_errors, decode, holdout_errors};
-use uplift_neural::fit_files::FitInputs;
+use uplift_material::ParamsImage;
 use uplift_neural::fit::{fit_material, FitOptions};
 use uplift_neural::model::{NeuralModel, LATENT};
 use uplift_engines::stack_params::PARAMETERS;
@@ -72,7 +72,7 @@ fn uniform_params(kind: EnhancementType, dir: &Path) -> (Vec<f32>, Vec<f32>) {
     let out = dir.join(material.name.clone());
     let options = EnhanceOptions { kind: Some(kind), seed: 11, resolution: Some((32, 32)), mask_size: 64 };
     enhance(&material, &options, &out, &CpuEngine::new().unwrap()).unwrap();
-    let FitInputs { width: w, height: h, params, diffuse } = uplift_neural::fit_files::read_params(&out.join("params.exr")).unwrap();
+    let ParamsImage { width: w, height: h, params, diffuse, .. } = uplift_material::MaterialFolder::open(&out).unwrap().read_params().unwrap();
     // The texel with the most dust or fuzz (the centre when there is none).
     let fuzz = uplift_engines::stack_params::index_of("fuzz_weight").unwrap();
     let t = (0..w * h).fold((h / 2) * w + w / 2, |best, t| if params[t * PARAMETERS + fuzz] > params[best * PARAMETERS + fuzz] { t } else { best });
@@ -176,7 +176,7 @@ fn fitting_a_512_material_beats_the_encoder() {
     // Type 2 (clearcoat with its damage mask) over textured base colour and roughness.
     let options = EnhanceOptions { kind: Some(EnhancementType::new(2).unwrap()), seed: 5, resolution: Some((512, 512)), mask_size: 256 };
     enhance(&material, &options, &out, &CpuEngine::new().unwrap()).unwrap();
-    let FitInputs { width: w, height: h, params, diffuse } = uplift_neural::fit_files::read_params(&out.join("params.exr")).unwrap();
+    let ParamsImage { width: w, height: h, params, diffuse, .. } = uplift_material::MaterialFolder::open(&out).unwrap().read_params().unwrap();
     assert_eq!((w, h), (512, 512));
     let model = shipped();
     let g = generator(41);

@@ -5,7 +5,7 @@
 //! images and `table.md` there.
 
 use uplift_neural::weights::load_model;
-use super::furnace::material_folders;
+use uplift_material::folder::find_material_folders as material_folders;
 use super::render::{environment, RenderSettings};
 use uplift_base::atomic_write::write_atomically;
 use uplift_engines::cpu_engine::CpuEngine;

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_neural::datagen::{ClassMix, DataGenerator};
 use uplift_neural::fit::{fit_material, FitOptions};
-use uplift_neural::fit_files::{read_params, write_fit, FitInputs};
+use uplift_material::{MaterialFolder, ParamsImage};
 use uplift_neural::weights::{load_model, SHIPPED_DECODER};
 
 #[derive(Args)]
@@ -44,14 +44,16 @@ pub fn run(args: FitArgs) -> Result<(), String> {
         return Err("--steps and --directions must be at least 1".into());
     }
     let model = load_model(&args.decoder)?;
-    let FitInputs { width: w, height: h, params, diffuse } = read_params(&args.material.join("params.exr"))?;
+    let folder = MaterialFolder::open(&args.material)?;
+    let ParamsImage { width: w, height: h, params, diffuse, .. } = folder.read_params()?;
     let generator = DataGenerator::new(CpuEngine::with_threads(threads)?, ClassMix::All, args.seed)?;
     let mut o = FitOptions { steps: args.steps, directions: args.directions, levels: args.levels, seed: args.seed, threads, ..Default::default() };
     if args.no_energy_bound {
         o.energy = None;
     }
     let r = fit_material(&model, &generator, &params, diffuse.as_deref(), w, h, &o, true)?;
-    write_fit(&args.material, &r, &args.decoder, &o)?;
+    folder.write_latents(&r.latent_image())?;
+    folder.write_fit(&r.record(&args.decoder, &o))?;
     eprintln!(
         "fitted {w}×{h} texels ({} groups) in {:.1} s; Eq. 3 at {} check texels: encoder only {:.5} (f {:.5}, T {:.5}, R {:.5}) → fitted {:.5} (f {:.5}, T {:.5}, R {:.5})",
         r.groups, r.seconds, o.check_texels.min(w * h), r.before.total, r.before.f, r.before.t, r.before.r, r.after.total, r.after.f, r.after.t, r.after.r
@@ -62,6 +64,6 @@ pub fn run(args: FitArgs) -> Result<(), String> {
             e.over_before, e.groups, e.worst_before, e.over_after, e.steps, e.worst_after, r.after_unbounded.total
         );
     }
-    eprintln!("wrote {}", args.material.join("latent.exr").display());
+    eprintln!("wrote {}", folder.latent_path().display());
     Ok(())
 }

@@ -3,6 +3,7 @@
 //! folders. Prints each material's worst total albedo and verdict, and the pass rate; with
 //! `--filter DIR`, failing material folders are moved into DIR (paper §4.3 discards them).
 
+use uplift_material::folder::find_material_folders as material_folders;
 use uplift_neural::weights::{load_model, SHIPPED_DECODER};
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_render::furnace::{white_furnace, FurnaceOptions};
@@ -41,25 +42,6 @@ pub struct FurnaceArgs {
     pub threads: Option<usize>,
 }
 
-/// The material folders under the arguments (a folder with params.exr, or its subfolders that
-/// have one), sorted.
-pub fn material_folders(args: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
-    let mut out = Vec::new();
-    for a in args {
-        if a.join("params.exr").is_file() {
-            out.push(a.clone());
-            continue;
-        }
-        let entries = std::fs::read_dir(a).map_err(|e| format!("{}: {e}", a.display()))?;
-        let mut found: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).filter(|p| p.join("params.exr").is_file()).collect();
-        if found.is_empty() {
-            return Err(format!("{}: neither an enhanced material (no params.exr) nor a folder of them", a.display()));
-        }
-        found.sort();
-        out.extend(found);
-    }
-    Ok(out)
-}
 
 fn move_aside(dir: &Path, into: &Path) -> Result<PathBuf, String> {
     std::fs::create_dir_all(into).map_err(|e| format!("{}: {e}", into.display()))?;

@@ -7,7 +7,7 @@
 pub mod pbr_set;
 pub mod report;
 
-use uplift_neural::fit_files::{read_params, write_fit, FitInputs};
+use uplift_material::{MaterialFolder, ParamsImage};
 use uplift_neural::weights::load_model;
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_enhance::pbr_input::PbrChannel;
@@ -54,14 +54,6 @@ fn bar(len: usize, stage: &str) -> ProgressBar {
     let b = ProgressBar::new(len as u64).with_style(style);
     b.set_prefix(stage.to_string());
     b
-}
-
-/// The `total` figure of an entry of fit.json (`"eq3_fitted": {"total": X, …}`).
-fn fit_json_total(text: &str, entry: &str) -> f64 {
-    text.find(&format!("\"{entry}\""))
-        .and_then(|at| text[at..].find("\"total\":").map(|t| at + t + 8))
-        .and_then(|at| text[at..].trim_start().split([',', '}']).next().and_then(|v| v.trim().parse().ok()))
-        .unwrap_or(f64::NAN)
 }
 
 fn srgb(x: f32) -> u8 {
@@ -117,7 +109,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
     for m in &set {
         let dir = materials_dir.join(&m.material.name);
         b.set_message(m.material.name.clone());
-        if !dir.join("meta.json").is_file() {
+        if !MaterialFolder::is_finished(&dir) {
             let options = EnhanceOptions { kind: Some(m.kind), seed: o.seed ^ uplift_base::rng::mix64(dirs.len() as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64) };
             enhance(&m.material, &options, &dir, &engine)?;
         }
@@ -133,10 +125,12 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
     let b = bar(dirs.len(), "fit");
     for dir in &dirs {
         b.set_message(dir.file_name().unwrap_or_default().to_string_lossy().to_string());
-        if !dir.join("latent.exr").is_file() || !dir.join("fit.json").is_file() {
-            let FitInputs { width: w, height: h, params, diffuse } = read_params(&dir.join("params.exr"))?;
+        let folder = MaterialFolder::open(dir)?;
+        if !folder.has_fit() {
+            let ParamsImage { width: w, height: h, params, diffuse, .. } = folder.read_params()?;
             let r = fit_material(&model, &generator, &params, diffuse.as_deref(), w, h, &fit_options, false)?;
-            write_fit(dir, &r, &o.decoder, &fit_options)?;
+            folder.write_latents(&r.latent_image())?;
+            folder.write_fit(&r.record(&o.decoder, &fit_options))?;
         }
         b.inc(1);
     }
@@ -159,7 +153,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         let surface = SurfaceTextures::load(dir, true)?;
         let fr = white_furnace(&surface, &reference, &fo)?;
         let fneu = white_furnace(&surface, &neural, &fo)?;
-        let fit_json = std::fs::read_to_string(dir.join("fit.json")).unwrap_or_default();
+        let fit = MaterialFolder::open(dir)?.read_fit()?;
         rows.push(ReportMaterial {
             eval,
             pbr_image: format!("{name}_pbr.png"),
@@ -169,8 +163,8 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
             furnace_reference: fr.passed,
             furnace_neural: fneu.passed,
             furnace_neural_worst: fneu.worst,
-            fit_before: fit_json_total(&fit_json, "eq3_encoder_only"),
-            fit_after: fit_json_total(&fit_json, "eq3_fitted"),
+            fit_before: fit.eq3_encoder_only.total,
+            fit_after: fit.eq3_fitted.total,
         });
         b.inc(1);
     }
