@@ -12,9 +12,9 @@
 //! `--graph FILE.mtlx` to measure another document's numeric outputs; a graph the runtime does
 //! not ship has no in-process figures; `--context eval|albedo|sample|pdf` for a BSDF graph's
 //! closure kernel, on random direction pairs in the local frame). The closure library's
-//! figures (paths relative to runtime/, where cargo runs benchmarks): `--graph
-//! graphs/bsdf/bsdf_conductor.mtlx --context eval` (one conductor)
-//! and `--graph graphs/bsdf/bsdf_stack.mtlx --context eval` (the layered stack).
+//! figures (paths relative to runtime/uplift/, where cargo runs benchmarks): `--graph
+//! ../kernels/graphs/bsdf/bsdf_conductor.mtlx --context eval` (one conductor)
+//! and `--graph ../kernels/graphs/bsdf/bsdf_stack.mtlx --context eval` (the layered stack).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

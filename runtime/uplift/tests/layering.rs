@@ -19,7 +19,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("uplift_neural", &["uplift_base", "uplift_kernels", "uplift_engines", "uplift_material", "mtlx", "uplift_compiler"]),
     ("uplift_render", &["uplift_base", "uplift_kernels", "uplift_engines", "uplift_material", "uplift_enhance", "uplift_neural", "mtlx", "uplift_compiler"]),
     ("uplift", &["uplift_base", "uplift_kernels", "uplift_engines", "uplift_material", "uplift_enhance", "uplift_neural", "uplift_render", "mtlx", "uplift_compiler"]),
-    ("uplift_rs_snapshots", &["mtlx", "uplift_compiler", "uplift_base"]),
+    ("uplift_rs_snapshots", &["mtlx", "uplift_compiler", "uplift_base", "uplift_engines"]),
 ];
 
 /// (crate, its workspace dependencies) from `cargo metadata`.
