@@ -35,6 +35,20 @@ pub struct BuiltKernel {
     pub fingerprint: u64,
 }
 
+/// One kernel [`Builder::generate`] wrote, in memory.
+#[derive(Clone, Debug)]
+pub struct GeneratedKernel {
+    /// The module name: the document's stem, `_<context>` for a closure kernel.
+    pub stem: String,
+    /// The document it came from.
+    pub source: PathBuf,
+    pub context: Option<ClosureContext>,
+    /// The Rust module (its first line names the document by `source` as given).
+    pub rust: String,
+    /// As [`BuiltKernel::fingerprint`].
+    pub fingerprint: u64,
+}
+
 impl Builder {
     pub fn new() -> Builder {
         Builder::default()
@@ -76,9 +90,14 @@ impl Builder {
     /// Writes the library's albedo tables as `pub static {name}: [f32; N]` into `file`, for
     /// [`Builder::shared_albedo_tables`].
     pub fn write_albedo_tables(&self, name: &str, file: &Path) -> Result<(), String> {
+        std::fs::write(file, self.albedo_tables_source(name)?).map_err(|e| format!("{}: {e}", file.display()))
+    }
+
+    /// The text [`Builder::write_albedo_tables`] writes.
+    pub fn albedo_tables_source(&self, name: &str) -> Result<String, String> {
         let compiler = Compiler::new(&self.libraries);
         let data = compiler.library.albedo_table_data.as_ref().ok_or("the library has no albedo tables (mx_albedo_table_data)")?;
-        std::fs::write(file, write_albedo_table_static(name, data)).map_err(|e| format!("{}: {e}", file.display()))
+        Ok(write_albedo_table_static(name, data))
     }
 
     /// Writes `<stem>.rs` for every graph into `out_dir`; returns the files written. Prints
@@ -90,16 +109,30 @@ impl Builder {
 
     /// [`Builder::compile`], also returning each kernel's fingerprint.
     pub fn compile_kernels(&self, out_dir: &Path) -> Result<Vec<BuiltKernel>, String> {
+        for dir in &self.libraries {
+            println!("cargo:rerun-if-changed={}", dir.display());
+        }
+        for (path, _, _) in &self.graphs {
+            println!("cargo:rerun-if-changed={}", path.display());
+        }
+        let mut written = Vec::new();
+        for k in self.generate()? {
+            let out = out_dir.join(format!("{}.rs", k.stem));
+            std::fs::write(&out, k.rust).map_err(|e| format!("{}: {e}", out.display()))?;
+            written.push(BuiltKernel { file: out, fingerprint: k.fingerprint });
+        }
+        Ok(written)
+    }
+
+    /// Every graph's kernel as Rust text, in the order the graphs were added, without writing
+    /// anything (for generated code that is committed rather than built by a build script).
+    pub fn generate(&self) -> Result<Vec<GeneratedKernel>, String> {
         let compiler = Compiler::new(&self.libraries);
         if mtlx::has_errors(&compiler.library.diagnostics) {
             return Err(lines(&compiler.library.diagnostics));
         }
-        for dir in &self.libraries {
-            println!("cargo:rerun-if-changed={}", dir.display());
-        }
-        let mut written = Vec::new();
+        let mut kernels = Vec::new();
         for (path, selection, context) in &self.graphs {
-            println!("cargo:rerun-if-changed={}", path.display());
             let c = compiler.compile_file_in(path, selection, *context);
             let Some(kernel) = c.kernel.filter(|_| !mtlx::has_errors(&c.diagnostics)) else {
                 let mut msg = lines(&c.diagnostics);
@@ -121,11 +154,9 @@ impl Builder {
             if let Some(c) = context {
                 stem = format!("{stem}_{}", c.name());
             }
-            let out = out_dir.join(format!("{stem}.rs"));
-            std::fs::write(&out, rust).map_err(|e| format!("{}: {e}", out.display()))?;
-            written.push(BuiltKernel { file: out, fingerprint });
+            kernels.push(GeneratedKernel { stem, source: path.clone(), context: *context, rust, fingerprint });
         }
-        Ok(written)
+        Ok(kernels)
     }
 
     /// `compile` into the `OUT_DIR` cargo gives build scripts.

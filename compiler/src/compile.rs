@@ -13,6 +13,11 @@ use std::sync::Arc;
 /// A loaded node library, reused across documents.
 pub struct Compiler {
     pub library: NodeLibrary,
+    /// Folders besides a document's own where the files it names may lie: the library folders
+    /// given and `MATERIALX_SEARCH_PATH` (each with its parent when it is a `libraries` folder,
+    /// where a MaterialX install keeps `resources/`). `None`: files may lie anywhere
+    /// (`--allow-any-path`).
+    pub file_roots: Option<Vec<PathBuf>>,
 }
 
 /// What to compile: every numeric output, or the outputs named (`graph/output` or `output`).
@@ -35,12 +40,22 @@ pub struct Compilation {
 impl Compiler {
     /// Loads the builtin library plus `extra` folders and `MATERIALX_SEARCH_PATH`.
     pub fn new(extra: &[PathBuf]) -> Compiler {
-        Compiler { library: NodeLibrary::new(Library::load(extra)) }
+        let mut roots: Vec<PathBuf> = extra.iter().cloned().chain(mtlx::library::search_path_from_env()).collect();
+        let parents: Vec<PathBuf> = roots.iter().filter(|r| r.file_name().is_some_and(|n| n == "libraries")).filter_map(|r| r.parent().map(Path::to_path_buf)).collect();
+        roots.extend(parents);
+        Compiler { library: NodeLibrary::new(Library::load(extra)), file_roots: Some(roots) }
     }
 
     /// Only the library embedded in the crate (tests, benchmarks).
     pub fn builtin() -> Compiler {
-        Compiler { library: NodeLibrary::new(Library::builtin()) }
+        Compiler { library: NodeLibrary::new(Library::builtin()), file_roots: Some(Vec::new()) }
+    }
+
+    /// Lets documents name files anywhere (`--allow-any-path`), not only in their own folder
+    /// and the search paths.
+    pub fn allow_any_path(mut self) -> Compiler {
+        self.file_roots = None;
+        self
     }
 
     /// Reads and checks a document: every diagnostic from reading, resolving and building all
@@ -123,7 +138,8 @@ impl Compiler {
             let names: Vec<&str> = chosen.iter().map(|o| o.name.as_str()).collect();
             diagnostics.push(Diagnostic::error(doc.get(doc.root()).pos.clone(), format!("a closure kernel evaluates one output; choose one of: {}", names.join(", "))));
         }
-        let builder = GraphBuilder::new(&self.library, Arc::new(doc));
+        let mut builder = GraphBuilder::new(&self.library, Arc::new(doc));
+        builder.file_roots = self.file_roots.clone();
         let (graph, build_diags) = builder.build(&chosen);
         diagnostics.extend(build_diags);
         if has_errors(&diagnostics) {

@@ -11,7 +11,7 @@ use crate::ir::{GeomProp, Graph, GraphOutput, InterfaceInput, TextureBinding, Va
 use crate::node_library::{match_nodedef, Definitions, NodeLibrary, NodeQuery};
 use mtlx::schema::{NodeDef, PortDef};
 use mtlx::{DataType, Diagnostic, Document, ElementId, SourcePos, Value as Literal};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -143,17 +143,31 @@ pub struct GraphBuilder<'a> {
     scopes: Vec<Scope>,
     scope_of_graph: HashMap<(usize, ElementId), usize>,
     memo: HashMap<(usize, ElementId), Option<NodeResult>>,
-    /// Nodes being built, outermost first (for cycle paths).
+    /// Nodes being built, outermost first (for cycle paths), and as a set (for the cycle test).
     visiting: Vec<(usize, ElementId)>,
+    visiting_set: HashSet<(usize, ElementId)>,
     /// Nodedefs whose nodegraphs are being inlined (for recursion).
     inlining: Vec<String>,
     consing: HashMap<String, H>,
     kernel_inputs: HashMap<(usize, String), H>,
     pub diagnostics: Vec<Diagnostic>,
+    /// Folders besides the document's own where the files it names may lie (`Compiler::file_roots`);
+    /// `None`: anywhere.
+    pub file_roots: Option<Vec<PathBuf>>,
 }
 
 /// An error that stops building one output.
 struct Fail;
+
+/// The deepest chain of nodes (counting nodes inlined from nodegraphs) the builder follows
+/// upstream of an output; deeper graphs get a positioned error instead of exhausting memory.
+/// Real MaterialX graphs are tens to hundreds of nodes deep.
+pub const MAX_GRAPH_DEPTH: usize = 100_000;
+
+/// stacker's parameters: when less than the red zone is left, recursion continues on a new
+/// heap-allocated segment of this size.
+const STACK_RED_ZONE: usize = 128 * 1024;
+const STACK_SEGMENT: usize = 4 * 1024 * 1024;
 
 impl<'a> GraphBuilder<'a> {
     pub fn new(lib: &'a NodeLibrary, doc: Arc<Document>) -> Self {
@@ -167,10 +181,12 @@ impl<'a> GraphBuilder<'a> {
             scope_of_graph: HashMap::new(),
             memo: HashMap::new(),
             visiting: Vec::new(),
+            visiting_set: HashSet::new(),
             inlining: Vec::new(),
             consing: HashMap::new(),
             kernel_inputs: HashMap::new(),
             diagnostics: Vec::new(),
+            file_roots: Some(Vec::new()),
         };
         b.check_names(&doc);
         b
@@ -459,6 +475,15 @@ impl<'a> GraphBuilder<'a> {
         let rel = format!("{prefix}{value}");
         match resolve_file(&rel, Path::new(&*pos.file)) {
             Some(path) if !value.is_empty() => {
+                if let Some(roots) = &self.file_roots {
+                    let doc_dir = Path::new(&*pos.file).parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+                    if !is_inside(&path, std::iter::once(doc_dir).chain(roots.iter().map(PathBuf::as_path))) {
+                        return Err(self.error(
+                            &pos,
+                            format!("`{rel}` resolves to `{}`, outside the document's folder and the library search paths (--library, MATERIALX_SEARCH_PATH); pass --allow-any-path to read it", path.display()),
+                        ));
+                    }
+                }
                 let binding = TextureBinding { path, colorspace, pos: pos.clone() };
                 let index = match self.graph.textures.iter().position(|t| t.path == binding.path && t.colorspace == binding.colorspace) {
                     Some(i) => i,
@@ -502,7 +527,7 @@ impl<'a> GraphBuilder<'a> {
         }
         let doc = self.scopes[s].doc.clone();
         let e = doc.get(node);
-        if let Some(start) = self.visiting.iter().position(|k| *k == key) {
+        if let Some(start) = self.visiting_set.contains(&key).then(|| self.visiting.iter().position(|k| *k == key)).flatten() {
             let path: Vec<String> = self.visiting[start..]
                 .iter()
                 .map(|(vs, vn)| format!("`{}`", self.scopes[*vs].doc.get(*vn).name()))
@@ -511,8 +536,16 @@ impl<'a> GraphBuilder<'a> {
             let msg = if path.len() == 2 { format!("cycle: node `{}` depends on itself", e.name()) } else { format!("cycle: {}", path.join(" -> ")) };
             return Err(self.error(&e.pos, msg));
         }
+        if self.visiting.len() >= MAX_GRAPH_DEPTH {
+            return Err(self.error(&e.pos, format!("`{}` lies more than {MAX_GRAPH_DEPTH} nodes upstream of the output being compiled: the graph is too deep", e.name())));
+        }
         self.visiting.push(key);
-        let r = self.build_node_inner(s, node);
+        self.visiting_set.insert(key);
+        // Each level of the graph is a few frames of build_node ↔ resolve_connection: the stack
+        // grows on the heap when it runs low, so that any depth up to MAX_GRAPH_DEPTH builds on
+        // any thread (stacker, as rustc does).
+        let r = stacker::maybe_grow(STACK_RED_ZONE, STACK_SEGMENT, || self.build_node_inner(s, node));
+        self.visiting_set.remove(&key);
         self.visiting.pop();
         self.memo.insert(key, r.as_ref().ok().cloned());
         r
@@ -737,6 +770,12 @@ impl GraphBuilder<'_> {
             .collect();
         Some(if values.len() == 1 { NodeResult::Single(values.pop().unwrap().1) } else { NodeResult::Multi(values) })
     }
+}
+
+/// Whether `path` lies inside one of `roots` (both resolved: `..` and links cannot leave a root).
+fn is_inside<'p>(path: &Path, roots: impl Iterator<Item = &'p Path>) -> bool {
+    let Ok(path) = path.canonicalize() else { return false };
+    roots.filter_map(|r| r.canonicalize().ok()).any(|r| path.starts_with(r))
 }
 
 /// Resolves a file named in a document at `doc_file`: relative to the document's folder; then,

@@ -161,12 +161,17 @@ impl Document {
 
     /// Structural equality: categories, attributes (in order) and children, ignoring positions.
     pub fn same_content(&self, other: &Document) -> bool {
+        // An explicit work list of element pairs: nesting is input-sized.
         fn eq(a: &Document, x: ElementId, b: &Document, y: ElementId) -> bool {
-            let (ex, ey) = (a.get(x), b.get(y));
-            ex.category == ey.category
-                && ex.attributes == ey.attributes
-                && ex.children.len() == ey.children.len()
-                && ex.children.iter().zip(&ey.children).all(|(&cx, &cy)| eq(a, cx, b, cy))
+            let mut work = vec![(x, y)];
+            while let Some((x, y)) = work.pop() {
+                let (ex, ey) = (a.get(x), b.get(y));
+                if ex.category != ey.category || ex.attributes != ey.attributes || ex.children.len() != ey.children.len() {
+                    return false;
+                }
+                work.extend(ex.children.iter().copied().zip(ey.children.iter().copied()));
+            }
+            true
         }
         eq(self, self.root, other, other.root)
     }

@@ -148,6 +148,9 @@ fn attributes_of(node: roxmltree::Node) -> Vec<(String, String)> {
     node.attributes().map(|a| (a.name().to_string(), a.value().to_string())).collect()
 }
 
+/// Converts `node` and its element descendants under `parent`, in document order, with an
+/// explicit work list: element nesting is input-sized (a document may nest 20,000 nodegraphs),
+/// so it must not become call depth.
 #[allow(clippy::too_many_arguments)]
 fn convert(
     lines: &Lines,
@@ -159,15 +162,17 @@ fn convert(
     diags: &mut Vec<Diagnostic>,
     stack: &mut Vec<PathBuf>,
 ) {
-    let pos = lines.pos(node, file);
-    let tag = node.tag_name();
-    if is_include(node) {
-        include(node, &pos, path, doc, parent, diags, stack);
-        return;
-    }
-    let id = doc.add_child(parent, tag.name(), attributes_of(node), pos);
-    for child in node.children().filter(|c| c.is_element()) {
-        convert(lines, child, file, path, doc, id, diags, stack);
+    let mut work = vec![(node, parent)];
+    while let Some((node, parent)) = work.pop() {
+        let pos = lines.pos(node, file);
+        if is_include(node) {
+            include(node, &pos, path, doc, parent, diags, stack);
+            continue;
+        }
+        let id = doc.add_child(parent, node.tag_name().name(), attributes_of(node), pos);
+        // Reversed onto the stack, so that the first child is converted (with its subtree) first.
+        let children: Vec<_> = node.children().filter(|c| c.is_element()).collect();
+        work.extend(children.into_iter().rev().map(|c| (c, id)));
     }
 }
 

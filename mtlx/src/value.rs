@@ -34,6 +34,12 @@ impl Value {
                 let parts: Vec<&str> = text.split([',', ' ', '\t', '\n']).filter(|p| !p.is_empty()).collect();
                 let parsed: Result<Vec<f32>, _> = parts.iter().map(|p| p.parse::<f32>()).collect();
                 match parsed {
+                    // MaterialX reads components with the C++ stream operators, which reject
+                    // `nan` and `inf` (Rust's parser accepts them) and values beyond f32's range.
+                    Ok(v) if v.iter().any(|x| !x.is_finite()) => {
+                        let bad = parts.iter().zip(&v).find(|(_, x)| !x.is_finite()).map_or("", |(p, _)| *p);
+                        Err(format!("`{text}` is not a {t} value: `{bad}` is not a finite number"))
+                    }
                     Ok(v) if v.len() == n => Ok(Value::Floats(v)),
                     Ok(v) if v.is_empty() => Ok(Value::Floats(vec![0.0; n])),
                     Ok(v) => Err(format!("`{text}` has {} components; {t} needs {n}", v.len())),

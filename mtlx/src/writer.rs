@@ -57,34 +57,48 @@ fn create_temp(dir: &Path, file_name: &str) -> std::io::Result<(std::path::PathB
     }
 }
 
+/// Indentation stops growing at this depth, so that output stays linear in the document's size
+/// however deep its elements nest (MaterialX documents nest two to four levels).
+const MAX_INDENT: usize = 32;
+
+/// Writes `id` and its descendants with an explicit work list (nesting is input-sized).
 fn write_element(doc: &Document, id: ElementId, depth: usize, out: &mut String) {
-    let e = doc.get(id);
-    for _ in 0..depth {
-        out.push_str("  ");
+    enum Step {
+        Open(ElementId, usize),
+        Close(ElementId, usize),
     }
-    out.push('<');
-    out.push_str(&e.category);
-    for (k, v) in &e.attributes {
-        out.push(' ');
-        out.push_str(k);
-        out.push_str("=\"");
-        escape_into(v, out);
-        out.push('"');
+    let indent = |out: &mut String, depth: usize| (0..depth.min(MAX_INDENT)).for_each(|_| out.push_str("  "));
+    let mut work = vec![Step::Open(id, depth)];
+    while let Some(step) = work.pop() {
+        match step {
+            Step::Open(id, depth) => {
+                let e = doc.get(id);
+                indent(out, depth);
+                out.push('<');
+                out.push_str(&e.category);
+                for (k, v) in &e.attributes {
+                    out.push(' ');
+                    out.push_str(k);
+                    out.push_str("=\"");
+                    escape_into(v, out);
+                    out.push('"');
+                }
+                if e.children.is_empty() {
+                    out.push_str(" />\n");
+                    continue;
+                }
+                out.push_str(">\n");
+                work.push(Step::Close(id, depth));
+                work.extend(e.children.iter().rev().map(|&c| Step::Open(c, depth + 1)));
+            }
+            Step::Close(id, depth) => {
+                indent(out, depth);
+                out.push_str("</");
+                out.push_str(&doc.get(id).category);
+                out.push_str(">\n");
+            }
+        }
     }
-    if e.children.is_empty() {
-        out.push_str(" />\n");
-        return;
-    }
-    out.push_str(">\n");
-    for &c in &e.children {
-        write_element(doc, c, depth + 1, out);
-    }
-    for _ in 0..depth {
-        out.push_str("  ");
-    }
-    out.push_str("</");
-    out.push_str(&e.category);
-    out.push_str(">\n");
 }
 
 /// Escapes an attribute value: `&`, `<`, `>`, `"` as entities; tab, newline and carriage return

@@ -1,7 +1,8 @@
 //! The runtime's bottom layer: what every other runtime crate may use and that depends on no
 //! other uplift crate. Atomic output files (`atomic_write`), seeded random numbers and stable
 //! hashes (`rng`), colour-space transfer functions (`color`), and the file codecs the runtime
-//! reads and writes (`exr`: OpenEXR; `csv_table`: `uplift eval`'s tables).
+//! reads and writes (`exr`: OpenEXR; `csv_table`: `uplift eval`'s tables); `test_env` says how a test
+//! skips when the machine lacks a tool (and fails instead under `UPLIFT_REQUIRE_ALL=1`).
 //!
 //! Must never: depend on the compiler, an engine or any higher runtime crate.
 
@@ -10,3 +11,4 @@ pub mod color;
 pub mod csv_table;
 pub mod exr;
 pub mod rng;
+pub mod test_env;

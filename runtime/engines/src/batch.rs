@@ -166,6 +166,16 @@ impl Geometry {
         r
     }
 
+    /// The geometry columns of `n` points that all share this geometry (a constant fill, without
+    /// the row-to-column transpose of [`Geometry::columns`]).
+    pub fn repeated(&self, n: usize) -> Columns {
+        let mut c = Columns::zeros(n, GEOMETRY_STRIDE);
+        for (k, v) in self.row().into_iter().enumerate() {
+            c.column_mut(k).fill(v);
+        }
+        c
+    }
+
     /// The geometry columns of `points`.
     pub fn columns(points: &[Geometry]) -> Columns {
         let rows: Vec<f32> = points.iter().flat_map(|g| g.row()).collect();
@@ -174,6 +184,11 @@ impl Geometry {
 }
 
 pub use uplift_kernels::KernelShape;
+
+/// A compiled kernel's shape: its input and output columns and its textures.
+pub fn kernel_shape(kernel: &PatternKernel) -> KernelShape {
+    KernelShape { input_columns: kernel.input_stride, output_columns: kernel.output_stride, texture_count: kernel.textures.len() }
+}
 
 /// What a pattern kernel reads for a batch of points.
 #[derive(Clone, Debug, Default)]
@@ -201,7 +216,7 @@ impl PatternBatch {
 
     /// Checks the batch against `kernel`'s interface; returns the number of points.
     pub fn check(&self, kernel: &PatternKernel) -> Result<usize, String> {
-        self.check_shape(&KernelShape::of(kernel))
+        self.check_shape(&kernel_shape(kernel))
     }
 
     /// Checks the batch against a kernel's shape; returns the number of points.

@@ -104,7 +104,7 @@ impl WgpuEngine {
         WgpuPipeline {
             pipeline,
             layout,
-            shape: KernelShape::of(kernel),
+            shape: crate::batch::kernel_shape(kernel),
             albedo_tables,
         }
     }

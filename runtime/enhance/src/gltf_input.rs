@@ -962,7 +962,7 @@ mod tests {
     #[test]
     fn shaderball_glb() {
         let Ok(root) = std::env::var("UPLIFT_MTLX_DATA") else {
-            return println!("UPLIFT_MTLX_DATA unset: skipping shaderball_glb");
+            return uplift_base::test_env::skip("shaderball_glb", "UPLIFT_MTLX_DATA is not set (set it to ../shared/data/materialx; .ci/run does)");
         };
         let b = rasterize_uv(&load(&Path::new(&root).join("Geometry/shaderball.glb")).unwrap(), 0, 256, 256).unwrap();
         let covered = b.covered.iter().filter(|&&c| c).count();

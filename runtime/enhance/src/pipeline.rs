@@ -181,7 +181,7 @@ fn mask_seed(seed: u64, kind: MaskKind) -> u64 {
 }
 
 /// Compiles the rule's pattern outputs as if the rule document sat in `dir` (so its
-/// `masks/*.png` are the material's): the same kernel `runtime/kernels/build.rs` ships.
+/// `masks/*.png` are the material's): the same kernel the runtime ships (`runtime/kernels/src/generated/`).
 pub fn rule_kernel(rule: &RuleInterface, dir: &Path) -> Result<uplift_compiler::PatternKernel, String> {
     let name = dir.join(rule.kind.file_name()).display().to_string();
     let (doc, diags) = mtlx::read_str(&rule.kind.standalone_text(), &name);

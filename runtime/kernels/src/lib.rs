@@ -4,8 +4,9 @@
 //!   textures, [`driver::BatchFn`]), runtime CPU dispatch (`cpu_batch_fn!`) and the parallel
 //!   block loop. The same file is copied into the kernel runners the CPU engine builds for other
 //!   documents ([`DRIVER_SOURCE`]).
-//! - `shipped`: the table of kernels `build.rs` compiles from `graphs/`, `examples/marble.mtlx`
-//!   and the uplift rules, each with the fingerprint of its generated Rust.
+//! - `shipped`: the kernels compiled from `graphs/`, `examples/marble.mtlx` and the uplift
+//!   rules, each with the fingerprint of its generated Rust; the code is in `generated/`,
+//!   committed and kept current by `compiler/tests/snapshots.rs` (`UPLIFT_BLESS=1` rewrites it).
 //! - `albedo_table_data`: the pbrlib albedo tables, once; every shipped kernel that reads them
 //!   uses this one static instead of its own copy.
 //! - `albedo_tables`: the quasi-Monte-Carlo integrator that computes those tables
@@ -16,12 +17,11 @@
 
 pub mod albedo_tables;
 pub mod driver;
+pub mod generated;
 pub mod shipped;
 
-/// The pbrlib albedo tables as one static (written by `build.rs` from the node library).
-pub mod albedo_table_data {
-    include!(concat!(env!("OUT_DIR"), "/albedo_table_data.rs"));
-}
+/// The pbrlib albedo tables as one static (generated from the node library).
+pub use generated::albedo_table_data;
 
 /// The text of `driver.rs`, which the CPU engine copies into every kernel runner it builds.
 pub const DRIVER_SOURCE: &str = include_str!("driver.rs");
@@ -32,10 +32,4 @@ pub struct KernelShape {
     pub input_columns: usize,
     pub output_columns: usize,
     pub texture_count: usize,
-}
-
-impl KernelShape {
-    pub fn of(kernel: &uplift_compiler::PatternKernel) -> KernelShape {
-        KernelShape { input_columns: kernel.input_stride, output_columns: kernel.output_stride, texture_count: kernel.textures.len() }
-    }
 }

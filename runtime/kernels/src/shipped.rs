@@ -1,12 +1,11 @@
-//! The CPU kernels built into the runtime: `build.rs` compiles every shipped graph
-//! (`runtime/kernels/graphs/*.mtlx`, `examples/marble.mtlx`, the uplift rules) with
-//! `uplift_compiler::build_api` and writes the table included here. The CPU engine finds a
-//! kernel by the fingerprint of its generated Rust, so a document that compiles to the same code
-//! runs in-process.
+//! The CPU kernels built into the runtime: every shipped graph (`runtime/kernels/graphs/*.mtlx`,
+//! `examples/marble.mtlx`, the uplift rules) compiled by `uplift_compiler::build_api` into
+//! `generated/` with the table re-exported here (committed; `compiler/tests/snapshots.rs` keeps
+//! it current). The CPU engine finds a kernel by the fingerprint of its generated Rust, so a
+//! document that compiles to the same code runs in-process.
 
-use crate::driver::{BatchFn, TextureSet};
+use crate::driver::BatchFn;
 use crate::KernelShape;
-use crate::cpu_batch_fn;
 
 /// One shipped kernel.
 pub struct BuiltinKernel {
@@ -16,7 +15,8 @@ pub struct BuiltinKernel {
     pub source: &'static str,
     /// The closure context (`eval`, `albedo`, `sample`) of a BSDF graph's kernel.
     pub context: Option<&'static str>,
-    /// `uplift_compiler::build_api::kernel_fingerprint` of its generated Rust.
+    /// `uplift_compiler::build_api::kernel_fingerprint` of its generated Rust (with its own
+    /// albedo tables, as a runtime compiling the same document writes it).
     pub fingerprint: u64,
     pub shape: KernelShape,
     /// `mx_pattern_batch` behind runtime CPU dispatch.
@@ -27,7 +27,7 @@ pub struct BuiltinKernel {
 /// shades with, shipped in every closure context.
 pub const UPLIFT_STACK_GRAPH: (&str, &str) = ("runtime/kernels/graphs/bsdf/uplift_stack.mtlx", include_str!("../graphs/bsdf/uplift_stack.mtlx"));
 
-include!(concat!(env!("OUT_DIR"), "/builtin_kernels.rs"));
+pub use crate::generated::BUILTIN_KERNELS;
 
 /// The shipped kernel whose generated Rust has this fingerprint.
 pub fn find(fingerprint: u64) -> Option<&'static BuiltinKernel> {

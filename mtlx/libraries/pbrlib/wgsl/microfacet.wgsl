@@ -146,6 +146,6 @@ fn mx_ggx_setup_new(cl: mx_closure, roughness: vec2<f32>, retroreflective: bool,
     }
     let a = mx_ggx_alpha(roughness);
     // The tables' roughness is MaterialX's ᾱ = √(αx·αy): exact for isotropic lobes, an
-    // approximation for anisotropic ones (measured in runtime/uplift/tests/closures.rs).
+    // approximation for anisotropic ones (measured in runtime/uplift/tests/integration/closures.rs).
     return mx_ggx_setup(frame, v, a, sqrt(a.x * a.y), clamp(v.z, 0.0, 1.0));
 }

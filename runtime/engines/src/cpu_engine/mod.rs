@@ -1,6 +1,6 @@
 //! The CPU engine: generated Rust kernels, parallel over blocks of points with rayon, each batch
 //! loop compiled for several CPU levels with runtime dispatch (`uplift_kernels::driver`). A
-//! kernel the runtime ships (`uplift_kernels::shipped`, built by `runtime/kernels/build.rs`)
+//! kernel the runtime ships (`uplift_kernels::shipped`, generated in `runtime/kernels/src/generated/`)
 //! runs in-process; any other kernel is built once with cargo into a cached runner and run as a
 //! child process (`external.rs`). Both paths run the same generated `mx_pattern_batch` through
 //! the same driver.
@@ -83,14 +83,14 @@ impl CpuEngine {
         let rust = rust_of(kernel)?;
         match shipped::find(kernel_fingerprint(&rust)) {
             Some(k) => Ok(CpuKernel::Builtin(k)),
-            None => external::build(&rust, KernelShape::of(kernel), &self.runner).map(CpuKernel::External),
+            None => external::build(&rust, crate::batch::kernel_shape(kernel), &self.runner).map(CpuKernel::External),
         }
     }
 
     /// Builds `kernel`'s runner even when it is shipped, with `options` (the benchmark builds
     /// one with vectorisation off).
     pub fn prepare_runner(&self, kernel: &PatternKernel, options: &RunnerOptions) -> Result<ExternalKernel, String> {
-        external::build(&rust_of(kernel)?, KernelShape::of(kernel), options)
+        external::build(&rust_of(kernel)?, crate::batch::kernel_shape(kernel), options)
     }
 
     /// Evaluates a prepared kernel for every point of `batch` (checked against its shape).

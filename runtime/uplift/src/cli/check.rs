@@ -10,10 +10,17 @@ pub struct CheckArgs {
     /// Extra library folder (repeatable); MATERIALX_SEARCH_PATH is read too.
     #[arg(long = "library")]
     pub library: Vec<PathBuf>,
+    /// Let the document name files anywhere; by default a file it names (a texture) must lie
+    /// in the document's folder or a library search path.
+    #[arg(long = "allow-any-path")]
+    pub allow_any_path: bool,
 }
 
 pub fn run(args: CheckArgs) -> Result<(), String> {
-    let compiler = Compiler::new(&args.library);
+    let mut compiler = Compiler::new(&args.library);
+    if args.allow_any_path {
+        compiler = compiler.allow_any_path();
+    }
     let mut diags = compiler.library.diagnostics.clone();
     diags.extend(compiler.check_file(&args.file));
     if super::report(&diags) {

@@ -109,6 +109,10 @@ pub struct CompileArgs {
     /// Extra library folder (repeatable); MATERIALX_SEARCH_PATH is read too.
     #[arg(long = "library")]
     pub library: Vec<PathBuf>,
+    /// Let the document name files anywhere; by default a file it names (a texture) must lie
+    /// in the document's folder or a library search path.
+    #[arg(long = "allow-any-path")]
+    pub allow_any_path: bool,
     /// Time library loading and per-document compilation instead of writing files.
     #[arg(long)]
     pub bench: bool,
@@ -146,7 +150,7 @@ pub fn run(args: CompileArgs) -> Result<(), String> {
     if args.bench {
         return crate::cli::compile_bench::run(&args.files, &args.library);
     }
-    let compiler = super::compiler(&args.library)?;
+    let compiler = super::compiler(&args.library, args.allow_any_path)?;
     let selection = if args.output.is_empty() { OutputSelection::AllNumeric } else { OutputSelection::Named(args.output.clone()) };
     let mut failed = false;
     for file in &args.files {

@@ -46,6 +46,10 @@ pub struct EvalArgs {
     /// Extra library folder (repeatable); MATERIALX_SEARCH_PATH is read too.
     #[arg(long = "library")]
     pub library: Vec<PathBuf>,
+    /// Let the document name files anywhere; by default a file it names (a texture) must lie
+    /// in the document's folder or a library search path.
+    #[arg(long = "allow-any-path")]
+    pub allow_any_path: bool,
     /// Evaluate even when a texture file the output reads does not exist: the texture node
     /// returns its `default`, as MaterialX does (without this flag, a missing file is an error).
     #[arg(long)]
@@ -59,7 +63,7 @@ pub struct EvalArgs {
 }
 
 pub fn run(args: EvalArgs) -> Result<(), String> {
-    let compiler = super::compiler(&args.library)?;
+    let compiler = super::compiler(&args.library, args.allow_any_path)?;
     let c = compiler.compile_file_in(&args.file, &OutputSelection::Named(vec![args.output.clone()]), args.context.map(|c| c.context()));
     super::report(&c.diagnostics);
     let Some(kernel) = c.kernel else {

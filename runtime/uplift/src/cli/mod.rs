@@ -55,10 +55,14 @@ pub fn report(diagnostics: &[Diagnostic]) -> bool {
     mtlx::has_errors(diagnostics)
 }
 
-/// A compiler over the builtin library and `library` folders; the library's diagnostics are
+/// A compiler over the builtin library and `library` folders (files named by documents anywhere
+/// with `allow_any_path`, else in their folder or the search paths); the library's diagnostics are
 /// printed, and an error among them fails.
-pub fn compiler(library: &[PathBuf]) -> Result<Compiler, String> {
-    let compiler = Compiler::new(library);
+pub fn compiler(library: &[PathBuf], allow_any_path: bool) -> Result<Compiler, String> {
+    let mut compiler = Compiler::new(library);
+    if allow_any_path {
+        compiler = compiler.allow_any_path();
+    }
     if report(&compiler.library.diagnostics) {
         return Err("errors in the node library".into());
     }

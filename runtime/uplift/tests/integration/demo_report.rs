@@ -1,0 +1,89 @@
+//! `uplift demo` end to end at a tiny size: every stage runs, the report and its images are
+//! written, the Table 1 rows cover all six Types, and — with headless Chromium
+//! (`UPLIFT_CHROMIUM`, set by .ci/run) — the report renders with no broken images.
+
+use std::path::PathBuf;
+use std::process::Command;
+use uplift::demo::{run_demo, DemoOptions};
+
+#[test]
+fn demo_writes_a_report_that_renders_without_broken_images() {
+    let out = std::env::temp_dir().join(format!("uplift-demo-test-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let o = DemoOptions {
+        out: out.clone(),
+        decoder: PathBuf::from(uplift_neural::weights::SHIPPED_DECODER),
+        per_type: 1,
+        texture_size: 16,
+        render_size: 32,
+        spp: 2,
+        fit_steps: 3,
+        seed: 5,
+        threads: 2,
+    };
+    let s = run_demo(&o).unwrap();
+    assert_eq!(s.materials, 6);
+    assert_eq!(s.table.iter().map(|r| r.kind).collect::<Vec<_>>(), vec![0, 1, 2, 3, 4, 5]);
+    assert!(s.table.iter().all(|r| r.count == 1));
+    // The reference stack conserves energy: every reference material passes; the fit holds the
+    // neural materials to the same bound (docs/neural.md), so every neural one passes too.
+    assert_eq!(s.furnace_reference_passed, 6);
+    assert_eq!(s.furnace_neural_passed, 6);
+    let html = std::fs::read_to_string(&s.report).unwrap();
+    let images: Vec<&str> = html.split("src=\"").skip(1).map(|t| t.split('"').next().unwrap()).collect();
+    assert_eq!(images.len(), 24, "four images per material");
+    for src in &images {
+        let p = out.join("report").join(src);
+        assert!(p.is_file(), "{} is missing", p.display());
+    }
+    // The table's whole-image FLIP, recomputed from the report's own PNGs with the nv-flip crate
+    // directly (one material per Type: the median is that material's figure).
+    let materials = out.join("materials");
+    for row in &s.table {
+        let name = std::fs::read_dir(&materials)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+            .find(|n| uplift_material::MaterialFolder::open(&materials.join(n)).unwrap().read_meta().unwrap().kind as usize == row.kind)
+            .unwrap();
+        let png = |which: &str| image::open(out.join("report/img").join(format!("{name}_{which}.png"))).unwrap().to_rgb8();
+        let (r, n) = (png("reference"), png("neural"));
+        let (w, h) = r.dimensions();
+        let map = nv_flip::flip(nv_flip::FlipImageRgb8::with_data(w, h, &r), nv_flip::FlipImageRgb8::with_data(w, h, &n), nv_flip::pixels_per_degree(0.7, 3840.0, 0.7));
+        let mean = map.to_vec().iter().map(|&e| e as f64).sum::<f64>() / (w * h) as f64;
+        assert!((mean - row.full.1).abs() <= 1e-6, "Type {}: the table's FLIP {} vs {mean} recomputed from {name}'s images", row.kind, row.full.1);
+        assert!(row.object.1 > 0.0 && row.object.1 < 1.0, "Type {}: object FLIP {}", row.kind, row.object.1);
+    }
+    // Resuming reuses the enhanced and fitted materials: no file of theirs is written again,
+    // and the report's table is the same.
+    let stamps = |dir: &std::path::Path| -> Vec<(PathBuf, std::time::SystemTime)> {
+        let mut v: Vec<_> = std::fs::read_dir(dir).unwrap().flat_map(|m| std::fs::read_dir(m.unwrap().path()).unwrap()).map(|f| f.unwrap()).filter(|f| f.path().is_file()).map(|f| (f.path(), f.metadata().unwrap().modified().unwrap())).collect();
+        v.sort();
+        v
+    };
+    let before = stamps(&materials);
+    assert!(before.len() >= 6 * 5, "material folders hold {} files", before.len());
+    let again = run_demo(&o).unwrap();
+    assert_eq!(again.materials, 6);
+    assert_eq!(stamps(&materials), before, "resuming wrote a material's files again");
+    assert_eq!(format!("{:?}", again.table), format!("{:?}", s.table), "resuming changed the table");
+
+    let Ok(chromium) = std::env::var("UPLIFT_CHROMIUM") else {
+        uplift_base::test_env::skip("the demo report in Chromium", "UPLIFT_CHROMIUM is not set (.ci/run sets it to Debian's chromium)");
+        let _ = std::fs::remove_dir_all(&out);
+        return;
+    };
+    let profile = out.join("chromium-profile");
+    let dom = Command::new(&chromium)
+        .args(["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking", "--disable-component-update", "--disable-sync", "--virtual-time-budget=10000"])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .arg("--dump-dom")
+        .arg(format!("file://{}", s.report.display()))
+        .output()
+        .expect("chromium runs");
+    assert!(dom.status.success(), "chromium failed: {}", String::from_utf8_lossy(&dom.stderr));
+    let dom = String::from_utf8_lossy(&dom.stdout);
+    assert!(dom.contains("data-images=\"24\""), "the report's load script did not run or saw another image count: {}", &dom[..dom.len().min(400)]);
+    assert!(dom.contains("data-broken-images=\"0\""), "broken images in the report");
+    eprintln!("Chromium loaded the report: 24 images, none broken");
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -1,0 +1,63 @@
+//! The emitted inference kernels against the trainer's forward pass (`NeuralModel` /
+//! `Mlp::forward`), on 4,096 generated rows with the shipped decoder's weights:
+//! - the committed Rust module runtime/neural/src/shipped_decoder.rs is what the template writes
+//!   for runtime/weights/decoder.safetensors today, and its outputs agree within 1e-4 relative;
+//! - the WGSL shader, run by wgpu (lavapipe without a GPU), agrees within 1e-4 relative.
+
+use crate::common;
+
+use std::path::Path;
+use uplift_neural::weights::source_name;
+use uplift_neural::weights::{load_model, SHIPPED_DECODER};
+use uplift_engines::cpu_engine::CpuEngine;
+use uplift_neural::datagen::{ClassMix, DataGenerator};
+use uplift_neural::evaluate::{decode, encode};
+use uplift_neural::inference::{decoder_spec, WgpuDecoder};
+use uplift_neural::model::{DECODER_INPUTS, LATENT};
+use uplift_neural::shipped_decoder;
+use uplift_compiler::backend_neural::write_rust_decoder;
+
+/// Rows of [latent, features] and the trainer's outputs for them.
+fn rows() -> (Vec<f32>, Vec<f32>) {
+    let model = load_model(Path::new(SHIPPED_DECODER)).unwrap();
+    let g = DataGenerator::new(CpuEngine::new().unwrap(), ClassMix::All, 51).unwrap();
+    let b = g.batch(0, 4096).unwrap();
+    let z = encode(&model, &b.encoded);
+    let out = decode(&model, &z, &b.features);
+    let dec_in = (0..b.rows).flat_map(|r| z[r * LATENT..(r + 1) * LATENT].iter().chain(&b.features[r * 9..(r + 1) * 9]).copied().collect::<Vec<_>>()).collect();
+    (dec_in, out)
+}
+
+fn assert_agree(what: &str, got: &[f32], want: &[f32]) {
+    assert_eq!(got.len(), want.len(), "{what}: output count");
+    let mut worst = 0.0f32;
+    for (k, (g, w)) in got.iter().zip(want).enumerate() {
+        let rel = (g - w).abs() / g.abs().max(w.abs()).max(1e-6);
+        worst = worst.max(rel);
+        assert!(rel <= 1e-4, "{what} output {k}: {g} vs the trainer's {w}");
+    }
+    eprintln!("{what}: worst relative difference to the trainer's forward pass {worst:.1e}");
+}
+
+#[test]
+fn committed_rust_decoder_is_current_and_agrees() {
+    let model = load_model(Path::new(SHIPPED_DECODER)).unwrap();
+    let text = write_rust_decoder(&decoder_spec(&model.decoder, &source_name(Path::new(SHIPPED_DECODER)))).unwrap();
+    let committed = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../neural/src/shipped_decoder.rs")).unwrap();
+    assert!(text == committed, "runtime/neural/src/shipped_decoder.rs is stale: run `cargo run --release -p uplift -- emit-decoder --rust runtime/neural/src/shipped_decoder.rs`");
+    let (dec_in, want) = rows();
+    assert_eq!(shipped_decoder::INPUTS, DECODER_INPUTS);
+    let mut got = vec![0.0f32; want.len()];
+    shipped_decoder::decode_rows(&dec_in, &mut got);
+    assert_agree("Rust (shipped_decoder.rs)", &got, &want);
+}
+
+#[test]
+fn wgsl_decoder_agrees() {
+    let model = load_model(Path::new(SHIPPED_DECODER)).unwrap();
+    let engine = common::engine();
+    let d = WgpuDecoder::new(engine, &model.decoder, "runtime/weights/decoder.safetensors").unwrap();
+    let (dec_in, want) = rows();
+    let got = d.decode(engine, &dec_in).unwrap();
+    assert_agree(&format!("WGSL on {}", engine.adapter_info.name), &got, &want);
+}
