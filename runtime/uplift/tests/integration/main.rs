@@ -11,6 +11,7 @@ mod nodedef_harness;
 
 mod albedo_tables;
 mod cli;
+mod cli_coverage;
 mod cli_eval;
 mod closures;
 mod cpu_engine;
