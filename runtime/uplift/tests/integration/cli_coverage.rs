@@ -97,3 +97,69 @@ fn every_subcommand_reports_missing_and_foreign_inputs_with_exit_1() {
     // Nothing was written for a failed command.
     assert!(!out.exists() || std::fs::read_dir(&out).unwrap().next().is_none(), "a failed command left files in {}", out.display());
 }
+
+/// A MaterialX document with one standard_surface material; `inputs` go inside the shader,
+/// `nodes` at the top level.
+fn surface_doc(inputs: &str, nodes: &str) -> String {
+    format!("<?xml version=\"1.0\"?>\n<materialx version=\"1.39\">\n  <standard_surface name=\"s\" type=\"surfaceshader\">\n{inputs}\n  </standard_surface>\n{nodes}\n  <surfacematerial name=\"m\" type=\"material\">\n    <input name=\"surfaceshader\" type=\"surfaceshader\" nodename=\"s\" />\n  </surfacematerial>\n</materialx>\n")
+}
+
+/// Every input error of `uplift enhance` (runtime/enhance/src/pbr_input.rs), triggered once
+/// through the binary: exit 1, the message's own words, and the file or position it names.
+#[test]
+fn enhance_reports_every_input_error() {
+    let dir = temp_dir("enhance-inputs");
+    let png = dir.join("tex.png");
+    image::RgbImage::from_pixel(4, 4, image::Rgb([128, 128, 128])).save(&png).unwrap();
+    let write = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let shader_doc = |name: &str, category: &str| write(name, &surface_doc("", "").replace("standard_surface name=\"s\"", &format!("{category} name=\"s\"")).replace("</standard_surface>", &format!("</{category}>")));
+    let twins = dir.join("twins");
+    std::fs::create_dir_all(&twins).unwrap();
+    for n in ["wood_basecolor.png", "wood_albedo.png"] {
+        std::fs::copy(&png, twins.join(n)).unwrap();
+    }
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (vec!["--base-color".into(), dir.join("none.png").display().to_string(), "--roughness".into(), png.display().to_string(), "--metalness".into(), png.display().to_string()], "no such texture file"),
+        (vec![twins.display().to_string()], "look like the base_color texture"),
+        (vec![write("empty.gltf", r#"{"asset":{"version":"2.0"}}"#).display().to_string()], "the asset has no materials"),
+        (vec![shader_doc("unlit.mtlx", "surface_unlit").display().to_string()], "uses `surface_unlit`; supported shaders"),
+        (vec![write("nomaterial.mtlx", "<?xml version=\"1.0\"?>\n<materialx version=\"1.39\">\n</materialx>\n").display().to_string()], "no surfacematerial with a supported PBR shader"),
+        (vec![write("constnormal.mtlx", &surface_doc("    <input name=\"normal\" type=\"vector3\" value=\"0, 0, 1\" />", "")).display().to_string()], "a constant normal is not a normal map"),
+        (vec![write("novalue.mtlx", &surface_doc("    <input name=\"base_color\" type=\"color3\" />", "")).display().to_string()], "has neither a value nor a connection"),
+        (vec![write("notnumbers.mtlx", &surface_doc("    <input name=\"metalness\" type=\"float\" value=\"half\" />", "")).display().to_string()], "not numbers"),
+        (vec![write("dangling.mtlx", &surface_doc("    <input name=\"base_color\" type=\"color3\" nodename=\"nowhere\" />", "")).display().to_string()], "the node it connects to is not in the document"),
+        (
+            vec![write("badnormalmap.mtlx", &surface_doc("    <input name=\"normal\" type=\"vector3\" nodename=\"nm\" />", "  <normalmap name=\"nm\" type=\"vector3\" />")).display().to_string()],
+            "normalmap without an image on `in`",
+        ),
+        (
+            vec![write("noise.mtlx", &surface_doc("    <input name=\"base_color\" type=\"color3\" nodename=\"n\" />", "  <noise2d name=\"n\" type=\"color3\" />")).display().to_string()],
+            "connected to a `noise2d` node",
+        ),
+        (
+            vec![write("nofile.mtlx", &surface_doc("    <input name=\"base_color\" type=\"color3\" nodename=\"i\" />", "  <image name=\"i\" type=\"color3\" />")).display().to_string()],
+            "has no `file` input",
+        ),
+        (
+            vec![write("missingtex.mtlx", &surface_doc("    <input name=\"base_color\" type=\"color3\" nodename=\"i\" />", "  <image name=\"i\" type=\"color3\">\n    <input name=\"file\" type=\"filename\" value=\"gone.png\" />\n  </image>")).display().to_string()],
+            "gone.png` not found",
+        ),
+        (vec![write("notes.txt", "x").display().to_string()], "not a .gltf, .glb or .mtlx file"),
+        (vec![dir.join("nothing_here").display().to_string()], "no such file or folder"),
+    ];
+    let out = dir.join("out");
+    for (inputs, fragment) in &cases {
+        let mut args: Vec<&str> = vec!["enhance"];
+        args.extend(inputs.iter().map(String::as_str));
+        args.extend(["-o", s(&out)]);
+        let (code, _, stderr) = uplift(&args);
+        assert_eq!(code, 1, "uplift {args:?}: exit {code}\n{stderr}");
+        assert!(stderr.contains(fragment), "uplift {args:?}: want `{fragment}` in:\n{stderr}");
+        assert!(!stderr.contains("panicked"), "{stderr}");
+    }
+    assert!(!out.exists() || std::fs::read_dir(&out).unwrap().next().is_none(), "a failed enhance left files");
+}
