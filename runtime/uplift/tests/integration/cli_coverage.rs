@@ -3,13 +3,9 @@
 //! folder, a folder that is not an enhanced material, or an output that cannot be written exits
 //! 1 with a message naming the path — never a panic (exit 101) or a signal.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::PathBuf;
 
-fn uplift(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_uplift")).args(args).output().expect("run uplift");
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
-}
+use crate::common::cli::{s, uplift};
 
 const SUBCOMMANDS: [&str; 15] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "fit", "emit-decoder", "render", "furnace", "eval-fit", "demo", "flip"];
 
@@ -31,14 +27,7 @@ fn every_subcommand_has_help_and_rejects_unknown_flags() {
 }
 
 fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("uplift-cli-coverage-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
+    crate::common::cli::temp_dir("cli-coverage", name)
 }
 
 /// Each command's main error paths: (arguments, a fragment the message must contain).

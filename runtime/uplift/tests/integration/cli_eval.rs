@@ -6,28 +6,11 @@
 //! panic.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn uplift(args: &[&str]) -> (i32, String, String) {
-    // The CPU engine builds runners for kernels it does not ship; keep them in the target folder.
-    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("uplift-kernel-cache");
-    let out = Command::new(env!("CARGO_BIN_EXE_uplift")).args(args).env("UPLIFT_CACHE_DIR", cache).output().expect("run uplift");
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
-}
-
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+use crate::common::cli::{repo, s, uplift};
 
 fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("uplift-cli-eval-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
+    crate::common::cli::temp_dir("cli-eval", name)
 }
 
 /// A graph with interface inputs (`scale` float, `tint` color3) and geometric reads. Values

@@ -25,9 +25,10 @@ use uplift_base::exr;
 use uplift_engines::texture_loader::load_texture;
 use uplift_compiler::{ClosureContext, OutputSelection, PatternKernel};
 
+/// The binary's exit code and its stdout and stderr together.
 fn uplift(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_uplift")).args(args).output().expect("run uplift");
-    (out.status.code().unwrap_or(-1), format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr)))
+    let (code, stdout, stderr) = crate::common::cli::uplift(args);
+    (code, format!("{stdout}{stderr}"))
 }
 
 fn temp_dir(name: &str) -> PathBuf {
@@ -37,9 +38,7 @@ fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
-fn repo() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+use crate::common::cli::repo;
 
 /// Runs MaterialX's validator on `path`; `None` when it is not available.
 fn validate(path: &Path) -> Option<Result<(), String>> {

@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod bsdf;
+pub mod cli;
 
 use std::sync::OnceLock;
 use uplift_engines::batch::{Geometry, PatternBatch, PatternEngine, TextureData};
