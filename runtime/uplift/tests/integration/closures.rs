@@ -255,6 +255,16 @@ fn random_stack(r: &mut Rng) -> Params {
     ])
 }
 
+/// The mean of `y` over `m` samples, one per stratum with neighbouring strata at 2q and 2q + 1,
+/// and an upper bound on its standard error: the variance of the mean is at most Σ over the
+/// disjoint pairs of (y_2q − y_2q+1)², over m² (E(y_a − y_b)² = Var_a + Var_b + (μ_a − μ_b)² ≥
+/// Var_a + Var_b).
+fn stratified_mean(m: usize, y: impl Fn(usize) -> f64) -> (f64, f64) {
+    let mean = (0..m).map(&y).sum::<f64>() / m as f64;
+    let pairs: f64 = (0..m / 2).map(|q| (y(2 * q) - y(2 * q + 1)).powi(2)).sum();
+    (mean, pairs.sqrt() / m as f64)
+}
+
 const VIEWS: [f64; 8] = [0.02, 0.1, 0.25, 0.4, 0.55, 0.7, 0.85, 1.0];
 
 /// GGX normal sample (distribution of normals × cos θh), isotropic alpha.
@@ -380,13 +390,7 @@ fn albedo_matches_monte_carlo_integral_of_eval() {
                 let alb = albedo.column(&a_out, "albedo", c);
                 for (k, &mu) in VIEWS.iter().enumerate() {
                     let m = SIDE * SIDE;
-                    let y = |j: usize| if pdfs[k * m + j] > 0.0 { resp[k * m + j] as f64 / pdfs[k * m + j] } else { 0.0 };
-                    let mc: f64 = (0..m).map(y).sum::<f64>() / m as f64;
-                    // One sample per stratum: the variance of the mean is at most
-                    // Σ over disjoint pairs of neighbouring strata (along u2) of (y_a − y_b)²,
-                    // over m² (E(y_a − y_b)² = Var_a + Var_b + (μ_a − μ_b)² ≥ Var_a + Var_b).
-                    let pairs: f64 = (0..m / 2).map(|q| (y(2 * q) - y(2 * q + 1)).powi(2)).sum();
-                    let sigma = pairs.sqrt() / m as f64;
+                    let (mc, sigma) = stratified_mean(m, |j| if pdfs[k * m + j] > 0.0 { resp[k * m + j] as f64 / pdfs[k * m + j] } else { 0.0 });
                     let a = alb[k] as f64;
                     let err = (a - mc).abs();
                     let approximation = if is_film(lobe) { FILM_RELATIVE_ERROR * mc.abs() } else { 0.0 };
@@ -556,9 +560,7 @@ fn sampling_is_consistent_with_pdf_eval_and_albedo() {
             // standard errors (from pairs of neighbouring strata, as in the albedo test).
             for c in 0..3 {
                 let resp = sample.column(&out, "response", c);
-                let y = |k: usize| if pdf[k] > 0.0 { resp[k] as f64 / pdf[k] as f64 } else { 0.0 };
-                let est: f64 = (0..N).map(y).sum::<f64>() / N as f64;
-                let sigma = (0..N / 2).map(|q| (y(2 * q) - y(2 * q + 1)).powi(2)).sum::<f64>().sqrt() / N as f64;
+                let (est, sigma) = stratified_mean(N, |k| if pdf[k] > 0.0 { resp[k] as f64 / pdf[k] as f64 } else { 0.0 });
                 let a = albedo.column(&alb, "albedo", c)[0] as f64;
                 let bound = TABLE_ERROR + if is_film(lobe) { FILM_RELATIVE_ERROR * a } else { 0.0 } + MC_SIGMAS * sigma;
                 assert!((est - a).abs() <= bound, "{} set {set} μ {mu} channel {c}: E[response/pdf] {est:.4} ± {sigma:.1e} vs albedo {a:.4}: beyond {bound:.1e} ({p:?})", lobe.name);
