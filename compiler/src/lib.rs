@@ -10,6 +10,7 @@ pub mod backend_rust;
 pub mod build_api;
 pub mod compile;
 pub mod const_eval;
+pub mod fuzz_entry;
 pub mod graph_builder;
 pub mod ir;
 pub mod kernel;

@@ -9,8 +9,6 @@ use crate::position::SourcePos;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-const XINCLUDE_NS: &str = "http://www.w3.org/2001/XInclude";
-
 /// Root attributes that MaterialX copies onto the children of an included document.
 const INHERITED_ROOT_ATTRIBUTES: [&str; 4] = ["fileprefix", "geomprefix", "colorspace", "namespace"];
 
@@ -139,9 +137,12 @@ impl<'a> Lines<'a> {
     }
 }
 
+/// An `include` element in any XML namespace (or none) is an include: MaterialX matches the
+/// qualified name `xi:include` and never looks at the namespace's URI, so `xi:` bound to a
+/// mistyped URI still includes there. (The writer writes every include as `xi:include`; an
+/// `include` element kept as a node would be written back as an include — found by fuzzing.)
 fn is_include(node: roxmltree::Node) -> bool {
-    let tag = node.tag_name();
-    tag.name() == "include" && (tag.namespace() == Some(XINCLUDE_NS) || tag.namespace().is_none())
+    node.tag_name().name() == "include"
 }
 
 fn attributes_of(node: roxmltree::Node) -> Vec<(String, String)> {

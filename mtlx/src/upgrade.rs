@@ -1002,6 +1002,10 @@ impl Up<'_> {
                     );
                     continue;
                 }
+                if !is_element_name(&category) {
+                    self.error(sr, format!("shaderref `{}` of material `{mat_name}` names the shader node `{category}`, which is not a valid element name; dropped", self.name(sr)));
+                    continue;
+                }
                 let name = self.valid_child_name(root, &self.name(sr));
                 let pos = self.pos(sr);
                 let node = self.add(root, &category, &[("name", &name), ("type", &ty)], pos);
@@ -1731,4 +1735,12 @@ impl Up<'_> {
             self.set(node, "nodedef", "ND_normalmap_float");
         }
     }
+}
+
+/// Whether `s` can be an element's tag (an XML name: a letter or `_` and then letters, digits,
+/// `_`, `-`, `.`, `:`). Upgrades that turn an attribute's value into a category check it, so that
+/// the writer never writes a tag that does not read back (found by fuzzing).
+fn is_element_name(s: &str) -> bool {
+    let mut chars = s.chars();
+    chars.next().is_some_and(|c| c.is_alphabetic() || c == '_') && chars.all(|c| c.is_alphanumeric() || matches!(c, '_' | '-' | '.' | ':'))
 }
