@@ -221,6 +221,9 @@ pub fn enhance(material: &PbrMaterial, options: &EnhanceOptions, out: &Path, eng
     let parent = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
     let leaf = out.file_name().map(|n| n.to_string_lossy().to_string()).ok_or_else(|| format!("{}: not a folder name", out.display()))?;
+    // What a killed run left: its staging folder, or the replaced output it was removing.
+    uplift_base::atomic_write::remove_stale(parent, &format!(".{leaf}.staging-"), "");
+    uplift_base::atomic_write::remove_stale(parent, &format!(".{leaf}.old-"), "");
     let staging = parent.join(format!(".{leaf}.staging-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&staging);
     std::fs::create_dir_all(&staging).map_err(|e| format!("{}: {e}", staging.display()))?;

@@ -76,12 +76,15 @@ pub struct TrainState {
     pub history: Vec<LossRecord>,
     /// Wall time spent training so far (over resumptions).
     pub seconds: f64,
+    /// The losses summed over the steps since the last history record, and their count: kept
+    /// in checkpoints, so that a run resumed between two records records the same means.
+    pub window: (LossParts, u64),
 }
 
 impl TrainState {
     pub fn new(seed: u64) -> TrainState {
         let model = NeuralModel::<f32>::new(seed);
-        TrainState { adam_enc: Adam::new(model.encoder.params.len()), adam_dec: Adam::new(model.decoder.params.len()), model, step: 0, history: Vec::new(), seconds: 0.0 }
+        TrainState { adam_enc: Adam::new(model.encoder.params.len()), adam_dec: Adam::new(model.decoder.params.len()), model, step: 0, history: Vec::new(), seconds: 0.0, window: (LossParts::default(), 0) }
     }
 }
 
@@ -220,6 +223,9 @@ pub fn weights_file(state: &TrainState, opts: &TrainOptions, extra: &[(&str, Str
 
 fn write_checkpoint(path: &Path, state: &TrainState, opts: &TrainOptions) -> Result<(), String> {
     let mut f = weights_file(state, opts, &[]);
+    // Rust prints floats in the shortest form that reads back to the same value.
+    let (w, n) = &state.window;
+    f.metadata.insert("window".into(), format!("{n},{},{},{},{}", w.total, w.f, w.t, w.r));
     f.put_adam("encoder", &state.adam_enc);
     f.put_adam("decoder", &state.adam_dec);
     f.write(path)
@@ -242,6 +248,16 @@ pub fn read_checkpoint(path: &Path, opts: &TrainOptions) -> Result<TrainState, S
         step: f.meta("step").map_err(at)?.parse().map_err(|_| at("`step` is not a number".into()))?,
         history: parse_history(f.meta("history").map_err(at)?).map_err(at)?,
         seconds: f.meta("seconds").map_err(at)?.parse().unwrap_or(0.0),
+        // Checkpoints written before the window was kept resume with an empty one.
+        window: match f.metadata.get("window") {
+            None => (LossParts::default(), 0),
+            Some(w) => {
+                let bad = || at(format!("`window` {w}: expected steps,total,f,t,r"));
+                let v: Vec<&str> = w.split(',').collect();
+                let x = |k: usize| v.get(k).and_then(|s| s.parse::<f64>().ok()).ok_or_else(bad);
+                (LossParts { total: x(1)?, f: x(2)?, t: x(3)?, r: x(4)? }, v[0].parse().map_err(|_| bad())?)
+            }
+        },
     })
 }
 
@@ -249,6 +265,29 @@ pub fn read_checkpoint(path: &Path, opts: &TrainOptions) -> Result<TrainState, S
 /// exists, writing checkpoints on the way and, at the end, the final weights to `out` (with
 /// `extra` metadata).
 pub fn train(generator: &DataGenerator, opts: &TrainOptions, out: &Path, extra: &[(&str, String)], progress: bool) -> Result<TrainState, String> {
+    let state = train_checkpointed(generator, opts, out, progress)?;
+    if state.step == opts.steps {
+        weights_file(&state, opts, extra).write(out)?;
+        finish(out);
+    }
+    Ok(state)
+}
+
+/// Removes `out`'s checkpoint (and what a killed writer left of one) once the caller has
+/// written the final weights to `out`.
+pub fn finish(out: &Path) {
+    let ckpt = checkpoint_path(out);
+    let _ = std::fs::remove_file(&ckpt);
+    let dir = ckpt.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = ckpt.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+    uplift_base::atomic_write::remove_stale(dir, &format!(".{name}."), ".tmp");
+}
+
+/// `train` without its end: trains to `opts.steps` (or `opts.stop_after`), resuming from
+/// `out`'s checkpoint when it exists, and leaves a checkpoint of the last step, finished or
+/// not, so that a process killed before its caller writes the final weights (and calls
+/// `finish`) resumes without training again. Says on stderr where it resumes when `progress`.
+pub fn train_checkpointed(generator: &DataGenerator, opts: &TrainOptions, out: &Path, progress: bool) -> Result<TrainState, String> {
     if opts.steps == 0 || opts.batch == 0 {
         return Err("--steps and --batch must be at least 1".into());
     }
@@ -268,7 +307,9 @@ pub fn train(generator: &DataGenerator, opts: &TrainOptions, out: &Path, extra: 
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps, {elapsed} elapsed, eta {eta} · {msg}").unwrap());
     bar.set_position(state.step);
     let mut buf = StepBuffers::default();
-    let mut window = (LossParts::default(), 0u64);
+    if progress && state.step > 0 {
+        eprintln!("resuming from {} at step {} of {}", ckpt.display(), state.step, opts.steps);
+    }
     let mut clock = std::time::Instant::now();
     while state.step < opts.steps {
         let batch = generator.batch(state.step, opts.batch)?;
@@ -277,21 +318,21 @@ pub fn train(generator: &DataGenerator, opts: &TrainOptions, out: &Path, extra: 
         if !loss.total.is_finite() {
             return Err(format!("the loss became {} at step {}", loss.total, state.step));
         }
-        window.0.add(&loss);
-        window.1 += 1;
+        state.window.0.add(&loss);
+        state.window.1 += 1;
         let now = std::time::Instant::now();
         state.seconds += (now - clock).as_secs_f64();
         clock = now;
         if state.step % opts.log_every.max(1) == 0 || state.step == opts.steps {
-            let n = window.1 as f64;
-            let mean = LossParts { total: window.0.total / n, f: window.0.f / n, t: window.0.t / n, r: window.0.r / n };
+            let (sum, n) = (state.window.0, state.window.1 as f64);
+            let mean = LossParts { total: sum.total / n, f: sum.f / n, t: sum.t / n, r: sum.r / n };
             state.history.push(LossRecord { step: state.step, loss: mean, lr, seconds: state.seconds });
             bar.set_message(format!("loss {:.4} (f {:.4}, T {:.4}, R {:.4})", mean.total, mean.f, mean.t, mean.r));
-            window = (LossParts::default(), 0);
+            state.window = (LossParts::default(), 0);
         }
         bar.set_position(state.step);
         let stop = opts.stop_after == Some(state.step) && state.step < opts.steps;
-        if (state.step % opts.checkpoint_every.max(1) == 0 && state.step < opts.steps) || stop {
+        if state.step % opts.checkpoint_every.max(1) == 0 || state.step == opts.steps || stop {
             write_checkpoint(&ckpt, &state, opts)?;
         }
         if stop {
@@ -300,7 +341,5 @@ pub fn train(generator: &DataGenerator, opts: &TrainOptions, out: &Path, extra: 
         }
     }
     bar.finish();
-    weights_file(&state, opts, extra).write(out)?;
-    let _ = std::fs::remove_file(&ckpt);
     Ok(state)
 }

@@ -9,7 +9,7 @@ use crate::adam::Adam;
 use crate::mlp::{Activation, Mlp, MlpShape};
 use uplift_base::atomic_write::write_atomically;
 use safetensors::tensor::{Dtype, SafeTensors, TensorView};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Named f32 tensors and string metadata, read from or written to one file.
@@ -37,8 +37,32 @@ impl TensorFile {
         let bytes: Vec<(String, Vec<usize>, Vec<u8>)> = self.tensors.iter().map(|(n, (s, d))| (n.clone(), s.clone(), d.iter().flat_map(|x| x.to_le_bytes()).collect())).collect();
         let views: Vec<(String, TensorView<'_>)> =
             bytes.iter().map(|(n, s, b)| TensorView::new(Dtype::F32, s.clone(), b).map(|v| (n.clone(), v)).map_err(|e| format!("{n}: {e}"))).collect::<Result<_, _>>()?;
-        let meta: HashMap<String, String> = self.metadata.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
-        safetensors::serialize(views, Some(meta)).map_err(|e| e.to_string())
+        // safetensors writes the metadata from a HashMap, in an order that changes from run to
+        // run; write the header's metadata in key order instead, so that the same tensors and
+        // metadata are always the same bytes (a resumed run's files equal an uninterrupted one's).
+        let plain = safetensors::serialize(views, None).map_err(|e| e.to_string())?;
+        let n = u64::from_le_bytes(plain[..8].try_into().unwrap()) as usize;
+        let header = std::str::from_utf8(&plain[8..8 + n]).map_err(|e| e.to_string())?.trim_end();
+        let tensors = header.strip_prefix('{').ok_or("safetensors wrote a header that is not a JSON object")?;
+        let mut h = String::from("{");
+        if !self.metadata.is_empty() {
+            let json = |s: &String| serde_json::to_string(s).expect("a string serialises");
+            let entries: Vec<String> = self.metadata.iter().map(|(k, v)| format!("{}:{}", json(k), json(v))).collect();
+            h += &format!("\"__metadata__\":{{{}}}", entries.join(","));
+            if tensors != "}" {
+                h.push(',');
+            }
+        }
+        h += tensors;
+        // The header is padded with spaces to a multiple of 8 bytes, as safetensors does.
+        while h.len() % 8 != 0 {
+            h.push(' ');
+        }
+        let mut out = Vec::with_capacity(8 + h.len() + plain.len() - 8 - n);
+        out.extend((h.len() as u64).to_le_bytes());
+        out.extend(h.as_bytes());
+        out.extend(&plain[8 + n..]);
+        Ok(out)
     }
 
     pub fn from_bytes(bytes: &[u8]) -> Result<TensorFile, String> {
@@ -143,4 +167,30 @@ pub fn source_name(path: &Path) -> String {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
     let (abs, repo) = (std::fs::canonicalize(path).unwrap_or(path.to_path_buf()), std::fs::canonicalize(&repo).unwrap_or(repo));
     abs.strip_prefix(&repo).map(|p| p.to_string_lossy().replace('\\', "/")).unwrap_or_else(|_| path.display().to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_same_file_is_the_same_bytes_and_reads_back() {
+        let mut f = TensorFile::default();
+        f.put("b", vec![2], vec![1.0, -2.5]);
+        f.put("a", vec![1, 1], vec![3.0]);
+        for k in 0..20 {
+            f.metadata.insert(format!("key{k}"), format!("value {k}"));
+        }
+        f.metadata.insert("odd".into(), "quote \" backslash \\ newline \n tab \t bell \u{7} é".into());
+        let bytes = f.to_bytes().unwrap();
+        // A HashMap's order differs between instances; twenty entries in the same order twice
+        // by chance is 1 in 20!.
+        for _ in 0..3 {
+            assert_eq!(f.clone().to_bytes().unwrap(), bytes);
+        }
+        let back = TensorFile::from_bytes(&bytes).unwrap();
+        assert_eq!((back.tensors, back.metadata), (f.tensors.clone(), f.metadata.clone()));
+        let empty = TensorFile::from_bytes(&TensorFile::default().to_bytes().unwrap()).unwrap();
+        assert!(empty.tensors.is_empty() && empty.metadata.is_empty());
+    }
 }

@@ -3,7 +3,8 @@
 //! Each shard `DIR/<class>-<k>.safetensors` holds `params` (rows × 22, physical values, the
 //! parameter names in the metadata), `encoded` (the encoder's inputs), `wv`, `wl` (local frame,
 //! normal +z), `features` (the decoder's 9 direction features), `target` (f·μl RGB, T RGB, R)
-//! and `class`. Shards already written are skipped, so an interrupted run resumes.
+//! and `class`. Shards already written are skipped (and counted on stderr), so an interrupted
+//! run resumes.
 
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_neural::datagen::{ClassMix, DataGenerator};
@@ -47,10 +48,12 @@ pub fn run(args: DatagenArgs) -> Result<(), String> {
     let bar = indicatif::ProgressBar::new(args.count as u64);
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows, eta {eta}").unwrap());
     let names = PARAMETER_TABLE.iter().map(|p| p.channel).collect::<Vec<_>>().join(",");
+    let mut skipped = 0;
     for shard in 0..shards {
         let rows = args.shard_rows.min(args.count - shard * args.shard_rows);
         let path = args.output.join(format!("{}-{shard:05}.safetensors", mix.name()));
         if path.exists() {
+            skipped += 1;
             bar.inc(rows as u64);
             continue;
         }
@@ -81,6 +84,6 @@ pub fn run(args: DatagenArgs) -> Result<(), String> {
         file.write(&path)?;
     }
     bar.finish();
-    eprintln!("wrote {shards} shard(s) to {}", args.output.display());
+    eprintln!("wrote {} shard(s) to {}; {skipped} already written", shards - skipped, args.output.display());
     Ok(())
 }

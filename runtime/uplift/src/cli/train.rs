@@ -1,12 +1,14 @@
 //! `uplift train --steps N --seed S -o decoder.safetensors`: universal training of the encoder
 //! and decoder on generated data (all five classes), with a progress bar showing the loss;
-//! resumes from `decoder.checkpoint.safetensors` when a run was interrupted. Prints and stores
-//! (in the file's metadata) the held-out relative L1 error of f·cos per class.
+//! resumes from `decoder.checkpoint.safetensors` when a run was interrupted (saying at which
+//! step). Prints and stores (in the file's metadata) the held-out relative L1 error of f·cos per
+//! class. The checkpoint of the last step is kept until the weights with that table are written,
+//! so a run killed during the held-out evaluation does not train again.
 
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_neural::datagen::{ClassMix, DataGenerator, ViewDistribution};
 use uplift_neural::evaluate::holdout_errors;
-use uplift_neural::trainer::{train, TrainOptions};
+use uplift_neural::trainer::{finish, train_checkpointed, weights_file, TrainOptions};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -88,7 +90,7 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
     }
     let extra: Vec<(String, String)> = std::iter::once(("command".to_string(), command.clone())).chain(extra.into_iter().map(|(k, v)| (format!("init.{k}"), v))).collect();
     let extra_refs: Vec<(&str, String)> = extra.iter().map(|(k, v)| (k.as_str(), v.clone())).collect();
-    let state = train(&generator, &opts, &args.output, &extra_refs, true)?;
+    let state = train_checkpointed(&generator, &opts, &args.output, true)?;
     if state.step < opts.steps {
         eprintln!("stopped at step {} of {}; the checkpoint is {} — run the same command again to resume", state.step, opts.steps, uplift_neural::trainer::checkpoint_path(&args.output).display());
         return Ok(());
@@ -102,10 +104,11 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
         eprintln!("  {:<10} {:.4}  {:.4}  {:.4}", e.class.name(), e.fcos_relative_l1, e.t_l1, e.r_l1);
         table += &format!("{},{:.5},{:.5},{:.5}\n", e.class.name(), e.fcos_relative_l1, e.t_l1, e.r_l1);
     }
-    // Store the held-out table beside the training record.
-    let mut file = uplift_neural::weights::TensorFile::read(&args.output)?;
+    // Store the held-out table beside the training record; then the checkpoint is done with.
+    let mut file = weights_file(&state, &opts, &extra_refs);
     file.metadata.insert("holdout".into(), table);
     file.write(&args.output)?;
+    finish(&args.output);
     eprintln!("wrote {}", args.output.display());
     Ok(())
 }
