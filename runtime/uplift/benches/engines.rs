@@ -176,7 +176,7 @@ fn main() {
     let cache = cache_dir();
     let mut vectorised = None;
     for vectorize in [true, false] {
-        let options = RunnerOptions { cache_dir: cache.clone(), vectorize };
+        let options = RunnerOptions { cache_dir: cache.clone(), vectorize, quick: false };
         let started = Instant::now();
         match one.prepare_runner(&kernel, &options) {
             Ok(runner) => {

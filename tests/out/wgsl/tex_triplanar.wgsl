@@ -162,7 +162,11 @@ fn mx_divide_vector3FA(in1_3: vec3<f32>, in2_3: f32) -> vec3<f32> {
 }
 
 fn mx_pow(x: f32, y: f32) -> f32 {
-    return select(pow(x, y), 0f, ((x == 0f) & (y > 0f)));
+    let m_1 = select(pow(abs(x), y), 0f, ((x == 0f) & (y > 0f)));
+    let integer = (trunc(y) == y);
+    let odd = ((integer & (abs(y) < 16777216f)) & ((i32(y) & 1i) != 0i));
+    let negative = select(select(0f, m_1, integer), -(m_1), odd);
+    return select(select(m_1, negative, (x < 0f)), 1f, (y == 0f));
 }
 
 fn mx_power_vector3FA(in1_4: vec3<f32>, in2_4: f32) -> vec3<f32> {

@@ -40,11 +40,15 @@ pub struct RunnerOptions {
     /// `false` builds with LLVM's loop and SLP vectorisers off (`-C no-vectorize-loops -C
     /// no-vectorize-slp`): the benchmark's reference for what vectorisation gains.
     pub vectorize: bool,
+    /// `true` builds at opt-level 0 without [`KERNEL_LLVM_ARGS`]: for one-off kernels of
+    /// thousands of nodes in differential tests, whose optimised build takes LLVM tens of
+    /// minutes (and whose speed does not matter).
+    pub quick: bool,
 }
 
 impl Default for RunnerOptions {
     fn default() -> Self {
-        RunnerOptions { cache_dir: default_cache_dir(), vectorize: true }
+        RunnerOptions { cache_dir: default_cache_dir(), vectorize: true, quick: false }
     }
 }
 
@@ -89,7 +93,11 @@ fn manifest(name: &str) -> String {
 
 /// Builds (or finds in the cache) the runner of the kernel whose generated Rust is `rust`.
 pub fn build(rust: &str, shape: KernelShape, options: &RunnerOptions) -> Result<ExternalKernel, String> {
-    let variant = if options.vectorize { "" } else { "-novec" };
+    let variant = match (options.vectorize, options.quick) {
+        (_, true) => "-quick",
+        (true, false) => "",
+        (false, false) => "-novec",
+    };
     let mut h = FNV1A_START;
     for part in [rust, RUNNER_MAIN, DRIVER, PROTOCOL, &manifest(""), &KERNEL_LLVM_ARGS.join(" ")] {
         h = fnv1a(h, part.as_bytes());
@@ -124,7 +132,10 @@ pub fn build(rust: &str, shape: KernelShape, options: &RunnerOptions) -> Result<
         }
         // Flags are the runner's own: not the caller's RUSTFLAGS, nor a `.cargo/config.toml`
         // around the caller's working directory.
-        let mut flags: Vec<String> = KERNEL_LLVM_ARGS.iter().map(|a| format!("-Cllvm-args={a}")).collect();
+        let mut flags: Vec<String> = if options.quick { Vec::new() } else { KERNEL_LLVM_ARGS.iter().map(|a| format!("-Cllvm-args={a}")).collect() };
+        if options.quick {
+            c.env("CARGO_PROFILE_RELEASE_OPT_LEVEL", "0");
+        }
         if !options.vectorize {
             flags.extend(["-Cno-vectorize-loops".to_string(), "-Cno-vectorize-slp".to_string()]);
         }
