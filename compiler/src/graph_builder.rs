@@ -773,7 +773,9 @@ impl GraphBuilder<'_> {
 }
 
 /// Whether `path` lies inside one of `roots` (both resolved: `..` and links cannot leave a root).
-fn is_inside<'p>(path: &Path, roots: impl Iterator<Item = &'p Path>) -> bool {
+/// Whether `path` lies inside one of `roots` once both are canonical (`..` and links resolved):
+/// the path rule for files a document names.
+pub fn is_inside<'p>(path: &Path, roots: impl Iterator<Item = &'p Path>) -> bool {
     let Ok(path) = path.canonicalize() else { return false };
     roots.filter_map(|r| r.canonicalize().ok()).any(|r| path.starts_with(r))
 }

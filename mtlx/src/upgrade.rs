@@ -850,7 +850,11 @@ impl Up<'_> {
                 for p in self.children_of(id, "parameter") {
                     if let Some(v) = self.attr(p, "value") {
                         let k = self.name(p);
-                        self.set(id, &k, v);
+                        if is_element_name(&k) {
+                            self.set(id, &k, v);
+                        } else {
+                            self.error(p, format!("backdrop parameter `{k}` cannot become an attribute: not a valid attribute name; dropped"));
+                        }
                     }
                     self.doc.remove(p);
                 }
@@ -1737,9 +1741,10 @@ impl Up<'_> {
     }
 }
 
-/// Whether `s` can be an element's tag (an XML name: a letter or `_` and then letters, digits,
-/// `_`, `-`, `.`, `:`). Upgrades that turn an attribute's value into a category check it, so that
-/// the writer never writes a tag that does not read back (found by fuzzing).
+/// Whether `s` can be an element's tag or an attribute's name (an XML name: a letter or `_` and
+/// then letters, digits, `_`, `-`, `.`, `:`). Upgrades that turn a value into a category or a
+/// name into an attribute check it, so that the writer never writes a document that does not
+/// read back (both found by fuzzing).
 fn is_element_name(s: &str) -> bool {
     let mut chars = s.chars();
     chars.next().is_some_and(|c| c.is_alphabetic() || c == '_') && chars.all(|c| c.is_alphanumeric() || matches!(c, '_' | '-' | '.' | ':'))

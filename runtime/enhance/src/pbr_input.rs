@@ -225,7 +225,7 @@ pub fn from_mtlx(path: &Path) -> Result<Vec<PbrMaterial>, String> {
         return Err(d.to_string());
     }
     let root_cs = doc.get(doc.root()).attr("colorspace").map(str::to_string);
-    let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf();
     let top = |name: &str| doc.top_level().iter().copied().find(|&id| doc.get(id).name() == name);
     let mut out = Vec::new();
     for &mat in doc.top_level() {
@@ -292,8 +292,13 @@ fn mtlx_channel(doc: &mtlx::Document, input: mtlx::ElementId, dir: &Path, root_c
                 return Err(format!("{pos}: a constant normal is not a normal map; leave the input unset"));
             }
             let v = e.attr("value").ok_or_else(|| format!("{pos}: input `{}` has neither a value nor a connection", e.name()))?;
-            let parsed: Result<Vec<f32>, _> = v.split(',').map(|c| c.trim().parse::<f32>()).collect();
-            return parsed.map(PbrChannel::Constant).map_err(|_| format!("{pos}: input `{}` has value `{v}`, not numbers", e.name()));
+            // The document's value rules (MaterialX's): finite numbers, as many as the type has.
+            let ty = mtlx::DataType::from_name(e.attr("type").unwrap_or("float"));
+            return match mtlx::Value::parse(&ty, v) {
+                Ok(mtlx::Value::Floats(f)) => Ok(PbrChannel::Constant(f)),
+                Ok(_) => Err(format!("{pos}: input `{}` has type `{}`, not a number, vector or color", e.name(), ty.name())),
+                Err(why) => Err(format!("{pos}: input `{}`: {why}", e.name())),
+            };
         }
     }
     .ok_or_else(|| format!("{pos}: input `{}`: the node it connects to is not in the document", e.name()))?;
@@ -318,6 +323,11 @@ fn mtlx_channel(doc: &mtlx::Document, input: mtlx::ElementId, dir: &Path, root_c
     let path = dir.join(format!("{prefix}{value}"));
     if !path.is_file() {
         return Err(format!("{}: texture `{}` not found", f.pos, path.display()));
+    }
+    // The compiler's path rule: a texture lies in the document's folder (`fileprefix` and `..`
+    // may not lead out of it).
+    if !uplift_compiler::graph_builder::is_inside(&path, std::iter::once(dir)) {
+        return Err(format!("{}: texture `{prefix}{value}` resolves to `{}`, outside the document's folder `{}`", f.pos, path.display(), dir.display()));
     }
     let colorspace = f
         .attr("colorspace")

@@ -106,6 +106,9 @@ fn enhance_reports_every_input_error() {
         p
     };
     let shader_doc = |name: &str, category: &str| write(name, &surface_doc("", "").replace("standard_surface name=\"s\"", &format!("{category} name=\"s\"")).replace("</standard_surface>", &format!("</{category}>")));
+    // A texture beside the folder of `sub/escapes.mtlx`, which names it through fileprefix="../".
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    std::fs::copy(&png, dir.join("outside.png")).unwrap();
     let twins = dir.join("twins");
     std::fs::create_dir_all(&twins).unwrap();
     for n in ["wood_basecolor.png", "wood_albedo.png"] {
@@ -119,7 +122,12 @@ fn enhance_reports_every_input_error() {
         (vec![write("nomaterial.mtlx", "<?xml version=\"1.0\"?>\n<materialx version=\"1.39\">\n</materialx>\n").display().to_string()], "no surfacematerial with a supported PBR shader"),
         (vec![write("constnormal.mtlx", &surface_doc("    <input name=\"normal\" type=\"vector3\" value=\"0, 0, 1\" />", "")).display().to_string()], "a constant normal is not a normal map"),
         (vec![write("novalue.mtlx", &surface_doc("    <input name=\"base_color\" type=\"color3\" />", "")).display().to_string()], "has neither a value nor a connection"),
-        (vec![write("notnumbers.mtlx", &surface_doc("    <input name=\"metalness\" type=\"float\" value=\"half\" />", "")).display().to_string()], "not numbers"),
+        (vec![write("notnumbers.mtlx", &surface_doc("    <input name=\"metalness\" type=\"float\" value=\"half\" />", "")).display().to_string()], "`half` is not a float value"),
+        (vec![write("nan.mtlx", &surface_doc("    <input name=\"metalness\" type=\"float\" value=\"nan\" />", "")).display().to_string()], "`nan` is not a finite number"),
+        (
+            vec![write("sub/escapes.mtlx", &surface_doc("    <input name=\"base_color\" type=\"color3\" nodename=\"i\" />", "  <image name=\"i\" type=\"color3\" fileprefix=\"../\">\n    <input name=\"file\" type=\"filename\" value=\"outside.png\" />\n  </image>")).display().to_string()],
+            "outside the document's folder",
+        ),
         (vec![write("dangling.mtlx", &surface_doc("    <input name=\"base_color\" type=\"color3\" nodename=\"nowhere\" />", "")).display().to_string()], "the node it connects to is not in the document"),
         (
             vec![write("badnormalmap.mtlx", &surface_doc("    <input name=\"normal\" type=\"vector3\" nodename=\"nm\" />", "  <normalmap name=\"nm\" type=\"vector3\" />")).display().to_string()],
