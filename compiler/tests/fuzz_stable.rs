@@ -7,7 +7,7 @@
 //! input class the fuzzers found crashes in (tests/malformed) from regressing and catches gross
 //! faults on each push.
 //!
-//! Budget: `UPLIFT_FUZZ_SECONDS` per target (default 12, so CI spends ≤ 40 s here); seed:
+//! Budget: `UPLIFT_FUZZ_SECONDS` per target (default 8: CI spends ≈ 25 s of CPU here); seed:
 //! `UPLIFT_FUZZ_SEED` (default 1). Before each input runs it is written to
 //! `$CARGO_TARGET_TMPDIR/fuzz-stable-<target>.mtlx`, so that an abort (a stack overflow kills the
 //! process) leaves the input behind; a panic reports the input's file and its iteration. An
@@ -116,7 +116,7 @@ fn mutate(rng: &mut Rng, corpus: &[Vec<u8>]) -> Vec<u8> {
 }
 
 fn run_target(name: &str, target: fn(&[u8])) {
-    let seconds: u64 = std::env::var("UPLIFT_FUZZ_SECONDS").ok().map(|s| s.parse().expect("UPLIFT_FUZZ_SECONDS: a whole number of seconds")).unwrap_or(12);
+    let seconds: u64 = std::env::var("UPLIFT_FUZZ_SECONDS").ok().map(|s| s.parse().expect("UPLIFT_FUZZ_SECONDS: a whole number of seconds")).unwrap_or(8);
     let seed: u64 = std::env::var("UPLIFT_FUZZ_SEED").ok().map(|s| s.parse().expect("UPLIFT_FUZZ_SEED: a whole number")).unwrap_or(1);
     let corpus = corpus();
     let last = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("fuzz-stable-{name}.mtlx"));
