@@ -213,7 +213,7 @@ pub fn mx_absval_color3_(in_2: Vec3) -> Vec3 {
 
 #[inline(always)]
 pub fn mx_pow(x_6: f32, y_4: f32) -> f32 {
-    let m = if (x_6 == 0.0f32) & (y_4 > 0.0f32) { 0.0f32 } else { x_6.abs().powf(y_4) };
+    let m = if x_6 == 0.0f32 { 0.0f32 } else { x_6.abs().powf(y_4) };
     let integer = y_4.trunc() == y_4;
     let odd = integer & (y_4.abs() < 16777216.0f32) & (y_4 as i32 & 1i32 != 0i32);
     let negative = if odd { -m } else { if integer { m } else { 0.0f32 } };

@@ -72,7 +72,7 @@ pub fn mx_modulo_float(in1_4: f32, in2_4: f32) -> f32 {
 
 #[inline(always)]
 pub fn mx_pow(x: f32, y: f32) -> f32 {
-    let m = if (x == 0.0f32) & (y > 0.0f32) { 0.0f32 } else { x.abs().powf(y) };
+    let m = if x == 0.0f32 { 0.0f32 } else { x.abs().powf(y) };
     let integer = y.trunc() == y;
     let odd = integer & (y.abs() < 16777216.0f32) & (y as i32 & 1i32 != 0i32);
     let negative = if odd { -m } else { if integer { m } else { 0.0f32 } };

@@ -184,7 +184,7 @@ pub fn mx_divide_vector3FA(in1_3: Vec3, in2_3: f32) -> Vec3 {
 
 #[inline(always)]
 pub fn mx_pow(x: f32, y: f32) -> f32 {
-    let m_1 = if (x == 0.0f32) & (y > 0.0f32) { 0.0f32 } else { x.abs().powf(y) };
+    let m_1 = if x == 0.0f32 { 0.0f32 } else { x.abs().powf(y) };
     let integer = y.trunc() == y;
     let odd = integer & (y.abs() < 16777216.0f32) & (y as i32 & 1i32 != 0i32);
     let negative = if odd { -m_1 } else { if integer { m_1 } else { 0.0f32 } };

@@ -178,7 +178,7 @@ fn mx_absval_color3_(in_2: vec3<f32>) -> vec3<f32> {
 }
 
 fn mx_pow(x_6: f32, y_4: f32) -> f32 {
-    let m = select(pow(abs(x_6), y_4), 0f, ((x_6 == 0f) & (y_4 > 0f)));
+    let m = select(pow(abs(x_6), y_4), 0f, (x_6 == 0f));
     let integer = (trunc(y_4) == y_4);
     let odd = ((integer & (abs(y_4) < 16777216f)) & ((i32(y_4) & 1i) != 0i));
     let negative = select(select(0f, m, integer), -(m), odd);

@@ -52,7 +52,7 @@ fn mx_modulo_float(in1_4: f32, in2_4: f32) -> f32 {
 }
 
 fn mx_pow(x: f32, y: f32) -> f32 {
-    let m = select(pow(abs(x), y), 0f, ((x == 0f) & (y > 0f)));
+    let m = select(pow(abs(x), y), 0f, (x == 0f));
     let integer = (trunc(y) == y);
     let odd = ((integer & (abs(y) < 16777216f)) & ((i32(y) & 1i) != 0i));
     let negative = select(select(0f, m, integer), -(m), odd);

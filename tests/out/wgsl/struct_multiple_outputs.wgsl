@@ -140,7 +140,7 @@ fn mx_noise2d_float(amplitude: f32, pivot: f32, texcoord: vec2<f32>) -> f32 {
 }
 
 fn mx_pow(x_4: f32, y_2: f32) -> f32 {
-    let m = select(pow(abs(x_4), y_2), 0f, ((x_4 == 0f) & (y_2 > 0f)));
+    let m = select(pow(abs(x_4), y_2), 0f, (x_4 == 0f));
     let integer = (trunc(y_2) == y_2);
     let odd = ((integer & (abs(y_2) < 16777216f)) & ((i32(y_2) & 1i) != 0i));
     let negative = select(select(0f, m, integer), -(m), odd);

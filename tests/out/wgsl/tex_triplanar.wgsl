@@ -162,7 +162,7 @@ fn mx_divide_vector3FA(in1_3: vec3<f32>, in2_3: f32) -> vec3<f32> {
 }
 
 fn mx_pow(x: f32, y: f32) -> f32 {
-    let m_1 = select(pow(abs(x), y), 0f, ((x == 0f) & (y > 0f)));
+    let m_1 = select(pow(abs(x), y), 0f, (x == 0f));
     let integer = (trunc(y) == y);
     let odd = ((integer & (abs(y) < 16777216f)) & ((i32(y) & 1i) != 0i));
     let negative = select(select(0f, m_1, integer), -(m_1), odd);

@@ -578,11 +578,11 @@ fn mx_round_integer(in: f32) -> i32 {
 // exp2(y·log2(x))): lavapipe gives NaN or 0 there, where C and Rust give numbers, so the CPU
 // and GPU engines disagreed (found by the random-graph test). The library defines `power` on
 // every input as OSL's pow does (OSL is the shading language of MaterialX's reference
-// renders): pow(x, 0) = 1; pow(0, y > 0) = 0; for x < 0, |x|^y negated for odd integer y, and 0
-// for y not an integer.
+// renders, `safe_pow`): pow(x, 0) = 1; pow(0, y) = 0 for every other y (negative ones too, where
+// C gives infinity); for x < 0, |x|^y negated for odd integer y, and 0 for y not an integer.
 
 fn mx_pow(x: f32, y: f32) -> f32 {
-    let m = select(pow(abs(x), y), 0.0, (x == 0.0) & (y > 0.0));
+    let m = select(pow(abs(x), y), 0.0, x == 0.0);
     let integer = trunc(y) == y;
     let odd = integer & (abs(y) < 16777216.0) & ((i32(y) & 1) != 0);
     let negative = select(select(0.0, m, integer), -m, odd);

@@ -255,7 +255,7 @@ pub fn mx_multiply_float(in1_2: f32, in2_2: f32) -> f32 {
 
 #[inline(always)]
 pub fn mx_pow(x_4: f32, y_2: f32) -> f32 {
-    let m = if (x_4 == 0.0f32) & (y_2 > 0.0f32) { 0.0f32 } else { x_4.abs().powf(y_2) };
+    let m = if x_4 == 0.0f32 { 0.0f32 } else { x_4.abs().powf(y_2) };
     let integer = y_2.trunc() == y_2;
     let odd = integer & (y_2.abs() < 16777216.0f32) & (y_2 as i32 & 1i32 != 0i32);
     let negative = if odd { -m } else { if integer { m } else { 0.0f32 } };

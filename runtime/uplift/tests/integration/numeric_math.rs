@@ -19,6 +19,25 @@ use mtlx::schema::{NodeDef, PortDef};
 use mtlx::DataType;
 use nodedef_harness::*;
 
+/// OSL's `safe_pow` (the library's definition of `power` on the whole line, math.wgsl), in f64:
+/// x^0 = 1; 0^y = 0; a negative base to a whole power keeps the power's parity in its sign, to
+/// any other power gives 0.
+fn osl_pow(a: f32, b: f32) -> f32 {
+    let (a, b) = (a as f64, b as f64);
+    if b == 0.0 {
+        1.0
+    } else if a == 0.0 {
+        0.0
+    } else if a > 0.0 {
+        a.powf(b) as f32
+    } else if b.trunc() != b {
+        0.0
+    } else {
+        let m = (-a).powf(b);
+        (if (b as i64) % 2 != 0 { -m } else { m }) as f32
+    }
+}
+
 /// Input domains: keep functions in their domains and away from ill-conditioned points.
 fn gen(nd: &NodeDef, p: &PortDef, rng: &mut Rng) -> Option<Vec<f32>> {
     let n = p.ty.components()?;
@@ -32,7 +51,10 @@ fn gen(nd: &NodeDef, p: &PortDef, rng: &mut Rng) -> Option<Vec<f32>> {
         ("place2d", "operationorder") => vec![int_in(rng, 0, 1)],
         // Integers are whole numbers (passed as f32); keep sums small.
         (_, _) if p.ty == DataType::Integer => vec![int_in(rng, -100, 100)],
-        ("power", "in1") => uniform(rng, n, 0.1, 3.0),
+        // The whole line, zero included: the library defines pow everywhere (OSL's safe_pow).
+        ("power", "in1") => (0..n).map(|_| if rng.next_u64() % 8 == 0 { 0.0 } else { rng.range(-3.0, 3.0) }).collect(),
+        // Whole exponents (odd and even, signs of negative bases) half of the time.
+        ("power", "in2") => (0..n).map(|_| if rng.next_u64() & 1 == 0 { int_in(rng, -3, 3) } else { rng.range(-2.0, 2.0) }).collect(),
         ("safepower", "in1") => away_from_zero(rng, n, 0.1, 3.0),
         ("sin", _) | ("cos", _) => uniform(rng, n, -6.0, 6.0),
         ("tan", _) => uniform(rng, n, -1.2, 1.2),
@@ -112,7 +134,7 @@ fn reference(nd: &NodeDef, x: &Inputs) -> Vec<f32> {
         "ceil" => x.n("in", out_n(nd)).iter().map(|a| a.ceil()).collect(),
         // Ties (x.5) have probability zero here, so GLSL's round and WGSL's round agree.
         "round" => x.n("in", out_n(nd)).iter().map(|a| a.round()).collect(),
-        "power" => map2(nd, x, "in1", "in2", |a, b| (a as f64).powf(b as f64) as f32),
+        "power" => map2(nd, x, "in1", "in2", osl_pow),
         "safepower" => map2(nd, x, "in1", "in2", |a, b| (a.signum() as f64 * (a.abs() as f64).powf(b as f64)) as f32),
         "sin" => map1(nd, x, "in", f32::sin),
         "cos" => map1(nd, x, "in", f32::cos),
