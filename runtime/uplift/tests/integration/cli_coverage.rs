@@ -160,3 +160,97 @@ fn enhance_reports_every_input_error() {
     }
     assert!(!out.exists() || std::fs::read_dir(&out).unwrap().next().is_none(), "a failed enhance left files");
 }
+
+/// Runs the binary and requires exit 0; its stdout and stderr together.
+fn ok(args: &[&str]) -> String {
+    let (code, stdout, stderr) = uplift(args);
+    assert_eq!(code, 0, "uplift {}: {stdout}{stderr}", args.join(" "));
+    stdout + &stderr
+}
+
+/// The happy path through the binary of every subcommand that the other binary tests
+/// (cli, cli_eval, enhance, kill_resume) do not run to success: tables, masks, emit-decoder,
+/// render (reference and neural), flip, furnace (reference and neural), eval-fit and demo, on
+/// tiny inputs. Each output is checked against something independent of the command: the
+/// committed tables and decoder code it regenerates, a second run, FLIP's zero on equal images.
+#[test]
+fn the_remaining_subcommands_succeed_through_the_binary() {
+    let dir = temp_dir("happy");
+    let repo = crate::common::cli::repo();
+
+    // tables: the committed library tables are exactly this command's output.
+    let tables = dir.join("tables");
+    ok(&["tables", "-o", s(&tables)]);
+    let committed = std::fs::read(repo.join("mtlx/libraries/pbrlib/wgsl/albedo_tables.wgsl")).unwrap();
+    assert!(std::fs::read(tables.join("albedo_tables.wgsl")).unwrap() == committed, "`uplift tables` no longer writes the committed albedo_tables.wgsl");
+
+    // masks: files written, and the same bytes for the same seed.
+    let (m1, m2) = (dir.join("masks1"), dir.join("masks2"));
+    for m in [&m1, &m2] {
+        ok(&["masks", "--seed", "3", "--size", "32", "-o", s(m)]);
+    }
+    let mut names: Vec<_> = std::fs::read_dir(&m1).unwrap().map(|e| e.unwrap().file_name()).collect();
+    names.sort();
+    assert!(!names.is_empty(), "masks wrote nothing");
+    for n in &names {
+        assert!(std::fs::read(m1.join(n)).unwrap() == std::fs::read(m2.join(n)).unwrap(), "masks {n:?} differs between two runs with one seed");
+    }
+
+    // emit-decoder: the shipped decoder's committed Rust is this command's output.
+    let (rust, wgsl) = (dir.join("decoder.rs"), dir.join("decoder.wgsl"));
+    ok(&["emit-decoder", "--rust", s(&rust), "--wgsl", s(&wgsl)]);
+    let shipped = std::fs::read_to_string(repo.join("runtime/neural/src/shipped_decoder.rs")).unwrap();
+    assert_eq!(std::fs::read_to_string(&rust).unwrap(), shipped, "`uplift emit-decoder` no longer writes the committed shipped_decoder.rs");
+    assert!(std::fs::read_to_string(&wgsl).unwrap().contains("fn "), "no WGSL decoder");
+
+    // A fitted material: enhance one PBR set at 16², fit it briefly.
+    let enhanced = dir.join("enhanced");
+    ok(&["enhance", s(&repo.join("examples/pbr_materials.mtlx")), "--seed", "3", "--resolution", "16x16", "--mask-size", "32", "-o", s(&enhanced)]);
+    let copper = enhanced.join("copper");
+    ok(&["fit", s(&copper), "--steps", "20", "--threads", "2"]);
+
+    // render (reference and neural) and flip between them; flip of an image with itself is 0.
+    let (reference, neural) = (dir.join("reference.png"), dir.join("neural.png"));
+    ok(&["render", s(&copper), "-o", s(&reference), "--size", "32", "--spp", "4", "--threads", "2"]);
+    ok(&["render", s(&copper), "--neural", "-o", s(&neural), "--size", "32", "--spp", "4", "--threads", "2"]);
+    let same = ok(&["flip", s(&reference), s(&reference)]);
+    let flip_of = |text: &str| -> f64 {
+        let at = text.find("FLIP").unwrap_or_else(|| panic!("no FLIP figure in: {text}"));
+        text[at..].split(|c: char| !(c.is_ascii_digit() || c == '.')).find(|t| t.parse::<f64>().is_ok()).unwrap().parse().unwrap()
+    };
+    assert_eq!(flip_of(&same), 0.0, "FLIP of an image with itself: {same}");
+    let map = dir.join("flip.png");
+    let differ = ok(&["flip", s(&reference), s(&neural), "-o", s(&map)]);
+    let f = flip_of(&differ);
+    assert!(f > 0.0 && f < 1.0 && map.is_file(), "FLIP reference vs neural: {differ}");
+
+    // furnace, reference and neural, on a few texels.
+    for extra in [&[][..], &["--neural"][..]] {
+        let mut args = vec!["furnace", s(&copper), "--max-texels", "8", "--directions", "64", "--views", "4", "--threads", "2"];
+        args.extend_from_slice(extra);
+        let out = ok(&args);
+        assert!(out.contains("pass") || out.contains("PASS"), "furnace {extra:?}: {out}");
+    }
+
+    // eval-fit: the table and its images.
+    let eval = dir.join("eval");
+    ok(&["eval-fit", s(&copper), "-o", s(&eval), "--size", "32", "--spp", "4", "--threads", "2"]);
+    let table = std::fs::read_to_string(eval.join("table.md")).unwrap();
+    assert!(table.contains('|'), "eval-fit's table.md: {table}");
+
+    // demo, the main job, at its smallest.
+    let demo = dir.join("demo");
+    ok(&["demo", "-o", s(&demo), "--per-type", "1", "--texture-size", "16", "--render-size", "24", "--spp", "2", "--fit-steps", "5", "--threads", "2"]);
+    // One material per Type, each fitted, and a report showing each one's four images.
+    let materials: Vec<String> = std::fs::read_dir(demo.join("materials")).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(materials.len(), 6, "{materials:?}");
+    let report = std::fs::read_to_string(demo.join("report/index.html")).unwrap();
+    for m in &materials {
+        assert!(demo.join("materials").join(m).join("latent.exr").is_file(), "{m} was not fitted");
+        for kind in ["pbr", "reference", "neural", "flip"] {
+            let img = format!("img/{m}_{kind}.png");
+            assert!(demo.join("report").join(&img).is_file() && report.contains(&img), "the report lacks {img}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -268,6 +268,7 @@ fn random_graphs_compile_and_agree_between_engines() {
             let (text, sources) = random_graph(&name, &nodes, &mut rng);
             if let Err(e) = compile(&document(std::slice::from_ref(&text))) {
                 failures.push(format!("graph {i} (seed {seed}) does not compile:\n{e}\n{}", document(&[text])));
+                eprintln!("random graphs: {}", failures.last().unwrap());
                 continue;
             }
             tally.nodes += sources.len();
@@ -325,6 +326,9 @@ fn random_graphs_compile_and_agree_between_engines() {
             }
             if bad > 0 {
                 failures.push(format!("graph {name}:\n{text}"));
+                if total > PER_KERNEL {
+                    eprintln!("random graphs: failure in {name}:\n{}", failures[failures.len() - 1 - bad..].join("\n"));
+                }
             }
         }
         if total > PER_KERNEL {
