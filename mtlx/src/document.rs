@@ -120,13 +120,17 @@ impl Document {
     }
 
     /// Copies the subtree rooted at `src` of `other` under `parent` of this document.
+    /// A work list, not recursion: subtrees are as deep as the input makes them.
     pub fn import_subtree(&mut self, parent: ElementId, other: &Document, src: ElementId) -> ElementId {
         let e = other.get(src);
-        let id = self.add_child(parent, e.category.clone(), e.attributes.clone(), e.pos.clone());
-        for &c in &e.children {
-            self.import_subtree(id, other, c);
+        let root = self.add_child(parent, e.category.clone(), e.attributes.clone(), e.pos.clone());
+        let mut work: Vec<(ElementId, ElementId)> = e.children.iter().rev().map(|&c| (c, root)).collect();
+        while let Some((from, to)) = work.pop() {
+            let e = other.get(from);
+            let id = self.add_child(to, e.category.clone(), e.attributes.clone(), e.pos.clone());
+            work.extend(e.children.iter().rev().map(|&c| (c, id)));
         }
-        id
+        root
     }
 
     pub fn children(&self, id: ElementId) -> &[ElementId] {

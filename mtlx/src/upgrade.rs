@@ -474,13 +474,17 @@ impl Up<'_> {
         }
     }
 
+    /// A work list, not recursion: subtrees are as deep as the input makes them.
     fn clone_subtree(&mut self, src: ElementId, parent: ElementId) -> ElementId {
-        let e = self.doc.get(src).clone();
-        let id = self.doc.add_child(parent, e.category, e.attributes, e.pos);
-        for c in e.children {
-            self.clone_subtree(c, id);
+        let mut root = None;
+        let mut work = vec![(src, parent)];
+        while let Some((from, to)) = work.pop() {
+            let e = self.doc.get(from).clone();
+            let id = self.doc.add_child(to, e.category, e.attributes, e.pos);
+            root.get_or_insert(id);
+            work.extend(e.children.iter().rev().map(|&c| (c, id)));
         }
-        id
+        root.expect("the work list starts with the subtree's root")
     }
 
     /// MaterialX's `copyInputWithBindings`: copies input `src_name` of `src_node` (value and
