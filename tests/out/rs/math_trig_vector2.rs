@@ -3,7 +3,7 @@
 // The pattern kernel in Rust: the library functions and `mx_pattern`, written from the same naga
 // module as the WGSL kernel, and `mx_pattern_batch`, a loop over structure-of-arrays columns.
 // Include it in a module of its own; it needs glam and nothing else.
-use glam::{UVec2, Vec2, Vec3, Vec4};
+use glam::{BVec2, UVec2, Vec2, Vec3, Vec4};
 
 /// Textures of a kernel, by index (binding − 4 in the WGSL kernel), implemented by the runtime.
 /// Coordinates are texel indices and may lie outside the texture: return zero there, as
@@ -58,7 +58,7 @@ pub fn mx_cos_vector2_(in_1: Vec2) -> Vec2 {
 
 #[inline(always)]
 pub fn mx_atan2_vector2_(iny: Vec2, inx: Vec2) -> Vec2 {
-    wgsl_atan2_vec2_vec2(iny, inx)
+    Vec2::select(wgsl_and_bvec2_bvec2(iny.cmpeq(Vec2::splat(0.0f32)), inx.cmpeq(Vec2::splat(0.0f32))), Vec2::splat(0.0f32), wgsl_atan2_vec2_vec2(iny, inx))
 }
 
 #[inline(always)]
@@ -69,6 +69,11 @@ pub fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
     let v5_ = mx_cos_vector2_(v3_);
     let v6_ = mx_atan2_vector2_(v4_, v5_);
     MxOutputs { angle_out: v6_, log_out: 0.49999997f32 }
+}
+
+#[inline(always)]
+fn wgsl_and_bvec2_bvec2(a: BVec2, b: BVec2) -> BVec2 {
+    BVec2::new(a.x & b.x, a.y & b.y)
 }
 
 #[inline(always)]

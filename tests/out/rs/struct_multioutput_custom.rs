@@ -57,7 +57,7 @@ pub fn mx_extract_vector2_(in_1: Vec2, index_1: i32) -> f32 {
 
 #[inline(always)]
 pub fn mx_atan2_float(iny: f32, inx: f32) -> f32 {
-    iny.atan2(inx)
+    if (iny == 0.0f32) & (inx == 0.0f32) { 0.0f32 } else { iny.atan2(inx) }
 }
 
 #[inline(always)]

@@ -40,7 +40,7 @@ fn mx_cos_vector2_(in_1: vec2<f32>) -> vec2<f32> {
 }
 
 fn mx_atan2_vector2_(iny: vec2<f32>, inx: vec2<f32>) -> vec2<f32> {
-    return atan2(iny, inx);
+    return select(atan2(iny, inx), vec2(0f), ((iny == vec2(0f)) & (inx == vec2(0f))));
 }
 
 fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {

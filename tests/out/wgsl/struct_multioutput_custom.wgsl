@@ -39,7 +39,7 @@ fn mx_extract_vector2_(in_1: vec2<f32>, index_1: i32) -> f32 {
 }
 
 fn mx_atan2_float(iny: f32, inx: f32) -> f32 {
-    return atan2(iny, inx);
+    return select(atan2(iny, inx), 0f, ((iny == 0f) & (inx == 0f)));
 }
 
 fn mx_combine2_vector2_(in1_1: f32, in2_1: f32) -> vec2<f32> {

@@ -668,9 +668,11 @@ fn mx_acos_float(in: f32) -> f32 {
 }
 
 // ---- atan2 ----
+// WGSL leaves atan2(0, 0) indeterminate (lavapipe gives 3π/4, Rust 0; found by the random-graph
+// test). The library defines it as C does for +0, +0: 0.
 
 fn mx_atan2_float(iny: f32, inx: f32) -> f32 {
-    return atan2(iny, inx);
+    return select(atan2(iny, inx), 0.0, (iny == 0.0) & (inx == 0.0));
 }
 
 // ---- sin ----
@@ -710,7 +712,8 @@ fn mx_acos_vector2(in: vec2<f32>) -> vec2<f32> {
 // ---- atan2 ----
 
 fn mx_atan2_vector2(iny: vec2<f32>, inx: vec2<f32>) -> vec2<f32> {
-    return atan2(iny, inx);
+    // atan2(0, 0) = 0: see mx_atan2_float.
+    return select(atan2(iny, inx), vec2<f32>(0.0), (iny == vec2<f32>(0.0)) & (inx == vec2<f32>(0.0)));
 }
 
 // ---- sin ----
@@ -750,7 +753,8 @@ fn mx_acos_vector3(in: vec3<f32>) -> vec3<f32> {
 // ---- atan2 ----
 
 fn mx_atan2_vector3(iny: vec3<f32>, inx: vec3<f32>) -> vec3<f32> {
-    return atan2(iny, inx);
+    // atan2(0, 0) = 0: see mx_atan2_float.
+    return select(atan2(iny, inx), vec3<f32>(0.0), (iny == vec3<f32>(0.0)) & (inx == vec3<f32>(0.0)));
 }
 
 // ---- sin ----
@@ -790,7 +794,8 @@ fn mx_acos_vector4(in: vec4<f32>) -> vec4<f32> {
 // ---- atan2 ----
 
 fn mx_atan2_vector4(iny: vec4<f32>, inx: vec4<f32>) -> vec4<f32> {
-    return atan2(iny, inx);
+    // atan2(0, 0) = 0: see mx_atan2_float.
+    return select(atan2(iny, inx), vec4<f32>(0.0), (iny == vec4<f32>(0.0)) & (inx == vec4<f32>(0.0)));
 }
 
 // ---- sqrt ----

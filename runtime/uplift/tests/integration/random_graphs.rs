@@ -29,10 +29,10 @@
 //!
 //! **Known limit.** The check sees values at node outputs, not inside a node's implementation: an
 //! exact singular point inside one (`range` with inhigh = inlow exactly, a `cloverleaf` of radius
-//! exactly 0, an `ifgreatereq` tie, WGSL's indeterminate `atan2(0, 0)`) can make the engines
-//! differ where every output looks well-conditioned. Piecewise-constant nodes (clamp, floor,
-//! safepower of 0) produce such exact values; 6 of 2,800 graphs of seed 10 met one (stop note of
-//! 2026-12-04). CI's seed meets none.
+//! exactly 0, an `ifgreatereq` tie) can make the engines differ where every output looks
+//! well-conditioned. Piecewise-constant nodes (clamp, floor, safepower of 0) produce such exact
+//! values; 6 of 2,800 graphs of seed 10 met one, 2 of them WGSL's indeterminate `atan2(0, 0)`,
+//! which the library now defines (math.wgsl). CI's seed meets none.
 //!
 //! **Size.** `UPLIFT_RANDOM_GRAPHS` graphs (default 24, CI's share: ≈ 40 s, most of it
 //! rustc building the runner of a kernel of ~130 nodes), seed `UPLIFT_RANDOM_SEED` (default 1).
