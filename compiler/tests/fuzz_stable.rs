@@ -50,27 +50,19 @@ fn repo_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
 }
 
-fn mtlx_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else { return };
-    let mut entries: Vec<PathBuf> = entries.flatten().map(|e| e.path()).collect();
-    entries.sort();
-    for p in entries {
-        if p.is_dir() {
-            mtlx_files(&p, out);
-        } else if p.extension().is_some_and(|e| e == "mtlx") {
-            out.push(p);
-        }
-    }
+/// The `.mtlx` files under `dir`, sorted.
+fn mtlx_files(dir: &Path) -> impl Iterator<Item = PathBuf> {
+    mtlx::library::files_under(dir).into_iter().filter(|p| p.extension().is_some_and(|e| e == "mtlx"))
 }
 
 /// The seed corpus (the same folders `fuzz/seed-corpus.sh` copies for `cargo fuzz`).
 fn corpus() -> Vec<Vec<u8>> {
     let root = repo_root();
     let mut files = Vec::new();
-    mtlx_files(&root.join("tests/in"), &mut files);
-    mtlx_files(&root.join("tests/malformed"), &mut files);
+    files.extend(mtlx_files(&root.join("tests/in")));
+    files.extend(mtlx_files(&root.join("tests/malformed")));
     match std::env::var_os("UPLIFT_MTLX_DATA") {
-        Some(data) => mtlx_files(&Path::new(&data).join("Materials/TestSuite"), &mut files),
+        Some(data) => files.extend(mtlx_files(&Path::new(&data).join("Materials/TestSuite"))),
         None => eprintln!("UPLIFT_MTLX_DATA is not set: the seed corpus is tests/in and tests/malformed only"),
     }
     let corpus: Vec<Vec<u8>> = files.iter().map(|f| std::fs::read(f).unwrap()).collect();

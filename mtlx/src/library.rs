@@ -61,9 +61,7 @@ impl Library {
 
     /// Adds every `.mtlx` and `.wgsl` file under `dir` (recursively, sorted by path).
     pub fn add_dir(&mut self, dir: &Path) {
-        let mut files = Vec::new();
-        collect_files(dir, &mut files);
-        for f in files {
+        for f in files_under(dir) {
             match f.extension().and_then(|e| e.to_str()) {
                 Some("mtlx") => {
                     let (doc, diags) = read_file(&f);
@@ -88,6 +86,14 @@ pub fn search_path_from_env() -> Vec<PathBuf> {
     std::env::var(SEARCH_PATH_VAR)
         .map(|v| v.split([':', ';']).filter(|s| !s.is_empty()).map(PathBuf::from).collect())
         .unwrap_or_default()
+}
+
+/// Every file under `dir`, recursively, in sorted path order (nothing for a folder that cannot be
+/// read). The library loader and the tests that walk document folders share it.
+pub fn files_under(dir: &Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    collect_files(dir, &mut files);
+    files
 }
 
 fn collect_files(dir: &Path, out: &mut Vec<PathBuf>) {

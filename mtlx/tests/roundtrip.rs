@@ -31,17 +31,9 @@ fn data_root() -> Option<PathBuf> {
     }
 }
 
+/// Appends the `.mtlx` files under `dir`, sorted.
 fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else { return };
-    let mut entries: Vec<PathBuf> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
-    entries.sort();
-    for p in entries {
-        if p.is_dir() {
-            collect(&p, out);
-        } else if p.extension().is_some_and(|e| e == "mtlx") {
-            out.push(p);
-        }
-    }
+    out.extend(mtlx::library::files_under(dir).into_iter().filter(|p| p.extension().is_some_and(|e| e == "mtlx")));
 }
 
 /// Constructs that no 1.39 document has: what the upgrade must have removed.
