@@ -292,15 +292,17 @@ fn random_graphs_compile_and_agree_between_engines() {
         let (on_cpu, on_gpu) = (run_cpu(&batch), gpu.run_pattern(&kernel, &batch).unwrap_or_else(|e| panic!("{e}")));
         let nudged = [run_cpu(&perturbed(&kernel, &points, &rows, &mut rng)), run_cpu(&perturbed(&kernel, &points, &rows, &mut rng))];
         for (name, text, sources) in &graphs {
-            let output = |j: usize| {
-                let want = format!("{name}/o{j}");
-                kernel.outputs.iter().find(|o| o.name == want).unwrap_or_else(|| panic!("kernel has no output {want}"))
-            };
+            // Node j's output, looked up once per graph (not per row).
+            let outputs: Vec<_> = (0..sources.len())
+                .map(|j| {
+                    let want = format!("{name}/o{j}");
+                    kernel.outputs.iter().find(|o| o.name == want).unwrap_or_else(|| panic!("kernel has no output {want}"))
+                })
+                .collect();
             let mut bad = 0;
             for r in 0..ROWS {
                 let mut ok = vec![false; sources.len()];
-                for j in 0..sources.len() {
-                    let o = output(j);
+                for (j, o) in outputs.iter().enumerate() {
                     let sources_ok = sources[j].iter().all(|&k| ok[k]);
                     let mut all = true;
                     for c in o.offset..o.offset + o.ty.components().unwrap() {
