@@ -122,7 +122,7 @@ const RESERVED: &[&str] = &[
     "u128", "usize", // std prelude names a type or value could shadow
     "Option", "Some", "None", "Result", "Ok", "Err", "Default", "Clone", "Copy", "Debug", "PartialEq", "Vec",
     "String", "Box", "core", "std", "glam", // glam names the generated code uses
-    "Vec2", "Vec3", "Vec4", "IVec2", "IVec3", "IVec4", "UVec2", "UVec3", "UVec4", "BVec2", "BVec3", "BVec4", "Mat2",
+    "Vec2", "Vec3", "Vec4", "IVec2", "IVec3", "IVec4", "UVec2", "UVec3", "UVec4", "BVec2", "BVec3", "BVec4", "BVec4A", "Mat2",
     "Mat3", "Mat4", // the writer's and the template's own names
     "MxTextures", "tex", "GEOMETRY_COLUMNS", "INPUT_COLUMNS", "OUTPUT_COLUMNS", "TEXTURE_COUNT", "INPUTS",
     "OUTPUTS", "mx_pattern_batch", "mx_n", "mx_i", "mx_geom", "mx_inputs", "mx_out",
@@ -367,6 +367,16 @@ fn write_module(module: &Module, info: &ModuleInfo, options: &RustOptions, force
 impl<'m> Writer<'m> {
     fn use_glam(&mut self, name: &str) {
         self.glam.insert(name.to_string());
+    }
+
+    /// The conversions between glam's SIMD `Vec4` mask (`BVec4A`, what `Vec4` compares to and
+    /// selects with) and `BVec4` (WGSL's `vec4<bool>` everywhere else): their names.
+    fn mask4_helpers(&mut self) -> R<(&'static str, &'static str)> {
+        let b = self.inner_name(&TypeInner::Vector { size: naga::VectorSize::Quad, scalar: Scalar::BOOL })?;
+        self.use_glam("BVec4A");
+        self.helper("wgsl_bvec4_from_mask", || format!("#[inline(always)]\nfn wgsl_bvec4_from_mask(m: BVec4A) -> {b} {{\n    {b}::from(<[bool; 4]>::from(m))\n}}\n"));
+        self.helper("wgsl_mask_from_bvec4", || format!("#[inline(always)]\nfn wgsl_mask_from_bvec4(b: {b}) -> BVec4A {{\n    BVec4A::from(<[bool; 4]>::from(b))\n}}\n"));
+        Ok(("wgsl_bvec4_from_mask", "wgsl_mask_from_bvec4"))
     }
 
     /// Registers a helper function (once).
@@ -1362,9 +1372,15 @@ impl<'m> Writer<'m> {
                 let vt = self.ty(ctx, *accept).clone();
                 match (&ct, &vt) {
                     (TypeInner::Scalar(_), _) => Ex::new(format!("if {} {{ {} }} else {{ {} }}", c.s, a.s, r.s), Prec::Lowest),
-                    (TypeInner::Vector { .. }, TypeInner::Vector { scalar, .. }) if scalar.kind != ScalarKind::Bool => {
+                    (TypeInner::Vector { .. }, TypeInner::Vector { scalar, size }) if scalar.kind != ScalarKind::Bool => {
                         let t = self.inner_name(&vt)?;
-                        Ex::atom(format!("{t}::select({}, {}, {})", c.s, a.s, r.s))
+                        if scalar.kind == ScalarKind::Float && *size == naga::VectorSize::Quad {
+                            // glam's SIMD `Vec4::select` takes a `BVec4A`.
+                            let name = self.mask4_helpers()?.1;
+                            Ex::atom(format!("{t}::select({name}({}), {}, {})", c.s, a.s, r.s))
+                        } else {
+                            Ex::atom(format!("{t}::select({}, {}, {})", c.s, a.s, r.s))
+                        }
                     }
                     _ => self.call_lanewise("select", &[(&c, &ct), (&a, &vt), (&r, &vt)], &vt, &|x| format!("if {} {{ {} }} else {{ {} }}", x[0], x[1], x[2]))?,
                 }
@@ -1507,6 +1523,10 @@ impl<'m> Writer<'m> {
                 };
                 if both_scalar {
                     infix(sym, Prec::Cmp)
+                } else if kind == ScalarKind::Float && matches!(lt, TypeInner::Vector { size: naga::VectorSize::Quad, .. }) && is_vec(&rt) {
+                    // glam's SIMD `Vec4` compares to a `BVec4A`; WGSL's `vec4<bool>` is `BVec4`.
+                    let name = self.mask4_helpers()?.0;
+                    Ex::atom(format!("{name}({})", cmp_method(m).s))
                 } else if kind != ScalarKind::Bool && is_vec(&lt) && is_vec(&rt) {
                     cmp_method(m)
                 } else {

@@ -36,6 +36,9 @@ fn smooth_step(x: f32) -> f32 { return smoothstep(0.0, 2.0, x); }
 fn step_vec2(edge: vec2<f32>, x: vec2<f32>) -> vec2<f32> { return step(edge, x); }
 fn inv_sqrt(x: f32) -> f32 { return inverseSqrt(x); }
 fn select_max(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> { return select(a, b, a < b); }
+// vec4<f32> compares and selects (glam's SIMD Vec4 masks are BVec4A, not BVec4).
+fn select_vec4_masks(a: vec4<f32>, b: vec4<f32>) -> vec4<f32> { return select(b, a, (a < b) & (b > vec4(0.0))); }
+fn equal_vec4(a: vec4<f32>, b: vec4<f32>) -> vec4<bool> { return a == b; }
 fn count_bits(a: u32) -> u32 { return countOneBits(a); }
 fn row_times_matrix(v: vec3<f32>, m: mat3x3<f32>) -> vec3<f32> { return v * m; }
 fn any_all(v: vec3<f32>) -> vec2<bool> { return vec2<bool>(any(v > vec3(0.0)), all(v > vec3(0.0))); }

@@ -71,6 +71,9 @@ fn builtins() {
     assert_eq!(s::step_vec2_(Vec2::new(0.5, 0.5), Vec2::new(0.5, 0.4)), Vec2::new(1.0, 0.0));
     assert_eq!(s::inv_sqrt(4.0), 0.5);
     assert_eq!(s::select_max(Vec3::new(1.0, 5.0, -2.0), Vec3::new(3.0, 2.0, -1.0)), Vec3::new(3.0, 5.0, -1.0));
+    // Lanes: a < b and b > 0 → a; otherwise b.
+    assert_eq!(s::select_vec4_masks(Vec4::new(1.0, 5.0, -3.0, -2.0), Vec4::new(3.0, 2.0, -1.0, 4.0)), Vec4::new(1.0, 2.0, -1.0, -2.0));
+    assert_eq!(s::equal_vec4_(Vec4::new(1.0, 2.0, f32::NAN, 0.0), Vec4::new(1.0, 3.0, f32::NAN, -0.0)), glam::BVec4::new(true, false, false, true));
     assert_eq!(s::count_bits(0xF0F0), 8);
     let m = Mat3::from_cols(Vec3::new(1.0, 2.0, 3.0), Vec3::new(4.0, 5.0, 6.0), Vec3::new(7.0, 8.0, 9.0));
     // v * M (row vector): component j is dot(v, column j).
