@@ -12,14 +12,15 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("mtlx", &[]),
     ("uplift_compiler", &["mtlx"]),
     ("uplift_base", &[]),
-    ("uplift_kernels", &["uplift_base"]),
-    ("uplift_engines", &["uplift_base", "uplift_kernels", "mtlx", "uplift_compiler"]),
-    ("uplift_material", &["uplift_base", "uplift_kernels", "uplift_engines", "mtlx", "uplift_compiler"]),
-    ("uplift_enhance", &["uplift_base", "uplift_kernels", "uplift_engines", "uplift_material", "mtlx", "uplift_compiler"]),
-    ("uplift_neural", &["uplift_base", "uplift_kernels", "uplift_engines", "uplift_material", "mtlx", "uplift_compiler"]),
-    ("uplift_render", &["uplift_base", "uplift_kernels", "uplift_engines", "uplift_material", "uplift_enhance", "uplift_neural", "mtlx", "uplift_compiler"]),
-    ("uplift", &["uplift_base", "uplift_kernels", "uplift_engines", "uplift_material", "uplift_enhance", "uplift_neural", "uplift_render", "mtlx", "uplift_compiler"]),
-    ("uplift_rs_snapshots", &["mtlx", "uplift_compiler", "uplift_base", "uplift_engines"]),
+    ("uplift_simd", &[]),
+    ("uplift_kernels", &["uplift_base", "uplift_simd"]),
+    ("uplift_engines", &["uplift_base", "uplift_simd", "uplift_kernels", "mtlx", "uplift_compiler"]),
+    ("uplift_material", &["uplift_base", "uplift_simd", "uplift_kernels", "uplift_engines", "mtlx", "uplift_compiler"]),
+    ("uplift_enhance", &["uplift_base", "uplift_simd", "uplift_kernels", "uplift_engines", "uplift_material", "mtlx", "uplift_compiler"]),
+    ("uplift_neural", &["uplift_base", "uplift_simd", "uplift_kernels", "uplift_engines", "uplift_material", "mtlx", "uplift_compiler"]),
+    ("uplift_render", &["uplift_base", "uplift_simd", "uplift_kernels", "uplift_engines", "uplift_material", "uplift_enhance", "uplift_neural", "mtlx", "uplift_compiler"]),
+    ("uplift", &["uplift_base", "uplift_simd", "uplift_kernels", "uplift_engines", "uplift_material", "uplift_enhance", "uplift_neural", "uplift_render", "mtlx", "uplift_compiler"]),
+    ("uplift_rs_snapshots", &["mtlx", "uplift_compiler", "uplift_base", "uplift_simd", "uplift_engines"]),
 ];
 
 /// (crate, its workspace dependencies) from `cargo metadata`.
@@ -68,7 +69,7 @@ fn violations(edges: &BTreeMap<String, BTreeSet<String>>, allowed: &[(&str, &[&s
 #[test]
 fn runtime_crates_depend_only_downwards() {
     let edges = workspace_edges();
-    for krate in ["uplift_base", "uplift_kernels", "uplift_engines", "uplift_material", "uplift_enhance", "uplift_neural", "uplift_render", "uplift"] {
+    for krate in ["uplift_base", "uplift_simd", "uplift_kernels", "uplift_engines", "uplift_material", "uplift_enhance", "uplift_neural", "uplift_render", "uplift"] {
         assert!(edges.contains_key(krate), "`{krate}` is not a workspace member");
     }
     let bad = violations(&edges, ALLOWED);
