@@ -16,6 +16,7 @@ pub mod ir;
 pub mod kernel;
 pub mod lower;
 pub mod node_library;
+pub mod variance;
 pub mod wgsl_items;
 pub mod wgsl_types;
 

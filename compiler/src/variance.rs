@@ -1,0 +1,354 @@
+//! Variance analysis of a naga Module (issue 24, the packet writer's first pass): for each
+//! function and each signature of argument variances, how every expression, local variable and
+//! the result vary across the points of a batch.
+//!
+//! A value is [`Variance::Uniform`] (one value for the whole batch: literals, constants,
+//! tables, a material parameter shared by the batch), [`Variance::PerGroup`] (one value per
+//! group of points: material parameters and the view direction, in a BSDF kernel's grouped
+//! layout) or [`Variance::PerPoint`] (a light direction, a sample's random numbers, a
+//! pattern's geometry). The variances form a chain and combine by `max`: an expression varies
+//! like its most varying operand. Control flow adds its own: a store under an `if` whose
+//! condition is per point makes the local per point (different lanes keep different values),
+//! whatever it stores; a `return` under such control flow makes the result per point; a loop
+//! whose exit (a `break`, `continue` or `return` under varying control flow, or `break if`)
+//! varies runs its whole body under that variance, since lanes run different numbers of
+//! iterations. Locals are solved to a fixed point (a store later in a loop can reach a load
+//! earlier in it); callees are analysed per signature of their arguments' variances. The
+//! packet writer keeps uniform values and uniform loops scalar, and hoists per-group values
+//! out of the inner loop over a group's points.
+
+use naga::{Block, Expression, Function, Handle, Module, Statement};
+use std::collections::HashMap;
+
+/// How a value varies across a batch (ordered: a combination is the maximum).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Variance {
+    Uniform,
+    PerGroup,
+    PerPoint,
+}
+
+/// The analysis of one function for one signature.
+#[derive(Clone, Debug)]
+pub struct FunctionVariance {
+    /// Per expression handle (index order).
+    pub expressions: Vec<Variance>,
+    /// Per local variable handle.
+    pub locals: Vec<Variance>,
+    /// The result's (`Uniform` for a function without one).
+    pub result: Variance,
+}
+
+impl FunctionVariance {
+    pub fn expression(&self, h: Handle<Expression>) -> Variance {
+        self.expressions[h.index()]
+    }
+}
+
+/// Analyses of a module's functions, memoised per (function, argument variances).
+pub struct ModuleVariance<'m> {
+    module: &'m Module,
+    cache: HashMap<(Handle<Function>, Vec<Variance>), FunctionVariance>,
+}
+
+impl<'m> ModuleVariance<'m> {
+    pub fn new(module: &'m Module) -> Self {
+        ModuleVariance { module, cache: HashMap::new() }
+    }
+
+    /// The analysis of `function` called with arguments of these variances.
+    pub fn function(&mut self, function: Handle<Function>, arguments: &[Variance]) -> &FunctionVariance {
+        let key = (function, arguments.to_vec());
+        if !self.cache.contains_key(&key) {
+            let f = &self.module.functions[function];
+            let result = self.analyse(f, arguments);
+            self.cache.insert(key.clone(), result);
+        }
+        &self.cache[&key]
+    }
+
+    /// Analyses a function body (also entry points' and those not in `module.functions`).
+    pub fn analyse(&mut self, f: &Function, arguments: &[Variance]) -> FunctionVariance {
+        let mut state = FunctionVariance { expressions: vec![Variance::Uniform; f.expressions.len()], locals: vec![Variance::Uniform; f.local_variables.len()], result: Variance::Uniform };
+        let mut calls: HashMap<Handle<Expression>, Variance> = HashMap::new();
+        // Every pass only raises variances, which are bounded: this ends.
+        loop {
+            let before = (state.expressions.clone(), state.locals.clone(), state.result, calls.clone());
+            for (h, e) in f.expressions.iter() {
+                let v = Self::expression(h, e, arguments, &state, &calls);
+                state.expressions[h.index()] = state.expressions[h.index()].max(v);
+            }
+            let mut walk = Walk { analysis: self, f, state: &mut state, calls: &mut calls };
+            walk.block(&f.body, Variance::Uniform);
+            if before == (state.expressions.clone(), state.locals.clone(), state.result, calls.clone()) {
+                return state;
+            }
+        }
+    }
+
+    fn expression(h: Handle<Expression>, e: &Expression, arguments: &[Variance], state: &FunctionVariance, calls: &HashMap<Handle<Expression>, Variance>) -> Variance {
+        let of = |h: &Handle<Expression>| state.expressions[h.index()];
+        let max = |hs: &[Handle<Expression>]| hs.iter().map(of).max().unwrap_or(Variance::Uniform);
+        match e {
+            Expression::Literal(_) | Expression::Constant(_) | Expression::Override(_) | Expression::ZeroValue(_) | Expression::GlobalVariable(_) => Variance::Uniform,
+            Expression::FunctionArgument(i) => arguments.get(*i as usize).copied().unwrap_or(Variance::PerPoint),
+            Expression::LocalVariable(l) => state.locals[l.index()],
+            Expression::Compose { components, .. } => max(components),
+            Expression::Access { base, index } => of(base).max(of(index)),
+            Expression::AccessIndex { base, .. } => of(base),
+            Expression::Splat { value, .. } => of(value),
+            Expression::Swizzle { vector, .. } => of(vector),
+            Expression::Load { pointer } => of(pointer),
+            Expression::Unary { expr, .. } => of(expr),
+            Expression::Binary { left, right, .. } => of(left).max(of(right)),
+            Expression::Select { condition, accept, reject } => max(&[*condition, *accept, *reject]),
+            Expression::Relational { argument, .. } => of(argument),
+            Expression::Math { arg, arg1, arg2, arg3, .. } => {
+                let mut v = of(arg);
+                for a in [arg1, arg2, arg3].into_iter().flatten() {
+                    v = v.max(of(a));
+                }
+                v
+            }
+            Expression::As { expr, .. } => of(expr),
+            Expression::ArrayLength(e) => of(e),
+            Expression::ImageQuery { image, .. } => of(image),
+            Expression::ImageLoad { image, coordinate, array_index, sample, level } => {
+                let mut v = of(image).max(of(coordinate));
+                for a in [array_index, sample, level].into_iter().flatten() {
+                    v = v.max(of(a));
+                }
+                v
+            }
+            // Set by its `Call` statement (on the previous pass).
+            Expression::CallResult(_) => calls.get(&h).copied().unwrap_or(Variance::Uniform),
+            // Anything else (image sampling, derivatives, atomics, …) is taken as per point.
+            _ => Variance::PerPoint,
+        }
+    }
+}
+
+/// One pass over a function's statements under a control variance.
+struct Walk<'a, 'm> {
+    analysis: &'a mut ModuleVariance<'m>,
+    f: &'a Function,
+    state: &'a mut FunctionVariance,
+    calls: &'a mut HashMap<Handle<Expression>, Variance>,
+}
+
+impl Walk<'_, '_> {
+    fn of(&self, h: Handle<Expression>) -> Variance {
+        self.state.expressions[h.index()]
+    }
+
+    /// The local variable a pointer expression points into, if any.
+    fn root_local(&self, mut p: Handle<Expression>) -> Option<usize> {
+        loop {
+            match &self.f.expressions[p] {
+                Expression::LocalVariable(l) => return Some(l.index()),
+                Expression::Access { base, .. } | Expression::AccessIndex { base, .. } => p = *base,
+                _ => return None,
+            }
+        }
+    }
+
+    fn block(&mut self, block: &Block, control: Variance) {
+        for s in block.iter() {
+            self.statement(s, control);
+        }
+    }
+
+    fn statement(&mut self, s: &Statement, control: Variance) {
+        match s {
+            Statement::Block(b) => self.block(b, control),
+            Statement::If { condition, accept, reject } => {
+                let c = control.max(self.of(*condition));
+                self.block(accept, c);
+                self.block(reject, c);
+            }
+            Statement::Switch { selector, cases } => {
+                let c = control.max(self.of(*selector));
+                for case in cases {
+                    self.block(&case.body, c);
+                }
+            }
+            Statement::Loop { body, continuing, break_if } => {
+                let mut exit = break_if.map_or(Variance::Uniform, |b| self.of(b));
+                exit = exit.max(self.exits(body, Variance::Uniform, false)).max(self.exits(continuing, Variance::Uniform, false));
+                let c = control.max(exit);
+                self.block(body, c);
+                self.block(continuing, c);
+            }
+            Statement::Store { pointer, value } => {
+                let v = control.max(self.of(*value)).max(self.of(*pointer));
+                if let Some(l) = self.root_local(*pointer) {
+                    self.state.locals[l] = self.state.locals[l].max(v);
+                }
+            }
+            Statement::Return { value } => {
+                let v = control.max(value.map_or(Variance::Uniform, |h| self.of(h)));
+                self.state.result = self.state.result.max(v);
+            }
+            Statement::Call { function, arguments, result } => {
+                let args: Vec<Variance> = arguments.iter().map(|a| self.of(*a)).collect();
+                let r = self.analysis.function(*function, &args).result;
+                if let Some(h) = result {
+                    let e = self.calls.entry(*h).or_insert(Variance::Uniform);
+                    *e = (*e).max(r);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// The variance of the control flow under which `block` leaves the enclosing loop early
+    /// (`break` and `continue` of this loop, `return`): lanes that leave while others stay
+    /// make everything the loop stores vary as that control flow does. `in_switch`: a `break`
+    /// here ends a switch, not the loop.
+    fn exits(&self, block: &Block, control: Variance, in_switch: bool) -> Variance {
+        let mut v = Variance::Uniform;
+        for s in block.iter() {
+            v = v.max(match s {
+                Statement::Break if !in_switch => control,
+                Statement::Continue | Statement::Return { .. } => control,
+                Statement::Block(b) => self.exits(b, control, in_switch),
+                Statement::If { condition, accept, reject } => {
+                    let c = control.max(self.of(*condition));
+                    self.exits(accept, c, in_switch).max(self.exits(reject, c, in_switch))
+                }
+                Statement::Switch { selector, cases } => {
+                    let c = control.max(self.of(*selector));
+                    cases.iter().map(|case| self.exits(&case.body, c, true)).max().unwrap_or(Variance::Uniform)
+                }
+                // A nested loop's break and continue are its own; its returns leave this one too.
+                Statement::Loop { body, continuing, .. } => self.returns(body, control).max(self.returns(continuing, control)),
+                _ => Variance::Uniform,
+            });
+        }
+        v
+    }
+
+    /// The variance of the control flow under which `block` returns.
+    fn returns(&self, block: &Block, control: Variance) -> Variance {
+        let mut v = Variance::Uniform;
+        for s in block.iter() {
+            v = v.max(match s {
+                Statement::Return { .. } => control,
+                Statement::Block(b) => self.returns(b, control),
+                Statement::If { condition, accept, reject } => {
+                    let c = control.max(self.of(*condition));
+                    self.returns(accept, c).max(self.returns(reject, c))
+                }
+                Statement::Switch { selector, cases } => {
+                    let c = control.max(self.of(*selector));
+                    cases.iter().map(|case| self.returns(&case.body, c)).max().unwrap_or(Variance::Uniform)
+                }
+                Statement::Loop { body, continuing, break_if } => {
+                    let c = control.max(break_if.map_or(Variance::Uniform, |b| self.of(b)));
+                    self.returns(body, c).max(self.returns(continuing, c))
+                }
+                _ => Variance::Uniform,
+            });
+        }
+        v
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use Variance::{PerGroup, PerPoint, Uniform};
+
+    fn module(src: &str) -> Module {
+        naga::front::wgsl::parse_str(src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)))
+    }
+
+    fn function(m: &Module, name: &str) -> Handle<Function> {
+        m.functions.iter().find(|(_, f)| f.name.as_deref() == Some(name)).unwrap().0
+    }
+
+    /// The variance of local `name` in `f`.
+    fn local(m: &Module, fv: &FunctionVariance, f: Handle<Function>, name: &str) -> Variance {
+        let (h, _) = m.functions[f].local_variables.iter().find(|(_, l)| l.name.as_deref() == Some(name)).unwrap_or_else(|| panic!("no local {name}"));
+        fv.locals[h.index()]
+    }
+
+    #[test]
+    fn a_constant_trip_counter_stays_uniform() {
+        let m = module("fn f(x: f32) -> f32 { var acc = x; for (var i = 0; i < 4; i++) { acc += f32(i); } return acc; }");
+        let f = function(&m, "f");
+        let mut a = ModuleVariance::new(&m);
+        let fv = a.function(f, &[PerPoint]).clone();
+        assert_eq!(local(&m, &fv, f, "i"), Uniform);
+        assert_eq!(local(&m, &fv, f, "acc"), PerPoint);
+        assert_eq!(fv.result, PerPoint);
+        // With a uniform argument everything is uniform.
+        assert_eq!(a.function(f, &[Uniform]).result, Uniform);
+    }
+
+    #[test]
+    fn a_store_under_a_varying_if_makes_the_local_vary() {
+        let m = module("fn f(x: f32, u: f32) -> f32 { var t = 0.0; if (x > 0.0) { t = 1.0; } var s = 0.0; if (u > 0.0) { s = 2.0; } return t + s; }");
+        let f = function(&m, "f");
+        let mut a = ModuleVariance::new(&m);
+        let fv = a.function(f, &[PerPoint, Uniform]).clone();
+        assert_eq!(local(&m, &fv, f, "t"), PerPoint, "stored a constant under a per-point condition");
+        assert_eq!(local(&m, &fv, f, "s"), Uniform, "stored a constant under a uniform condition");
+        let fv = a.function(f, &[PerPoint, PerGroup]).clone();
+        assert_eq!(local(&m, &fv, f, "s"), PerGroup);
+    }
+
+    #[test]
+    fn a_return_under_a_varying_if_makes_the_result_vary() {
+        let m = module("fn g(x: f32) -> f32 { if (x > 0.0) { return 1.0; } return 2.0; }");
+        let g = function(&m, "g");
+        let mut a = ModuleVariance::new(&m);
+        assert_eq!(a.function(g, &[PerPoint]).result, PerPoint);
+        assert_eq!(a.function(g, &[PerGroup]).result, PerGroup);
+        assert_eq!(a.function(g, &[Uniform]).result, Uniform);
+    }
+
+    #[test]
+    fn a_loop_with_a_varying_exit_runs_its_body_under_that_variance() {
+        // `n` counts iterations with a constant step, but lanes leave at different times.
+        let m = module(
+            "fn f(x: f32) -> i32 { var n = 0; var i = 0; loop { if (f32(i) > x) { break; } n += 2; i++; } return n; }
+             fn g(x: f32) -> f32 { var acc = 0.0; for (var i = 0; i < 8; i++) { if (x > f32(i)) { continue; } acc += 1.0; } return acc; }
+             fn h(x: f32) -> f32 { var acc = 0.0; for (var i = 0; i < 8; i++) { switch (i) { case 3: { break; } default: { acc += x; } } } return 1.0; }",
+        );
+        let mut a = ModuleVariance::new(&m);
+        let f = function(&m, "f");
+        let fv = a.function(f, &[PerPoint]).clone();
+        assert_eq!((local(&m, &fv, f, "n"), local(&m, &fv, f, "i")), (PerPoint, PerPoint));
+        let g = function(&m, "g");
+        let gv = a.function(g, &[PerPoint]).clone();
+        assert_eq!(local(&m, &gv, g, "acc"), PerPoint, "a per-point continue");
+        // A switch's break on a uniform selector ends the switch, not the loop: `i` stays uniform.
+        let h = function(&m, "h");
+        let hv = a.function(h, &[PerPoint]).clone();
+        assert_eq!((local(&m, &hv, h, "i"), local(&m, &hv, h, "acc"), hv.result), (Uniform, PerPoint, Uniform));
+    }
+
+    #[test]
+    fn a_call_varies_as_the_callee_does_for_its_arguments() {
+        let m = module(
+            "fn first(a: f32, b: f32) -> f32 { return a + 1.0; }
+             fn caller(u: f32, x: f32) -> f32 { let k = first(u, x); let j = first(x, u); return k; }",
+        );
+        let mut a = ModuleVariance::new(&m);
+        let caller = function(&m, "caller");
+        assert_eq!(a.function(caller, &[Uniform, PerPoint]).result, Uniform);
+        assert_eq!(a.function(caller, &[PerPoint, Uniform]).result, PerPoint);
+        assert_eq!(a.function(caller, &[PerGroup, PerPoint]).result, PerGroup);
+    }
+
+    #[test]
+    fn a_store_reaching_an_earlier_load_through_the_loop_is_found() {
+        // `prev` is read before the store that makes it per point, one iteration later.
+        let m = module("fn f(x: f32) -> f32 { var prev = 0.0; var out = 0.0; for (var i = 0; i < 3; i++) { out = prev; prev = x; } return out; }");
+        let f = function(&m, "f");
+        let mut a = ModuleVariance::new(&m);
+        let fv = a.function(f, &[PerPoint]).clone();
+        assert_eq!((local(&m, &fv, f, "prev"), local(&m, &fv, f, "out"), fv.result), (PerPoint, PerPoint, PerPoint));
+    }
+}
