@@ -14,7 +14,22 @@
 //! closure kernel, on random direction pairs in the local frame). The closure library's
 //! figures (paths relative to runtime/uplift/, where cargo runs benchmarks): `--graph
 //! ../kernels/graphs/bsdf/bsdf_conductor.mtlx --context eval` (one conductor)
-//! and `--graph ../kernels/graphs/bsdf/bsdf_stack.mtlx --context eval` (the layered stack).
+//! and `--graph ../kernels/graphs/bsdf/bsdf_stack.mtlx --context eval` (the layered stack),
+//! `--graph ../kernels/graphs/bsdf/uplift_stack.mtlx --context eval` (the 8-lobe stack).
+//!
+//! **Parameters.** Interface inputs take their document defaults, one material for the whole
+//! batch, except: `--param NAME=V[,V…]` (repeatable) sets one; the `uplift_stack` graph runs
+//! with every lobe live (metalness 0.5, fuzz 0.3, coat 0.5, inner 0.4, subcutaneous 0.5 — its
+//! defaults leave 6 of the 8 lobes at weight 0) and the conductor graph at GGX α 0.3 (gold, as
+//! Mitsuba's `roughconductor` below); `--random-params` draws every `uplift_stack` parameter
+//! per row inside its range (stack_params.rs; weights at least 5 % of their range, so no lobe
+//! is dead). Directions: `wv` and `wl` uniform on the upper hemisphere.
+//!
+//! **Anchor.** `--mitsuba roughconductor|principled` also measures Mitsuba 3.9.1's BSDF `eval`
+//! (`llvm_ad_rgb`, all threads) on the same direction distribution in the same run
+//! (`benches/mitsuba/setup.sh` installs it into `target/mitsuba-venv`, `bsdf_rate.py` measures)
+//! and prints uplift's ratio to it. `--in-process` skips the runners and wgpu (the shipped
+//! kernel's figures and Mitsuba's only).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -31,10 +46,14 @@ struct Options {
     points: usize,
     seconds: f64,
     wgpu_child: bool,
+    params: Vec<(String, Vec<f32>)>,
+    random_params: bool,
+    mitsuba: Option<String>,
+    in_process: bool,
 }
 
 fn options() -> Options {
-    let mut o = Options { graph: None, context: None, points: 1 << 20, seconds: 2.0, wgpu_child: false };
+    let mut o = Options { graph: None, context: None, points: 1 << 20, seconds: 2.0, wgpu_child: false, params: Vec::new(), random_params: false, mitsuba: None, in_process: false };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
@@ -55,6 +74,18 @@ fn options() -> Options {
                 i += 1;
                 o.context = Some(ClosureContext::from_name(&args[i]).expect("--context eval|albedo|sample|pdf"));
             }
+            "--param" => {
+                i += 1;
+                let (name, values) = args[i].split_once('=').expect("--param NAME=V[,V…]");
+                let values = values.split(',').map(|v| v.trim().parse().expect("--param: numbers")).collect();
+                o.params.push((name.to_string(), values));
+            }
+            "--random-params" => o.random_params = true,
+            "--in-process" => o.in_process = true,
+            "--mitsuba" => {
+                i += 1;
+                o.mitsuba = Some(args[i].clone());
+            }
             "--wgpu-child" => o.wgpu_child = true,
             _ => {} // `--bench` and libtest's options
         }
@@ -63,9 +94,24 @@ fn options() -> Options {
     o
 }
 
+/// The parameters the benchmark sets on top of a graph's defaults (module doc), then `--param`s.
+fn parameters(graph: &Path, o: &Options) -> Vec<(String, Vec<f32>)> {
+    let stem = graph.file_stem().unwrap_or_default().to_string_lossy();
+    let mut params: Vec<(String, Vec<f32>)> = match stem.as_ref() {
+        "uplift_stack" => [("metalness", 0.5), ("fuzz_weight", 0.3), ("coat_weight", 0.5), ("inner_weight", 0.4), ("subcutaneous_weight", 0.5)]
+            .iter()
+            .map(|(n, v)| (n.to_string(), vec![*v]))
+            .collect(),
+        "bsdf_conductor" => vec![("roughness".to_string(), vec![0.3, 0.3])],
+        _ => Vec::new(),
+    };
+    params.extend(o.params.iter().cloned());
+    params
+}
+
 /// Seeded points on a sphere of radius 3 (world position, normal, tangent) with the documented
 /// interface inputs.
-fn batch(kernel: &PatternKernel, n: usize) -> PatternBatch {
+fn batch(kernel: &PatternKernel, n: usize, params: &[(String, Vec<f32>)], random_params: bool) -> PatternBatch {
     let mut state = 0x2545_f491_4f6c_dd1du64;
     let mut next = move || {
         state ^= state << 13;
@@ -82,8 +128,22 @@ fn batch(kernel: &PatternKernel, n: usize) -> PatternBatch {
             Geometry { texcoord: [next(), next()], position: normal.map(|c| 3.0 * c), normal, tangent: [-phi.sin(), phi.cos(), 0.0] }
         })
         .collect();
-    let defaults: Vec<f32> = kernel.inputs.iter().flat_map(|i| i.input.default.clone()).collect();
+    let mut defaults: Vec<f32> = kernel.inputs.iter().flat_map(|i| i.input.default.clone()).collect();
+    for (name, values) in params {
+        let input = kernel.inputs.iter().find(|i| &i.input.name == name).unwrap_or_else(|| panic!("--param {name}: the graph has no such input"));
+        assert_eq!(values.len(), input.input.ty.components().unwrap_or(0), "--param {name}: wrong number of components");
+        defaults[input.offset..input.offset + values.len()].copy_from_slice(values);
+    }
     let mut rows: Vec<f32> = (0..n).flat_map(|_| defaults.iter().copied()).collect();
+    if random_params {
+        // Every uplift_stack parameter per row, inside its range (weights ≥ 5 % of it).
+        for row in rows.chunks_mut(kernel.input_stride) {
+            for p in &uplift_engines::stack_params::PARAMETER_TABLE {
+                let input = kernel.inputs.iter().find(|i| i.input.name == p.input).unwrap_or_else(|| panic!("--random-params: the graph has no input {} (uplift_stack only)", p.input));
+                row[input.offset + p.component] = p.lo + (p.hi - p.lo) * (0.05 + 0.95 * next());
+            }
+        }
+    }
     let Some(context) = kernel.context else {
         return PatternBatch::from_rows(&points, &rows, kernel.input_stride, vec![]);
     };
@@ -97,9 +157,10 @@ fn batch(kernel: &PatternKernel, n: usize) -> PatternBatch {
             let v = if kernel.inputs[d].input.name == "u" {
                 [u1, u2, next()]
             } else {
-                let r = u1.sqrt();
+                // Uniform on the upper hemisphere (as bsdf_rate.py draws Mitsuba's).
+                let r = (1.0 - u1 * u1).max(0.0).sqrt();
                 let phi = std::f32::consts::TAU * u2;
-                [r * phi.cos(), r * phi.sin(), (1.0 - u1).max(0.0).sqrt()]
+                [r * phi.cos(), r * phi.sin(), u1]
             };
             row[kernel.inputs[d].offset..kernel.inputs[d].offset + 3].copy_from_slice(&v);
         }
@@ -131,7 +192,8 @@ fn main() {
     let compiler = Compiler::builtin();
     let c = compiler.compile_file_in(&graph, &OutputSelection::AllNumeric, o.context);
     let kernel = c.kernel.unwrap_or_else(|| panic!("{}: {:?}", graph.display(), c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>()));
-    let b = batch(&kernel, o.points);
+    let params = parameters(&graph, &o);
+    let b = batch(&kernel, o.points, &params, o.random_params);
     if o.wgpu_child {
         match wgpu_rate(&kernel, &b, o.seconds) {
             Ok((r, _)) => println!("rate={r}"),
@@ -149,7 +211,11 @@ fn main() {
     // CPU, in-process (a shipped kernel).
     let all = CpuEngine::with_threads(threads).unwrap().with_cache_dir(cache_dir());
     let one = CpuEngine::with_threads(1).unwrap().with_cache_dir(cache_dir());
-    println!("CPU level: {}", all.cpu_level());
+    println!("CPU level: {} (SIMD level {})", all.cpu_level(), uplift_simd::Level::detect().name());
+    if !params.is_empty() || o.random_params {
+        let set: Vec<String> = params.iter().map(|(n, v)| format!("{n}={}", v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(","))).collect();
+        println!("parameters: {}{}", set.join(" "), if o.random_params { " (then every uplift_stack parameter random per row)" } else { "" });
+    }
     let prepared = all.prepare(&kernel).unwrap();
     let (cpu1, cpu_all) = match &prepared {
         CpuKernel::Builtin(_) => {
@@ -171,6 +237,11 @@ fn main() {
             (cpu1, cpu_all)
         }
     };
+
+    if o.in_process {
+        print_mitsuba(&o, threads, cpu_all);
+        return;
+    }
 
     // CPU, runners with and without vectorisation (1 thread).
     let cache = cache_dir();
@@ -204,6 +275,12 @@ fn main() {
     }
     let exe = std::env::current_exe().unwrap();
     let mut child_args = vec!["--wgpu-child".to_string(), "--points".into(), o.points.to_string(), "--seconds".into(), o.seconds.to_string(), "--graph".into(), graph.display().to_string()];
+    for (n, v) in &o.params {
+        child_args.extend(["--param".to_string(), format!("{n}={}", v.iter().map(|x| x.to_string()).collect::<Vec<_>>().join(","))]);
+    }
+    if o.random_params {
+        child_args.push("--random-params".into());
+    }
     if let Some(c) = o.context {
         child_args.extend(["--context".to_string(), c.name().to_string()]);
     }
@@ -221,4 +298,36 @@ fn main() {
         }
         Err(e) => println!("wgpu single thread: cannot start the child: {e}"),
     }
+
+    print_mitsuba(&o, threads, cpu_all);
+}
+
+/// Mitsuba's figure and uplift's ratio to it (`--mitsuba`).
+fn print_mitsuba(o: &Options, threads: usize, cpu_all: f64) {
+    if let Some(bsdf) = &o.mitsuba {
+        match mitsuba_rate(bsdf, o, threads) {
+            Ok((r, line)) => println!("mitsuba {line}: {}  (uplift CPU {threads} threads / mitsuba = {:.3}×)", mega(r), cpu_all / r),
+            Err(e) => println!("mitsuba: {e}"),
+        }
+    }
+}
+
+/// Mitsuba's rate for `bsdf` on `threads` threads (benches/mitsuba/), and a line naming it.
+fn mitsuba_rate(bsdf: &str, o: &Options, threads: usize) -> Result<(f64, String), String> {
+    let here = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/mitsuba");
+    let venv = cache_dir().with_file_name("mitsuba-venv");
+    let setup = std::process::Command::new("bash").arg(here.join("setup.sh")).arg(&venv).output().map_err(|e| format!("cannot run setup.sh: {e}"))?;
+    if !setup.status.success() {
+        return Err(format!("setup.sh failed: {}{}", String::from_utf8_lossy(&setup.stdout), String::from_utf8_lossy(&setup.stderr)));
+    }
+    let out = std::process::Command::new(venv.join("bin/python"))
+        .arg(here.join("bsdf_rate.py"))
+        .args(["--bsdf", bsdf, "--points", &o.points.to_string(), "--seconds", &o.seconds.to_string(), "--threads", &threads.to_string()])
+        .output()
+        .map_err(|e| format!("cannot run bsdf_rate.py: {e}"))?;
+    let text = String::from_utf8_lossy(&out.stdout);
+    let line = text.lines().last().unwrap_or_default();
+    let json: serde_json::Value = serde_json::from_str(line).map_err(|_| format!("bsdf_rate.py said: {text}{}", String::from_utf8_lossy(&out.stderr)))?;
+    let rate = json["rate"].as_f64().ok_or("bsdf_rate.py gave no rate")?;
+    Ok((rate, format!("{} {} `{bsdf}`, {threads} threads", json["mitsuba"].as_str().unwrap_or("?"), json["variant"].as_str().unwrap_or("?"))))
 }
