@@ -28,6 +28,25 @@ pub enum Variance {
     PerPoint,
 }
 
+/// An argument's variance: one for the whole value, or one per member of a struct argument (a
+/// kernel's inputs struct: material parameters per group, the light direction per point).
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum ArgumentVariance {
+    Whole(Variance),
+    Members(Vec<Variance>),
+}
+
+impl ArgumentVariance {
+    /// The variance of the whole value.
+    pub fn whole(&self) -> Variance {
+        match self {
+            ArgumentVariance::Whole(v) => *v,
+            ArgumentVariance::Members(m) => m.iter().copied().max().unwrap_or(Variance::Uniform),
+        }
+    }
+
+}
+
 /// The analysis of one function for one signature.
 #[derive(Clone, Debug)]
 pub struct FunctionVariance {
@@ -37,6 +56,22 @@ pub struct FunctionVariance {
     pub locals: Vec<Variance>,
     /// The result's (`Uniform` for a function without one).
     pub result: Variance,
+    /// Per member, for struct values built in place, passed in or returned (expression index →
+    /// member variances): a closure struct keeps `wv` per group and `wl` per point through
+    /// the constructors it passes through.
+    pub members: HashMap<usize, Vec<Variance>>,
+    /// The result's members, when the function returns such struct values.
+    pub result_members: Option<Vec<Variance>>,
+}
+
+/// `a` raised to `b`, member by member.
+fn join_members(a: &mut Vec<Variance>, b: &[Variance]) {
+    if a.len() < b.len() {
+        a.resize(b.len(), Variance::Uniform);
+    }
+    for (x, y) in a.iter_mut().zip(b) {
+        *x = (*x).max(*y);
+    }
 }
 
 impl FunctionVariance {
@@ -48,7 +83,7 @@ impl FunctionVariance {
 /// Analyses of a module's functions, memoised per (function, argument variances).
 pub struct ModuleVariance<'m> {
     module: &'m Module,
-    cache: HashMap<(Handle<Function>, Vec<Variance>), FunctionVariance>,
+    cache: HashMap<(Handle<Function>, Vec<ArgumentVariance>), FunctionVariance>,
 }
 
 impl<'m> ModuleVariance<'m> {
@@ -58,6 +93,12 @@ impl<'m> ModuleVariance<'m> {
 
     /// The analysis of `function` called with arguments of these variances.
     pub fn function(&mut self, function: Handle<Function>, arguments: &[Variance]) -> &FunctionVariance {
+        let arguments: Vec<ArgumentVariance> = arguments.iter().map(|&v| ArgumentVariance::Whole(v)).collect();
+        self.function_with(function, &arguments)
+    }
+
+    /// The analysis of `function` with per-member variances for struct arguments.
+    pub fn function_with(&mut self, function: Handle<Function>, arguments: &[ArgumentVariance]) -> &FunctionVariance {
         let key = (function, arguments.to_vec());
         if !self.cache.contains_key(&key) {
             let f = &self.module.functions[function];
@@ -68,30 +109,68 @@ impl<'m> ModuleVariance<'m> {
     }
 
     /// Analyses a function body (also entry points' and those not in `module.functions`).
-    pub fn analyse(&mut self, f: &Function, arguments: &[Variance]) -> FunctionVariance {
-        let mut state = FunctionVariance { expressions: vec![Variance::Uniform; f.expressions.len()], locals: vec![Variance::Uniform; f.local_variables.len()], result: Variance::Uniform };
-        let mut calls: HashMap<Handle<Expression>, Variance> = HashMap::new();
+    pub fn analyse(&mut self, f: &Function, arguments: &[ArgumentVariance]) -> FunctionVariance {
+        let mut state = FunctionVariance {
+            expressions: vec![Variance::Uniform; f.expressions.len()],
+            locals: vec![Variance::Uniform; f.local_variables.len()],
+            result: Variance::Uniform,
+            members: HashMap::new(),
+            result_members: None,
+        };
+        let mut calls: HashMap<Handle<Expression>, (Variance, Option<Vec<Variance>>)> = HashMap::new();
         // Every pass only raises variances, which are bounded: this ends.
         loop {
-            let before = (state.expressions.clone(), state.locals.clone(), state.result, calls.clone());
+            let before = (state.expressions.clone(), state.locals.clone(), state.result, state.members.clone(), state.result_members.clone(), calls.clone());
             for (h, e) in f.expressions.iter() {
-                let v = Self::expression(h, e, arguments, &state, &calls);
+                let (v, members) = Self::expression(self.module, f, h, e, arguments, &state, &calls);
                 state.expressions[h.index()] = state.expressions[h.index()].max(v);
+                if let Some(m) = members {
+                    join_members(state.members.entry(h.index()).or_default(), &m);
+                }
             }
             let mut walk = Walk { analysis: self, f, state: &mut state, calls: &mut calls };
             walk.block(&f.body, Variance::Uniform);
-            if before == (state.expressions.clone(), state.locals.clone(), state.result, calls.clone()) {
+            if before == (state.expressions.clone(), state.locals.clone(), state.result, state.members.clone(), state.result_members.clone(), calls.clone()) {
                 return state;
             }
         }
     }
 
-    fn expression(h: Handle<Expression>, e: &Expression, arguments: &[Variance], state: &FunctionVariance, calls: &HashMap<Handle<Expression>, Variance>) -> Variance {
+    /// An expression's variance, and its members' for a struct value whose members are known.
+    fn expression(
+        module: &Module,
+        f: &Function,
+        h: Handle<Expression>,
+        e: &Expression,
+        arguments: &[ArgumentVariance],
+        state: &FunctionVariance,
+        calls: &HashMap<Handle<Expression>, (Variance, Option<Vec<Variance>>)>,
+    ) -> (Variance, Option<Vec<Variance>>) {
         let of = |h: &Handle<Expression>| state.expressions[h.index()];
         let max = |hs: &[Handle<Expression>]| hs.iter().map(of).max().unwrap_or(Variance::Uniform);
         match e {
+            Expression::Compose { ty, components } if matches!(module.types[*ty].inner, naga::TypeInner::Struct { .. }) => {
+                return (max(components), Some(components.iter().map(of).collect()));
+            }
+            Expression::FunctionArgument(i) => {
+                return match arguments.get(*i as usize) {
+                    Some(ArgumentVariance::Members(m)) => (ArgumentVariance::Members(m.clone()).whole(), Some(m.clone())),
+                    Some(a) => (a.whole(), None),
+                    None => (Variance::PerPoint, None),
+                };
+            }
+            Expression::AccessIndex { base, index } => {
+                if let Some(m) = state.members.get(&base.index()) {
+                    return (m.get(*index as usize).copied().unwrap_or(Variance::PerPoint), None);
+                }
+            }
+            // Set by its `Call` statement (on the previous pass).
+            Expression::CallResult(_) => return calls.get(&h).cloned().unwrap_or((Variance::Uniform, None)),
+            _ => {}
+        }
+        let _ = f;
+        (match e {
             Expression::Literal(_) | Expression::Constant(_) | Expression::Override(_) | Expression::ZeroValue(_) | Expression::GlobalVariable(_) => Variance::Uniform,
-            Expression::FunctionArgument(i) => arguments.get(*i as usize).copied().unwrap_or(Variance::PerPoint),
             Expression::LocalVariable(l) => state.locals[l.index()],
             Expression::Compose { components, .. } => max(components),
             Expression::Access { base, index } => of(base).max(of(index)),
@@ -120,11 +199,9 @@ impl<'m> ModuleVariance<'m> {
                 }
                 v
             }
-            // Set by its `Call` statement (on the previous pass).
-            Expression::CallResult(_) => calls.get(&h).copied().unwrap_or(Variance::Uniform),
             // Anything else (image sampling, derivatives, atomics, …) is taken as per point.
             _ => Variance::PerPoint,
-        }
+        }, None)
     }
 }
 
@@ -133,12 +210,21 @@ struct Walk<'a, 'm> {
     analysis: &'a mut ModuleVariance<'m>,
     f: &'a Function,
     state: &'a mut FunctionVariance,
-    calls: &'a mut HashMap<Handle<Expression>, Variance>,
+    calls: &'a mut HashMap<Handle<Expression>, (Variance, Option<Vec<Variance>>)>,
 }
 
 impl Walk<'_, '_> {
     fn of(&self, h: Handle<Expression>) -> Variance {
         self.state.expressions[h.index()]
+    }
+
+    /// How a call argument varies: per member for a struct value whose members are known (the
+    /// closure struct carrying `wv` and `wl`), else whole.
+    fn argument(&self, h: Handle<Expression>) -> ArgumentVariance {
+        match self.state.members.get(&h.index()) {
+            Some(m) => ArgumentVariance::Members(m.clone()),
+            None => ArgumentVariance::Whole(self.of(h)),
+        }
     }
 
     /// The local variable a pointer expression points into, if any.
@@ -188,13 +274,21 @@ impl Walk<'_, '_> {
             Statement::Return { value } => {
                 let v = control.max(value.map_or(Variance::Uniform, |h| self.of(h)));
                 self.state.result = self.state.result.max(v);
+                if let Some(m) = value.and_then(|h| self.state.members.get(&h.index()).cloned()) {
+                    let m: Vec<Variance> = m.iter().map(|&x| x.max(control)).collect();
+                    join_members(self.state.result_members.get_or_insert_with(Vec::new), &m);
+                }
             }
             Statement::Call { function, arguments, result } => {
-                let args: Vec<Variance> = arguments.iter().map(|a| self.of(*a)).collect();
-                let r = self.analysis.function(*function, &args).result;
+                let args: Vec<ArgumentVariance> = arguments.iter().map(|a| self.argument(*a)).collect();
+                let callee = self.analysis.function_with(*function, &args);
+                let (r, members) = (callee.result, callee.result_members.clone());
                 if let Some(h) = result {
-                    let e = self.calls.entry(*h).or_insert(Variance::Uniform);
-                    *e = (*e).max(r);
+                    let e = self.calls.entry(*h).or_insert((Variance::Uniform, None));
+                    e.0 = e.0.max(r);
+                    if let Some(m) = members {
+                        join_members(e.1.get_or_insert_with(Vec::new), &m);
+                    }
                 }
             }
             _ => {}
@@ -340,6 +434,41 @@ mod tests {
         assert_eq!(a.function(caller, &[Uniform, PerPoint]).result, Uniform);
         assert_eq!(a.function(caller, &[PerPoint, Uniform]).result, PerPoint);
         assert_eq!(a.function(caller, &[PerGroup, PerPoint]).result, PerGroup);
+    }
+
+    #[test]
+    fn a_conductor_kernel_splits_into_view_and_light_work() {
+        // The shipped conductor BSDF in the eval context, its material and view per group and
+        // its light direction per point: the view-only work (the energy-compensation albedo
+        // lookup and its Fresnel average) is per group, the lobe's value per point.
+        let graph = concat!(env!("CARGO_MANIFEST_DIR"), "/../runtime/kernels/graphs/bsdf/bsdf_conductor.mtlx");
+        let c = crate::Compiler::builtin().compile_file_in(std::path::Path::new(graph), &crate::OutputSelection::AllNumeric, Some(crate::ClosureContext::Eval));
+        let kernel = c.kernel.expect("the conductor kernel compiles");
+        let m = &kernel.module;
+        let pattern = function(m, "mx_pattern");
+        let f = &m.functions[pattern];
+        let members = |ty: Handle<naga::Type>, point: &[&str]| match &m.types[ty].inner {
+            naga::TypeInner::Struct { members, .. } => ArgumentVariance::Members(
+                members.iter().map(|x| if point.contains(&x.name.as_deref().unwrap_or("")) { PerPoint } else { PerGroup }).collect(),
+            ),
+            _ => ArgumentVariance::Whole(PerGroup),
+        };
+        let args: Vec<ArgumentVariance> = f.arguments.iter().map(|a| members(a.ty, &["wl"])).collect();
+        let mut a = ModuleVariance::new(m);
+        assert_eq!(a.function_with(pattern, &args).result, PerPoint);
+        let by_name = |a: &ModuleVariance, name: &str| -> Vec<Variance> {
+            a.cache.iter().filter(|((h, _), _)| m.functions[*h].name.as_deref() == Some(name)).map(|(_, fv)| fv.result).collect()
+        };
+        // (The memo also holds the signatures of the fixed point's earlier passes, lower ones.)
+        let setup = by_name(&a, "mx_ggx_energy_compensation");
+        assert!(setup.contains(&PerGroup) && setup.iter().all(|&v| v <= PerGroup), "energy compensation: {setup:?}");
+        let reflection = by_name(&a, "mx_ggx_reflection");
+        assert!(reflection.contains(&PerPoint), "the lobe: {reflection:?}");
+        // With every member per point, nothing is per group.
+        let all_point: Vec<ArgumentVariance> = f.arguments.iter().map(|a| members(a.ty, &["wl", "wv", "ior", "extinction", "roughness", "weight", "position", "normal", "tangent", "texcoord"])).collect();
+        let mut b = ModuleVariance::new(m);
+        b.function_with(pattern, &all_point);
+        assert!(by_name(&b, "mx_ggx_energy_compensation").contains(&PerPoint));
     }
 
     #[test]
