@@ -341,6 +341,15 @@ impl<'a> GraphBuilder<'a> {
             let Some(out) = out else {
                 return Err(self.error(&pos, format!("nodegraph `{graph_name}` has no output named `{}`", e.attr("output").unwrap_or("(unnamed; it has several)"))));
             };
+            // A graph reached again from inside itself is a cycle: each reference would open a
+            // fresh nested scope, so the node-level cycle test would never see a node twice.
+            let mut up = Some(s);
+            while let Some(u) = up {
+                if self.scopes[u].graph == g && Arc::ptr_eq(&self.scopes[u].doc, &doc) {
+                    return Err(self.error(&pos, format!("cycle: nodegraph `{graph_name}` is connected inside itself (through `{}`)", e.name())));
+                }
+                up = self.scopes[u].parent;
+            }
             let gs = self.compound_scope(s, g, false);
             self.resolve_connection(gs, out, None)?
         } else if let Some(node_name) = e.attr("nodename") {
