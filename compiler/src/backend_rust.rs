@@ -128,7 +128,7 @@ const RESERVED: &[&str] = &[
     "OUTPUTS", "mx_pattern_batch", "mx_n", "mx_i", "mx_geom", "mx_inputs", "mx_out",
 ];
 
-fn reserved_set() -> &'static KeywordSet {
+pub(crate) fn reserved_set() -> &'static KeywordSet {
     static SET: OnceLock<KeywordSet> = OnceLock::new();
     SET.get_or_init(|| KeywordSet::from_iter(RESERVED))
 }

@@ -6,6 +6,7 @@
 
 pub mod arena;
 pub mod backend_neural;
+pub mod backend_packet;
 pub mod backend_rust;
 pub mod build_api;
 pub mod compile;

@@ -39,6 +39,12 @@ fn main() {
         let path = path.canonicalize().unwrap_or(path);
         let _ = writeln!(out, "/// `tests/out/rs_wgsl/{stem}.rs`.\npub mod wgsl_{stem} {{\n    include!({:?});\n}}\n", path.display().to_string());
     }
+    let packet_dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../out/packet");
+    for stem in rust_stems(&packet_dir) {
+        let path = packet_dir.join(format!("{stem}.rs"));
+        let path = path.canonicalize().unwrap_or(path);
+        let _ = writeln!(out, "/// `tests/out/packet/{stem}.rs`.\npub mod packet_{stem} {{\n    include!({:?});\n}}\n", path.display().to_string());
+    }
     for stem in &stems {
         let path = dir.join(format!("{stem}.rs"));
         let path = path.canonicalize().unwrap_or(path);

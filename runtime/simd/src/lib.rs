@@ -35,6 +35,7 @@ mod avx512;
 mod emu;
 mod level;
 mod packets;
+pub mod vector;
 
 #[cfg(target_arch = "x86_64")]
 pub use avx2::{Avx2, F32x8, I32x8, M32x8, U32x8};

@@ -1,0 +1,527 @@
+//! naga → packet Rust (issue 24, first stage): every WGSL function becomes a Rust function
+//! generic over a SIMD level `S: uplift_simd::Simd`, computing one packet of points per call —
+//! a WGSL `f32` is an `S::F` (lane k = point k), `i32`/`u32` are `S::I`/`S::U`, `bool` is a
+//! mask `S::M`, and `vecN<f32>` is `[S::F; N]` (structure of arrays). Operations are the SIMD
+//! layer's (`uplift_simd`), whose semantics are WGSL's, so the packet functions compute what
+//! the scalar writer's (`backend_rust.rs`, the oracle) compute, lane by lane.
+//!
+//! This stage covers straight-line code: literals and constants (splatted), arguments, scalar
+//! and f32-vector arithmetic, comparisons, `select`, conversions between f32, i32 and u32,
+//! swizzles and component access, local variables, calls between the module's functions, and
+//! the math built-ins the layer has (transcendentals run lane by lane through `F32s::map`).
+//! Control flow (`if`, `switch`, loops, early returns) is the next stage: it needs the
+//! variance analysis (`variance.rs`) to keep uniform branches scalar and masks for the others;
+//! here it is a [`PacketError`] naming the construct, as are structs, matrices, arrays,
+//! textures and integer or boolean vectors. Generated code has no `unsafe`.
+
+use naga::proc::{CaseInsensitiveKeywordSet, KeywordSet, NameKey, Namer};
+use naga::{BinaryOperator as Bo, Expression as E, Function, Handle, Literal, MathFunction as Mf, Module, ScalarKind, Statement, TypeInner, UnaryOperator as Uo, VectorSize};
+use std::collections::HashMap;
+use std::fmt::{self, Write as _};
+
+/// A construct this stage of the packet writer does not handle.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PacketError {
+    pub construct: String,
+    pub function: Option<String>,
+}
+
+impl fmt::Display for PacketError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.function {
+            Some(func) => write!(f, "the packet writer does not handle {} (in `{func}`)", self.construct),
+            None => write!(f, "the packet writer does not handle {}", self.construct),
+        }
+    }
+}
+
+impl std::error::Error for PacketError {}
+
+type R<T> = Result<T, PacketError>;
+
+fn unsupported(what: impl Into<String>) -> PacketError {
+    PacketError { construct: what.into(), function: None }
+}
+
+/// The packet kind of a WGSL type.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Ty {
+    /// A scalar of this kind (`S::F`, `S::I`, `S::U`, `S::M`).
+    Scalar(ScalarKind),
+    /// `vecN<f32>`: `[S::F; N]`.
+    Vec(usize),
+}
+
+fn vsize(s: VectorSize) -> usize {
+    match s {
+        VectorSize::Bi => 2,
+        VectorSize::Tri => 3,
+        VectorSize::Quad => 4,
+    }
+}
+
+fn ty_of(inner: &TypeInner) -> R<Ty> {
+    match *inner {
+        TypeInner::Scalar(s) if s.width == 4 || s.kind == ScalarKind::Bool => Ok(Ty::Scalar(s.kind)),
+        TypeInner::Vector { size, scalar } if scalar.kind == ScalarKind::Float && scalar.width == 4 => Ok(Ty::Vec(vsize(size))),
+        ref other => Err(unsupported(format!("the type {other:?}"))),
+    }
+}
+
+fn rust_type(t: Ty) -> String {
+    match t {
+        Ty::Scalar(ScalarKind::Float) => "S::F".into(),
+        Ty::Scalar(ScalarKind::Sint) => "S::I".into(),
+        Ty::Scalar(ScalarKind::Uint) => "S::U".into(),
+        Ty::Scalar(_) => "S::M".into(),
+        Ty::Vec(n) => format!("[S::F; {n}]"),
+    }
+}
+
+/// Writes every function of `module` as a packet function. The file needs
+/// `use uplift_simd::{F32s, I32s, M32s, Simd, U32s};` (written first).
+pub fn write_packet(module: &Module) -> R<String> {
+    let mut names = naga::FastHashMap::default();
+    let mut namer = Namer::default();
+    namer.reset(module, crate::backend_rust::reserved_set(), KeywordSet::empty(), CaseInsensitiveKeywordSet::empty(), &["_e", "wgsl_"], &mut names);
+    let mut out = String::new();
+    out += "#[allow(unused_imports)]\nuse uplift_simd::{F32s, I32s, M32s, Simd, U32s};\n";
+    for (h, f) in module.functions.iter() {
+        let ctx = naga::proc::ResolveContext::with_locals(module, &f.local_variables, &f.arguments);
+        let mut typifier = naga::front::Typifier::new();
+        for (eh, _) in f.expressions.iter() {
+            typifier.grow(eh, &f.expressions, &ctx).map_err(|e| PacketError { construct: format!("an expression whose type naga cannot resolve ({e})"), function: f.name.clone() })?;
+        }
+        let mut w = FunctionWriter { module, f, names: &names, handle: h, typifier, body: String::new(), calls: HashMap::new() };
+        let text = w.function().map_err(|mut e| {
+            e.function = f.name.clone();
+            e
+        })?;
+        out += "\n";
+        out += &text;
+    }
+    Ok(out)
+}
+
+struct FunctionWriter<'a> {
+    module: &'a Module,
+    f: &'a Function,
+    names: &'a naga::FastHashMap<NameKey, String>,
+    handle: Handle<Function>,
+    /// The type of every expression.
+    typifier: naga::front::Typifier,
+    body: String,
+    /// Call results: the name of the `let` holding each.
+    calls: HashMap<Handle<naga::Expression>, String>,
+}
+
+impl FunctionWriter<'_> {
+    fn function(&mut self) -> R<String> {
+        let name = &self.names[&NameKey::Function(self.handle)];
+        let mut params = vec!["s: S".to_string()];
+        for (i, a) in self.f.arguments.iter().enumerate() {
+            let t = ty_of(&self.module.types[a.ty].inner)?;
+            params.push(format!("{}: {}", self.names[&NameKey::FunctionArgument(self.handle, i as u32)], rust_type(t)));
+        }
+        let ret = match &self.f.result {
+            Some(r) => format!(" -> {}", rust_type(ty_of(&self.module.types[r.ty].inner)?)),
+            None => String::new(),
+        };
+        for (lh, l) in self.f.local_variables.iter() {
+            let t = ty_of(&self.module.types[l.ty].inner)?;
+            let init = match l.init {
+                Some(e) => self.expr(e)?,
+                None => self.zero(t),
+            };
+            let _ = writeln!(self.body, "    let mut {}: {} = {init};", self.names[&NameKey::FunctionLocal(self.handle, lh)], rust_type(t));
+        }
+        for s in self.f.body.iter() {
+            self.statement(s)?;
+        }
+        Ok(format!("#[inline(always)]\n#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]\npub fn {name}<S: Simd>({}){ret} {{\n{}}}\n", params.join(", "), self.body))
+    }
+
+    fn ty(&self, h: Handle<naga::Expression>) -> R<Ty> {
+        ty_of(&self.resolve(h)?)
+    }
+
+    /// The type of an expression.
+    fn resolve(&self, h: Handle<naga::Expression>) -> R<TypeInner> {
+        Ok(self.typifier.get(h, &self.module.types).clone())
+    }
+
+    fn zero(&self, t: Ty) -> String {
+        match t {
+            Ty::Scalar(ScalarKind::Float) => "s.splat(0.0)".into(),
+            Ty::Scalar(ScalarKind::Sint) => "s.splat_i(0)".into(),
+            Ty::Scalar(ScalarKind::Uint) => "s.splat_u(0)".into(),
+            Ty::Scalar(_) => "s.first_lanes(0)".into(),
+            Ty::Vec(n) => format!("[s.splat(0.0); {n}]"),
+        }
+    }
+
+    fn statement(&mut self, s: &Statement) -> R<()> {
+        match s {
+            Statement::Emit(range) => {
+                for h in range.clone() {
+                    if matches!(self.resolve(h)?, TypeInner::Pointer { .. } | TypeInner::ValuePointer { .. }) {
+                        continue;
+                    }
+                    let e = self.expr_inline(h)?;
+                    let _ = writeln!(self.body, "    let _e{} = {e};", h.index());
+                }
+            }
+            Statement::Block(b) => {
+                for s in b.iter() {
+                    self.statement(s)?;
+                }
+            }
+            Statement::Store { pointer, value } => {
+                let place = self.place(*pointer)?;
+                let v = self.expr(*value)?;
+                let _ = writeln!(self.body, "    {place} = {v};");
+            }
+            Statement::Return { value: Some(v) } => {
+                let v = self.expr(*v)?;
+                let _ = writeln!(self.body, "    return {v};");
+            }
+            Statement::Return { value: None } => {
+                let _ = writeln!(self.body, "    return;");
+            }
+            Statement::Call { function, arguments, result } => {
+                let mut args = vec!["s".to_string()];
+                for a in arguments {
+                    args.push(self.expr(*a)?);
+                }
+                let call = format!("{}(s{})", self.names[&NameKey::Function(*function)], args[1..].iter().map(|a| format!(", {a}")).collect::<String>());
+                match result {
+                    Some(r) => {
+                        let name = format!("_e{}", r.index());
+                        let _ = writeln!(self.body, "    let {name} = {call};");
+                        self.calls.insert(*r, name);
+                    }
+                    None => {
+                        let _ = writeln!(self.body, "    {call};");
+                    }
+                }
+            }
+            Statement::If { .. } => return Err(unsupported("`if` (control flow is the next stage)")),
+            Statement::Switch { .. } => return Err(unsupported("`switch` (control flow is the next stage)")),
+            Statement::Loop { .. } => return Err(unsupported("loops (control flow is the next stage)")),
+            other => return Err(unsupported(format!("the statement {other:?}"))),
+        }
+        Ok(())
+    }
+
+    /// A local variable, or one component of a vector local, as an assignable place.
+    fn place(&self, pointer: Handle<naga::Expression>) -> R<String> {
+        match &self.f.expressions[pointer] {
+            E::LocalVariable(l) => Ok(self.names[&NameKey::FunctionLocal(self.handle, *l)].clone()),
+            E::AccessIndex { base, index } => Ok(format!("{}[{index}]", self.place(*base)?)),
+            other => Err(unsupported(format!("a store through {other:?}"))),
+        }
+    }
+
+    /// A reference to an expression already bound (by `Emit` or a call), or written in place
+    /// for those naga never emits (literals, constants, arguments, zero values).
+    fn expr(&mut self, h: Handle<naga::Expression>) -> R<String> {
+        match &self.f.expressions[h] {
+            E::Literal(_) | E::Constant(_) | E::ZeroValue(_) | E::FunctionArgument(_) | E::LocalVariable(_) => self.expr_inline(h),
+            E::CallResult(_) => self.calls.get(&h).cloned().ok_or_else(|| unsupported("a call result used before its call")),
+            _ => Ok(format!("_e{}", h.index())),
+        }
+    }
+
+    fn literal(&self, l: &Literal) -> R<String> {
+        Ok(match *l {
+            Literal::F32(x) => format!("s.splat({x:?}f32)"),
+            Literal::I32(x) => format!("s.splat_i({x}i32)"),
+            Literal::U32(x) => format!("s.splat_u({x}u32)"),
+            Literal::Bool(b) => format!("s.first_lanes({})", if b { "usize::MAX" } else { "0" }),
+            other => return Err(unsupported(format!("the literal {other:?}"))),
+        })
+    }
+
+    /// A module constant, written as a packet value.
+    fn constant(&self, h: Handle<naga::Expression>) -> R<String> {
+        match &self.module.global_expressions[h] {
+            E::Literal(l) => self.literal(l),
+            E::Constant(c) => self.constant(self.module.constants[*c].init),
+            E::Compose { components, .. } => {
+                let parts: R<Vec<String>> = components.iter().map(|c| self.constant(*c)).collect();
+                Ok(format!("[{}]", parts?.join(", ")))
+            }
+            E::Splat { size, value } => Ok(format!("[{}; {}]", self.constant(*value)?, vsize(*size))),
+            E::ZeroValue(t) => Ok(self.zero(ty_of(&self.module.types[*t].inner)?)),
+            other => Err(unsupported(format!("the constant expression {other:?}"))),
+        }
+    }
+
+    /// The expression `h` written out (its operands by reference).
+    fn expr_inline(&mut self, h: Handle<naga::Expression>) -> R<String> {
+        let e = self.f.expressions[h].clone();
+        Ok(match e {
+            E::Literal(l) => self.literal(&l)?,
+            E::Constant(c) => self.constant(self.module.constants[c].init)?,
+            E::ZeroValue(t) => self.zero(ty_of(&self.module.types[t].inner)?),
+            E::FunctionArgument(i) => self.names[&NameKey::FunctionArgument(self.handle, i)].clone(),
+            E::LocalVariable(l) => self.names[&NameKey::FunctionLocal(self.handle, l)].clone(),
+            E::Load { pointer } => self.place(pointer)?,
+            E::Compose { components, .. } => {
+                let mut lanes = Vec::new();
+                for c in components {
+                    let v = self.expr(c)?;
+                    match self.ty(c)? {
+                        Ty::Vec(n) => lanes.extend((0..n).map(|k| format!("{v}[{k}]"))),
+                        _ => lanes.push(v),
+                    }
+                }
+                format!("[{}]", lanes.join(", "))
+            }
+            E::Splat { size, value } => format!("[{}; {}]", self.expr(value)?, vsize(size)),
+            E::Swizzle { size, vector, pattern } => {
+                let v = self.expr(vector)?;
+                let parts: Vec<String> = pattern[..vsize(size)].iter().map(|c| format!("{v}[{}]", *c as usize)).collect();
+                format!("[{}]", parts.join(", "))
+            }
+            E::AccessIndex { base, index } => match self.resolve(base)? {
+                TypeInner::Vector { .. } => format!("{}[{index}]", self.expr(base)?),
+                other => return Err(unsupported(format!("a component of {other:?}"))),
+            },
+            E::Unary { op, expr } => {
+                let a = self.expr(expr)?;
+                match (op, self.ty(expr)?) {
+                    (Uo::Negate, Ty::Vec(n)) => format!("uplift_simd::vector::neg::<S, {n}>({a})"),
+                    (Uo::Negate, _) => format!("-{a}"),
+                    (Uo::LogicalNot | Uo::BitwiseNot, Ty::Scalar(_)) => format!("!{a}"),
+                    (op, t) => return Err(unsupported(format!("{op:?} on {t:?}"))),
+                }
+            }
+            E::Binary { op, left, right } => self.binary(op, left, right)?,
+            E::Select { condition, accept, reject } => {
+                let (c, a, r) = (self.expr(condition)?, self.expr(accept)?, self.expr(reject)?);
+                match (self.ty(condition)?, self.ty(accept)?) {
+                    (Ty::Scalar(_), Ty::Scalar(ScalarKind::Float)) => format!("{c}.select({a}, {r})"),
+                    (Ty::Scalar(_), Ty::Scalar(ScalarKind::Sint)) => format!("{c}.select_i({a}, {r})"),
+                    (Ty::Scalar(_), Ty::Scalar(ScalarKind::Uint)) => format!("{c}.select_u({a}, {r})"),
+                    (Ty::Scalar(_), Ty::Scalar(_)) => format!("(({c} & {a}) | (!{c} & {r}))"),
+                    (Ty::Scalar(_), Ty::Vec(n)) => format!("uplift_simd::vector::select_all::<S, {n}>({c}, {a}, {r})"),
+                    (c, v) => return Err(unsupported(format!("select of {v:?} by {c:?}"))),
+                }
+            }
+            E::As { expr, kind, convert } => {
+                let a = self.expr(expr)?;
+                let from = match self.ty(expr)? {
+                    Ty::Scalar(k) => k,
+                    t => return Err(unsupported(format!("a conversion of {t:?}"))),
+                };
+                match (from, kind, convert) {
+                    (ScalarKind::Float, ScalarKind::Sint, Some(4)) => format!("{a}.to_i32()"),
+                    (ScalarKind::Float, ScalarKind::Uint, Some(4)) => format!("{a}.to_u32()"),
+                    (ScalarKind::Sint | ScalarKind::Uint, ScalarKind::Float, Some(4)) => format!("{a}.to_f32()"),
+                    (ScalarKind::Float, ScalarKind::Uint, None) => format!("{a}.to_bits()"),
+                    (ScalarKind::Uint, ScalarKind::Float, None) => format!("{a}.to_f32_bits()"),
+                    (ScalarKind::Sint, ScalarKind::Uint, _) => format!("{a}.to_u32_bits()"),
+                    (ScalarKind::Uint, ScalarKind::Sint, _) => format!("{a}.to_i32_bits()"),
+                    (f, t, _) if f == t => a,
+                    (f, t, c) => return Err(unsupported(format!("the conversion {f:?} → {t:?} ({c:?})"))),
+                }
+            }
+            E::Relational { fun, argument } => {
+                let a = self.expr(argument)?;
+                let n = match self.resolve(argument)? {
+                    TypeInner::Vector { size, .. } => vsize(size),
+                    _ => 1,
+                };
+                let sym = match fun {
+                    naga::RelationalFunction::All => " & ",
+                    naga::RelationalFunction::Any => " | ",
+                    other => return Err(unsupported(format!("{other:?}"))),
+                };
+                if n == 1 {
+                    a
+                } else {
+                    format!("({})", (0..n).map(|k| format!("{a}[{k}]")).collect::<Vec<_>>().join(sym))
+                }
+            }
+            E::Math { fun, arg, arg1, arg2, .. } => self.math(fun, arg, arg1, arg2)?,
+            E::CallResult(_) => self.expr(h)?,
+            other => return Err(unsupported(format!("the expression {other:?}"))),
+        })
+    }
+
+    fn binary(&mut self, op: Bo, left: Handle<naga::Expression>, right: Handle<naga::Expression>) -> R<String> {
+        let (l, r) = (self.expr(left)?, self.expr(right)?);
+        let (lt, rt) = (self.ty(left)?, self.ty(right)?);
+        let vector_op = match op {
+            Bo::Add => Some("add"),
+            Bo::Subtract => Some("sub"),
+            Bo::Multiply => Some("mul"),
+            Bo::Divide => Some("div"),
+            _ => None,
+        };
+        if let (Some(name), Ty::Vec(_) | Ty::Scalar(ScalarKind::Float), Ty::Vec(_) | Ty::Scalar(ScalarKind::Float)) = (vector_op, lt, rt) {
+            return Ok(match (lt, rt) {
+                (Ty::Vec(n), Ty::Vec(_)) => format!("uplift_simd::vector::{name}::<S, {n}>({l}, {r})"),
+                (Ty::Vec(n), _) => format!("uplift_simd::vector::{name}::<S, {n}>({l}, [{r}; {n}])"),
+                (_, Ty::Vec(n)) => format!("uplift_simd::vector::{name}::<S, {n}>([{l}; {n}], {r})"),
+                _ => format!("({l} {} {r})", ["+", "-", "*", "/"][["add", "sub", "mul", "div"].iter().position(|x| *x == name).unwrap()]),
+            });
+        }
+        let (Ty::Scalar(kind), Ty::Scalar(_)) = (lt, rt) else {
+            return Err(unsupported(format!("{op:?} on {lt:?} and {rt:?}")));
+        };
+        let float = kind == ScalarKind::Float;
+        Ok(match op {
+            Bo::Add | Bo::Subtract | Bo::Multiply if !float && kind != ScalarKind::Bool => {
+                format!("({l} {} {r})", match op {
+                    Bo::Add => "+",
+                    Bo::Subtract => "-",
+                    _ => "*",
+                })
+            }
+            Bo::Divide if !float => format!("{l}.div({r})"),
+            Bo::Modulo if !float => format!("{l}.rem({r})"),
+            Bo::Modulo => format!("({l} - {r} * ({l} / {r}).trunc())"),
+            Bo::Equal if kind == ScalarKind::Bool => format!("!({l} ^ {r})"),
+            Bo::NotEqual if kind == ScalarKind::Bool => format!("({l} ^ {r})"),
+            Bo::Equal => format!("{l}.eq({r})"),
+            Bo::NotEqual if float => format!("{l}.ne({r})"),
+            Bo::NotEqual => format!("!{l}.eq({r})"),
+            Bo::Less => format!("{l}.lt({r})"),
+            Bo::Greater => format!("{l}.gt({r})"),
+            Bo::LessEqual if float => format!("{l}.le({r})"),
+            Bo::GreaterEqual if float => format!("{l}.ge({r})"),
+            Bo::LessEqual => format!("!{l}.gt({r})"),
+            Bo::GreaterEqual => format!("!{l}.lt({r})"),
+            Bo::And | Bo::LogicalAnd => format!("({l} & {r})"),
+            Bo::InclusiveOr | Bo::LogicalOr => format!("({l} | {r})"),
+            Bo::ExclusiveOr => format!("({l} ^ {r})"),
+            Bo::ShiftLeft => format!("{l}.shl({r})"),
+            Bo::ShiftRight => format!("{l}.shr({r})"),
+            other => return Err(unsupported(format!("{other:?} on {kind:?}"))),
+        })
+    }
+
+    fn math(&mut self, fun: Mf, arg: Handle<naga::Expression>, arg1: Option<Handle<naga::Expression>>, arg2: Option<Handle<naga::Expression>>) -> R<String> {
+        let a = self.expr(arg)?;
+        let b = arg1.map(|h| self.expr(h)).transpose()?;
+        let c = arg2.map(|h| self.expr(h)).transpose()?;
+        let t = self.ty(arg)?;
+        let b = || b.clone().ok_or_else(|| unsupported(format!("{fun:?} without its second argument")));
+        let c = || c.clone().ok_or_else(|| unsupported(format!("{fun:?} without its third argument")));
+        // Lane-wise on a scalar: the expression over `x` (and `y`, `z`).
+        let unary = |body: &str| -> String {
+            match t {
+                Ty::Vec(n) => format!("uplift_simd::vector::map::<S, {n}>({a}, |x| {body})"),
+                _ => format!("{{ let x = {a}; {body} }}"),
+            }
+        };
+        if t == Ty::Scalar(ScalarKind::Sint) || t == Ty::Scalar(ScalarKind::Uint) {
+            return Ok(match fun {
+                Mf::Abs if t == Ty::Scalar(ScalarKind::Sint) => format!("{a}.abs()"),
+                Mf::Abs => a,
+                Mf::Min => format!("{a}.min({})", b()?),
+                Mf::Max => format!("{a}.max({})", b()?),
+                Mf::Clamp => format!("{a}.max({}).min({})", b()?, c()?),
+                other => return Err(unsupported(format!("{other:?} on integers"))),
+            });
+        }
+        let binary = |body: &str, second: String| -> String {
+            match t {
+                Ty::Vec(n) => format!("uplift_simd::vector::zip::<S, {n}>({a}, {second}, |x, y| {body})"),
+                _ => format!("{{ let (x, y) = ({a}, {second}); {body} }}"),
+            }
+        };
+        // A second operand of a vector function may be a scalar (WGSL's overloads): splat it.
+        let widen = |h: Option<Handle<naga::Expression>>, v: String, w: &Self| -> R<String> {
+            Ok(match (t, h.map(|h| w.ty(h)).transpose()?) {
+                (Ty::Vec(n), Some(Ty::Scalar(_))) => format!("[{v}; {n}]"),
+                _ => v,
+            })
+        };
+        Ok(match fun {
+            Mf::Abs => unary("x.abs()"),
+            Mf::Floor => unary("x.floor()"),
+            Mf::Ceil => unary("x.ceil()"),
+            Mf::Round => unary("x.round()"),
+            Mf::Trunc => unary("x.trunc()"),
+            Mf::Fract => unary("x.fract()"),
+            Mf::Sqrt => unary("x.sqrt()"),
+            Mf::InverseSqrt => unary("s.splat(1.0) / x.sqrt()"),
+            Mf::Saturate => unary("x.max(s.splat(0.0)).min(s.splat(1.0))"),
+            Mf::Sin => unary("x.map(f32::sin)"),
+            Mf::Cos => unary("x.map(f32::cos)"),
+            Mf::Tan => unary("x.map(f32::tan)"),
+            Mf::Asin => unary("x.map(f32::asin)"),
+            Mf::Acos => unary("x.map(f32::acos)"),
+            Mf::Atan => unary("x.map(f32::atan)"),
+            Mf::Exp => unary("x.map(f32::exp)"),
+            Mf::Exp2 => unary("x.map(f32::exp2)"),
+            Mf::Log => unary("x.map(f32::ln)"),
+            Mf::Log2 => unary("x.map(f32::log2)"),
+            Mf::Min => binary("x.min(y)", widen(arg1, b()?, self)?),
+            Mf::Max => binary("x.max(y)", widen(arg1, b()?, self)?),
+            Mf::Step => binary("x.le(y).select(s.splat(1.0), s.splat(0.0))", widen(arg1, b()?, self)?),
+            Mf::Clamp => match t {
+                Ty::Vec(n) => format!(
+                    "uplift_simd::vector::zip::<S, {n}>(uplift_simd::vector::zip::<S, {n}>({a}, {}, |x, y| x.max(y)), {}, |x, y| x.min(y))",
+                    widen(arg1, b()?, self)?,
+                    widen(arg2, c()?, self)?
+                ),
+                _ => format!("{a}.max({}).min({})", b()?, c()?),
+            },
+            Mf::Fma => match t {
+                Ty::Vec(n) => format!("{{ let (p, q, r) = ({a}, {}, {}); std::array::from_fn::<_, {n}, _>(|k| p[k].mul_add(q[k], r[k])) }}", b()?, c()?),
+                _ => format!("{a}.mul_add({}, {})", b()?, c()?),
+            },
+            Mf::Mix => match t {
+                Ty::Vec(n) => format!("uplift_simd::vector::mix::<S, {n}>(s, {a}, {}, {})", widen(arg1, b()?, self)?, widen(arg2, c()?, self)?),
+                _ => format!("{{ let t = {}; {a} * (s.splat(1.0) - t) + {} * t }}", c()?, b()?),
+            },
+            Mf::Dot => match t {
+                Ty::Vec(n) => format!("uplift_simd::vector::dot::<S, {n}>({a}, {})", b()?),
+                _ => return Err(unsupported("dot of scalars")),
+            },
+            Mf::Length => match t {
+                Ty::Vec(n) => format!("uplift_simd::vector::length::<S, {n}>({a})"),
+                _ => format!("{a}.abs()"),
+            },
+            Mf::Distance => match t {
+                Ty::Vec(n) => format!("uplift_simd::vector::length::<S, {n}>(uplift_simd::vector::sub::<S, {n}>({a}, {}))", b()?),
+                _ => format!("({a} - {}).abs()", b()?),
+            },
+            Mf::Normalize => match t {
+                Ty::Vec(n) => format!("uplift_simd::vector::normalize::<S, {n}>({a})"),
+                _ => return Err(unsupported("normalize of a scalar")),
+            },
+            Mf::Cross => format!("uplift_simd::vector::cross::<S>({a}, {})", b()?),
+            other => return Err(unsupported(format!("the built-in {other:?}"))),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn packet(src: &str) -> R<String> {
+        let m = naga::front::wgsl::parse_str(src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
+        write_packet(&m)
+    }
+
+    #[test]
+    fn straight_line_functions_become_generic_packet_functions() {
+        let rs = packet("fn f(a: f32, v: vec3<f32>) -> vec3<f32> { let d = dot(v, v); return v * a + vec3(d); }").unwrap();
+        assert!(rs.contains("pub fn f<S: Simd>(s: S, a: S::F, v: [S::F; 3]) -> [S::F; 3]"), "{rs}");
+        assert!(rs.contains("uplift_simd::vector::dot::<S, 3>(v, v)"), "{rs}");
+        assert!(!rs.contains("unsafe"), "{rs}");
+    }
+
+    #[test]
+    fn control_flow_is_named_as_the_next_stage() {
+        let e = packet("fn f(a: f32) -> f32 { if (a > 0.0) { return 1.0; } return 2.0; }").unwrap_err();
+        assert_eq!(e.function.as_deref(), Some("f"));
+        assert!(e.to_string().contains("`if`"), "{e}");
+    }
+}

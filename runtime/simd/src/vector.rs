@@ -1,0 +1,91 @@
+//! WGSL's vector operations on structure-of-arrays packets: a `vecN<f32>` of a packet kernel is
+//! `[S::F; N]` (lane k of component c is point k's component c), and these are the lane-wise
+//! operations the packet Rust writer calls on them. Scalar operands are packets (the writer
+//! splats uniform ones).
+
+use crate::packets::{F32s, M32s, Simd};
+
+#[inline(always)]
+pub fn map<S: Simd, const N: usize>(a: [S::F; N], f: impl Fn(S::F) -> S::F) -> [S::F; N] {
+    std::array::from_fn(|c| f(a[c]))
+}
+
+#[inline(always)]
+pub fn zip<S: Simd, const N: usize>(a: [S::F; N], b: [S::F; N], f: impl Fn(S::F, S::F) -> S::F) -> [S::F; N] {
+    std::array::from_fn(|c| f(a[c], b[c]))
+}
+
+#[inline(always)]
+pub fn splat<S: Simd, const N: usize>(x: S::F) -> [S::F; N] {
+    [x; N]
+}
+
+#[inline(always)]
+pub fn add<S: Simd, const N: usize>(a: [S::F; N], b: [S::F; N]) -> [S::F; N] {
+    zip::<S, N>(a, b, |x, y| x + y)
+}
+
+#[inline(always)]
+pub fn sub<S: Simd, const N: usize>(a: [S::F; N], b: [S::F; N]) -> [S::F; N] {
+    zip::<S, N>(a, b, |x, y| x - y)
+}
+
+#[inline(always)]
+pub fn mul<S: Simd, const N: usize>(a: [S::F; N], b: [S::F; N]) -> [S::F; N] {
+    zip::<S, N>(a, b, |x, y| x * y)
+}
+
+#[inline(always)]
+pub fn div<S: Simd, const N: usize>(a: [S::F; N], b: [S::F; N]) -> [S::F; N] {
+    zip::<S, N>(a, b, |x, y| x / y)
+}
+
+#[inline(always)]
+pub fn neg<S: Simd, const N: usize>(a: [S::F; N]) -> [S::F; N] {
+    map::<S, N>(a, |x| -x)
+}
+
+/// Σ aᵢbᵢ in component order, unfused (as the scalar writer's `dot`).
+#[inline(always)]
+pub fn dot<S: Simd, const N: usize>(a: [S::F; N], b: [S::F; N]) -> S::F {
+    let mut acc = a[0] * b[0];
+    for c in 1..N {
+        acc = acc + a[c] * b[c];
+    }
+    acc
+}
+
+#[inline(always)]
+pub fn length<S: Simd, const N: usize>(a: [S::F; N]) -> S::F {
+    dot::<S, N>(a, a).sqrt()
+}
+
+#[inline(always)]
+pub fn normalize<S: Simd, const N: usize>(a: [S::F; N]) -> [S::F; N] {
+    let l = length::<S, N>(a);
+    map::<S, N>(a, |x| x / l)
+}
+
+#[inline(always)]
+pub fn cross<S: Simd>(a: [S::F; 3], b: [S::F; 3]) -> [S::F; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+/// WGSL `mix(a, b, t) = a·(1 − t) + b·t`, lane-wise.
+#[inline(always)]
+pub fn mix<S: Simd, const N: usize>(s: S, a: [S::F; N], b: [S::F; N], t: [S::F; N]) -> [S::F; N] {
+    let one = s.splat(1.0);
+    std::array::from_fn(|c| a[c] * (one - t[c]) + b[c] * t[c])
+}
+
+/// Component-wise `select(off, on, m)` with one mask per component.
+#[inline(always)]
+pub fn select<S: Simd, const N: usize>(m: [S::M; N], on: [S::F; N], off: [S::F; N]) -> [S::F; N] {
+    std::array::from_fn(|c| m[c].select(on[c], off[c]))
+}
+
+/// `select` with one mask for every component.
+#[inline(always)]
+pub fn select_all<S: Simd, const N: usize>(m: S::M, on: [S::F; N], off: [S::F; N]) -> [S::F; N] {
+    std::array::from_fn(|c| m.select(on[c], off[c]))
+}
