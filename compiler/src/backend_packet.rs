@@ -9,10 +9,12 @@
 //! and f32-vector arithmetic, comparisons, `select`, conversions between f32, i32 and u32,
 //! swizzles and component access, local variables, calls between the module's functions, and
 //! the math built-ins the layer has (transcendentals run lane by lane through `F32s::map`).
-//! Control flow (`if`, `switch`, loops, early returns) is the next stage: it needs the
-//! variance analysis (`variance.rs`) to keep uniform branches scalar and masks for the others;
-//! here it is a [`PacketError`] naming the construct, as are structs, matrices, arrays,
-//! textures and integer or boolean vectors. Generated code has no `unsafe`.
+//! An `if` runs ISPC's mask-mixed way: each side under the mask of the lanes that take it,
+//! skipped when none does, its stores blended into the locals. `switch`, loops and a `return`
+//! inside an `if` are the next stage (masked loops, return masks, and the variance analysis of
+//! `variance.rs` to keep uniform branches and loop counters scalar); here they are a
+//! [`PacketError`] naming the construct, as are structs, matrices, arrays, textures and integer
+//! or boolean vectors. Generated code has no `unsafe`.
 
 use naga::proc::{CaseInsensitiveKeywordSet, KeywordSet, NameKey, Namer};
 use naga::{BinaryOperator as Bo, Expression as E, Function, Handle, Literal, MathFunction as Mf, Module, ScalarKind, Statement, TypeInner, UnaryOperator as Uo, VectorSize};
@@ -92,7 +94,7 @@ pub fn write_packet(module: &Module) -> R<String> {
         for (eh, _) in f.expressions.iter() {
             typifier.grow(eh, &f.expressions, &ctx).map_err(|e| PacketError { construct: format!("an expression whose type naga cannot resolve ({e})"), function: f.name.clone() })?;
         }
-        let mut w = FunctionWriter { module, f, names: &names, handle: h, typifier, body: String::new(), calls: HashMap::new() };
+        let mut w = FunctionWriter { module, f, names: &names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, calls: HashMap::new() };
         let text = w.function().map_err(|mut e| {
             e.function = f.name.clone();
             e
@@ -111,6 +113,11 @@ struct FunctionWriter<'a> {
     /// The type of every expression.
     typifier: naga::front::Typifier,
     body: String,
+    /// The mask of the active lanes (a Rust expression), inside a varying `if`.
+    mask: Option<String>,
+    /// Nesting of the current block (indentation, and fresh mask names).
+    depth: usize,
+    masks: usize,
     /// Call results: the name of the `let` holding each.
     calls: HashMap<Handle<naga::Expression>, String>,
 }
@@ -168,7 +175,7 @@ impl FunctionWriter<'_> {
                         continue;
                     }
                     let e = self.expr_inline(h)?;
-                    let _ = writeln!(self.body, "    let _e{} = {e};", h.index());
+                    self.line(&format!("let _e{} = {e};", h.index()));
                 }
             }
             Statement::Block(b) => {
@@ -179,14 +186,51 @@ impl FunctionWriter<'_> {
             Statement::Store { pointer, value } => {
                 let place = self.place(*pointer)?;
                 let v = self.expr(*value)?;
-                let _ = writeln!(self.body, "    {place} = {v};");
+                // Under a mask only the active lanes take the stored value.
+                let v = match &self.mask {
+                    None => v,
+                    Some(m) => match self.ty(*value)? {
+                        Ty::Scalar(ScalarKind::Float) => format!("{m}.select({v}, {place})"),
+                        Ty::Scalar(ScalarKind::Sint) => format!("{m}.select_i({v}, {place})"),
+                        Ty::Scalar(ScalarKind::Uint) => format!("{m}.select_u({v}, {place})"),
+                        Ty::Scalar(_) => format!("(({m} & {v}) | (!{m} & {place}))"),
+                        Ty::Vec(n) => format!("uplift_simd::vector::select_all::<S, {n}>({m}, {v}, {place})"),
+                    },
+                };
+                self.line(&format!("{place} = {v};"));
             }
+            Statement::Return { .. } if self.mask.is_some() => return Err(unsupported("`return` inside a varying `if` (the next stage)")),
             Statement::Return { value: Some(v) } => {
                 let v = self.expr(*v)?;
-                let _ = writeln!(self.body, "    return {v};");
+                self.line(&format!("return {v};"));
             }
-            Statement::Return { value: None } => {
-                let _ = writeln!(self.body, "    return;");
+            Statement::Return { value: None } => self.line("return;"),
+            Statement::If { condition, accept, reject } => {
+                // ISPC's mask-mixed `if`: each side runs under its lanes' mask, and is skipped
+                // when no lane takes it; stores inside blend (above).
+                let c = self.expr(*condition)?;
+                let outer = self.mask.clone();
+                for (block, test) in [(accept, c.clone()), (reject, format!("!{c}"))] {
+                    if block.is_empty() {
+                        continue;
+                    }
+                    self.masks += 1;
+                    let m = format!("_m{}", self.masks);
+                    let value = match &outer {
+                        Some(o) => format!("{o} & {test}"),
+                        None => test,
+                    };
+                    self.line(&format!("let {m} = {value};"));
+                    self.line(&format!("if {m}.any() {{"));
+                    self.mask = Some(m);
+                    self.depth += 1;
+                    for st in block.iter() {
+                        self.statement(st)?;
+                    }
+                    self.depth -= 1;
+                    self.line("}");
+                }
+                self.mask = outer;
             }
             Statement::Call { function, arguments, result } => {
                 let mut args = vec!["s".to_string()];
@@ -197,20 +241,21 @@ impl FunctionWriter<'_> {
                 match result {
                     Some(r) => {
                         let name = format!("_e{}", r.index());
-                        let _ = writeln!(self.body, "    let {name} = {call};");
+                        self.line(&format!("let {name} = {call};"));
                         self.calls.insert(*r, name);
                     }
-                    None => {
-                        let _ = writeln!(self.body, "    {call};");
-                    }
+                    None => self.line(&format!("{call};")),
                 }
             }
-            Statement::If { .. } => return Err(unsupported("`if` (control flow is the next stage)")),
             Statement::Switch { .. } => return Err(unsupported("`switch` (control flow is the next stage)")),
             Statement::Loop { .. } => return Err(unsupported("loops (control flow is the next stage)")),
             other => return Err(unsupported(format!("the statement {other:?}"))),
         }
         Ok(())
+    }
+
+    fn line(&mut self, text: &str) {
+        let _ = writeln!(self.body, "{}{text}", "    ".repeat(self.depth));
     }
 
     /// A local variable, or one component of a vector local, as an assignable place.
@@ -519,9 +564,18 @@ mod tests {
     }
 
     #[test]
-    fn control_flow_is_named_as_the_next_stage() {
+    fn control_flow_beyond_this_stage_is_named() {
         let e = packet("fn f(a: f32) -> f32 { if (a > 0.0) { return 1.0; } return 2.0; }").unwrap_err();
         assert_eq!(e.function.as_deref(), Some("f"));
-        assert!(e.to_string().contains("`if`"), "{e}");
+        assert!(e.to_string().contains("`return` inside a varying `if`"), "{e}");
+        let e = packet("fn g(a: f32) -> f32 { var x = a; loop { x += 1.0; if (x > 3.0) { break; } } return x; }").unwrap_err();
+        assert!(e.to_string().contains("loops"), "{e}");
+    }
+
+    #[test]
+    fn a_varying_if_runs_both_sides_under_masks() {
+        let rs = packet("fn f(a: f32) -> f32 { var r = 0.0; if (a > 0.0) { r = a; } else { r = -a; } return r; }").unwrap();
+        assert!(rs.contains("if _m1.any() {") && rs.contains("let _m2 = !"), "{rs}");
+        assert!(rs.contains("r = _m1.select("), "{rs}");
     }
 }

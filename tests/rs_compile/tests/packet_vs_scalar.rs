@@ -1,5 +1,6 @@
 //! The packet writer against the scalar writer (its oracle): every function of
-//! tests/wgsl/packet_straight.wgsl, as packet Rust (tests/out/packet/) on every SIMD level this
+//! tests/wgsl/packet_straight.wgsl and packet_branches.wgsl (varying `if`s, about half the lanes
+//! on each side), as packet Rust (tests/out/packet/) on every SIMD level this
 //! machine has (plus `Emu<16>` and `Emu<1>`), and as scalar Rust (tests/out/rs_wgsl/), on the
 //! same seeded inputs — lanes differ from each other, so a lane mix-up fails. Values must agree
 //! to 1e-5 relative (`max(1, |x|)`): the writers may order a dot product's sums differently
@@ -7,7 +8,9 @@
 //! integers and exact operations agree bit for bit within that bound.
 
 use glam::{Vec2, Vec3, Vec4};
+use uplift_rs_snapshots::packet_packet_branches as pb;
 use uplift_rs_snapshots::packet_packet_straight as p;
+use uplift_rs_snapshots::wgsl_packet_branches as sb;
 use uplift_rs_snapshots::wgsl_packet_straight as sc;
 use uplift_simd::{F32s, I32s, Level, Simd, WithSimd};
 
@@ -87,6 +90,10 @@ impl WithSimd for Compare {
             lanes(s, |i| cols::<S, 1>([p::converts(s, s.load(&a[i..])).to_f32()])),
             &|i| vec![sc::converts(a[i]) as f32],
         );
+        // Varying ifs: inputs in [-3, 3] and [0, 1] send lanes both ways.
+        check("branches", lanes(s, |i| cols::<S, 1>([pb::branches(s, s.load(&a[i..]), s.load(&b[i..]))])), &|i| vec![sb::branches(a[i], b[i])]);
+        check("nested", lanes(s, |i| cols::<S, 3>(pb::nested(s, v3(&a, &b, &c, i), s.load(&f[i..])))), &|i| sb::nested(Vec3::new(a[i], b[i], c[i]), f[i]).to_array().to_vec());
+        check("flags", lanes(s, |i| cols::<S, 1>([pb::flags(s, s.load(&d[i..]))])), &|i| vec![sb::flags(d[i])]);
         failures
     }
 }

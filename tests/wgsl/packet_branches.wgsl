@@ -1,0 +1,38 @@
+// Varying `if`s for the packet writer (both sides under masks, stores blended): written as packet
+// Rust (tests/out/packet/) and by the scalar writer (the oracle), compared lane by lane in
+// tests/rs_compile/tests/packet_vs_scalar.rs on inputs where lanes take different sides.
+fn branches(a: f32, b: f32) -> f32 {
+    var r = b;
+    if (a > 0.0) {
+        r = a * 2.0;
+    } else {
+        if (b < 0.0) {
+            r = -b;
+        }
+    }
+    return r;
+}
+fn nested(v: vec3<f32>, t: f32) -> vec3<f32> {
+    var out = v;
+    var k = 0;
+    if (t > 0.5) {
+        out = out * t;
+        k = 2;
+        if (v.x < 0.0) {
+            out.y = 7.0;
+            k = k + 1;
+        }
+    } else {
+        out = vec3(t);
+    }
+    return out + vec3(f32(k));
+}
+fn flags(a: f32) -> f32 {
+    var hit = false;
+    var n = 0u;
+    if (abs(a) < 1.0) {
+        hit = true;
+        n = 5u;
+    }
+    return select(0.5, 1.5, hit) + f32(n);
+}
