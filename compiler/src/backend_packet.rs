@@ -10,9 +10,11 @@
 //! swizzles and component access, local variables, calls between the module's functions, and
 //! the math built-ins the layer has (transcendentals run lane by lane through `F32s::map`).
 //! An `if` runs ISPC's mask-mixed way: each side under the mask of the lanes that take it,
-//! skipped when none does, its stores blended into the locals. `switch`, loops and a `return`
-//! inside an `if` are the next stage (masked loops, return masks, and the variance analysis of
-//! `variance.rs` to keep uniform branches and loop counters scalar); here they are a
+//! skipped when none does, its stores blended into the locals; a `return` inside one stores its
+//! lanes' result into `_ret` and marks them done (`_done`, ISPC's return mask), later returns
+//! leave done lanes alone, and the function leaves as soon as every lane is done. `switch` and
+//! loops are the next stage (masked loops, and the variance analysis of `variance.rs` to keep
+//! uniform branches and loop counters scalar); here they are a
 //! [`PacketError`] naming the construct, as are structs, matrices, arrays, textures and integer
 //! or boolean vectors. Generated code has no `unsafe`.
 
@@ -94,7 +96,7 @@ pub fn write_packet(module: &Module) -> R<String> {
         for (eh, _) in f.expressions.iter() {
             typifier.grow(eh, &f.expressions, &ctx).map_err(|e| PacketError { construct: format!("an expression whose type naga cannot resolve ({e})"), function: f.name.clone() })?;
         }
-        let mut w = FunctionWriter { module, f, names: &names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, calls: HashMap::new() };
+        let mut w = FunctionWriter { module, f, names: &names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), calls: HashMap::new() };
         let text = w.function().map_err(|mut e| {
             e.function = f.name.clone();
             e
@@ -103,6 +105,30 @@ pub fn write_packet(module: &Module) -> R<String> {
         out += &text;
     }
     Ok(out)
+}
+
+/// Whether `block` holds a `return` (at any depth).
+fn returns_in(block: &naga::Block) -> bool {
+    block.iter().any(|s| match s {
+        Statement::Return { .. } => true,
+        Statement::Block(b) => returns_in(b),
+        Statement::If { accept, reject, .. } => returns_in(accept) || returns_in(reject),
+        Statement::Switch { cases, .. } => cases.iter().any(|c| returns_in(&c.body)),
+        Statement::Loop { body, continuing, .. } => returns_in(body) || returns_in(continuing),
+        _ => false,
+    })
+}
+
+/// Whether `block` returns from inside an `if` (`inside`: `block` is inside one).
+fn masked_return(block: &naga::Block, inside: bool) -> bool {
+    block.iter().any(|s| match s {
+        Statement::Return { .. } => inside,
+        Statement::Block(b) => masked_return(b, inside),
+        Statement::If { accept, reject, .. } => masked_return(accept, true) || masked_return(reject, true),
+        Statement::Switch { cases, .. } => cases.iter().any(|c| masked_return(&c.body, true)),
+        Statement::Loop { body, continuing, .. } => masked_return(body, true) || masked_return(continuing, true),
+        _ => false,
+    })
 }
 
 struct FunctionWriter<'a> {
@@ -118,6 +144,9 @@ struct FunctionWriter<'a> {
     /// Nesting of the current block (indentation, and fresh mask names).
     depth: usize,
     masks: usize,
+    /// The function returns under a mask somewhere: results gather in `_ret`, and `_done`
+    /// holds the lanes that have returned.
+    returns_masked: bool,
     /// Call results: the name of the `let` holding each.
     calls: HashMap<Handle<naga::Expression>, String>,
 }
@@ -141,6 +170,13 @@ impl FunctionWriter<'_> {
                 None => self.zero(t),
             };
             let _ = writeln!(self.body, "    let mut {}: {} = {init};", self.names[&NameKey::FunctionLocal(self.handle, lh)], rust_type(t));
+        }
+        if self.returns_masked {
+            if let Some(r) = &self.f.result {
+                let t = ty_of(&self.module.types[r.ty].inner)?;
+                let _ = writeln!(self.body, "    let mut _ret: {} = {};", rust_type(t), self.zero(t));
+            }
+            let _ = writeln!(self.body, "    let mut _done = s.first_lanes(0);");
         }
         for s in self.f.body.iter() {
             self.statement(s)?;
@@ -189,17 +225,28 @@ impl FunctionWriter<'_> {
                 // Under a mask only the active lanes take the stored value.
                 let v = match &self.mask {
                     None => v,
-                    Some(m) => match self.ty(*value)? {
-                        Ty::Scalar(ScalarKind::Float) => format!("{m}.select({v}, {place})"),
-                        Ty::Scalar(ScalarKind::Sint) => format!("{m}.select_i({v}, {place})"),
-                        Ty::Scalar(ScalarKind::Uint) => format!("{m}.select_u({v}, {place})"),
-                        Ty::Scalar(_) => format!("(({m} & {v}) | (!{m} & {place}))"),
-                        Ty::Vec(n) => format!("uplift_simd::vector::select_all::<S, {n}>({m}, {v}, {place})"),
-                    },
+                    Some(m) => Self::blend(m, &v, &place, self.ty(*value)?),
                 };
                 self.line(&format!("{place} = {v};"));
             }
-            Statement::Return { .. } if self.mask.is_some() => return Err(unsupported("`return` inside a varying `if` (the next stage)")),
+            // A return under a mask: its lanes take their result now and are done (ISPC's
+            // return mask); later returns leave them alone.
+            Statement::Return { value } if self.mask.is_some() => {
+                let m = self.mask.clone().unwrap();
+                if let Some(v) = value {
+                    let t = self.ty(*v)?;
+                    let v = self.expr(*v)?;
+                    let on = Self::blend(&format!("({m} & !_done)"), &v, "_ret", t);
+                    self.line(&format!("_ret = {on};"));
+                }
+                self.line(&format!("_done = _done | {m};"));
+            }
+            Statement::Return { value: Some(v) } if self.returns_masked => {
+                let t = self.ty(*v)?;
+                let v = self.expr(*v)?;
+                let on = Self::blend("(!_done)", &v, "_ret", t);
+                self.line(&format!("return {on};"));
+            }
             Statement::Return { value: Some(v) } => {
                 let v = self.expr(*v)?;
                 self.line(&format!("return {v};"));
@@ -231,6 +278,10 @@ impl FunctionWriter<'_> {
                     self.line("}");
                 }
                 self.mask = outer;
+                if self.returns_masked && returns_in(accept).max(returns_in(reject)) {
+                    let done = if self.f.result.is_some() { "return _ret;" } else { "return;" };
+                    self.line(&format!("if _done.all() {{ {done} }}"));
+                }
             }
             Statement::Call { function, arguments, result } => {
                 let mut args = vec!["s".to_string()];
@@ -252,6 +303,17 @@ impl FunctionWriter<'_> {
             other => return Err(unsupported(format!("the statement {other:?}"))),
         }
         Ok(())
+    }
+
+    /// `on` where mask `m` is on, else `off`, for a value of type `t`.
+    fn blend(m: &str, on: &str, off: &str, t: Ty) -> String {
+        match t {
+            Ty::Scalar(ScalarKind::Float) => format!("{m}.select({on}, {off})"),
+            Ty::Scalar(ScalarKind::Sint) => format!("{m}.select_i({on}, {off})"),
+            Ty::Scalar(ScalarKind::Uint) => format!("{m}.select_u({on}, {off})"),
+            Ty::Scalar(_) => format!("(({m} & {on}) | (!{m} & {off}))"),
+            Ty::Vec(n) => format!("uplift_simd::vector::select_all::<S, {n}>({m}, {on}, {off})"),
+        }
     }
 
     fn line(&mut self, text: &str) {
@@ -565,10 +627,8 @@ mod tests {
 
     #[test]
     fn control_flow_beyond_this_stage_is_named() {
-        let e = packet("fn f(a: f32) -> f32 { if (a > 0.0) { return 1.0; } return 2.0; }").unwrap_err();
-        assert_eq!(e.function.as_deref(), Some("f"));
-        assert!(e.to_string().contains("`return` inside a varying `if`"), "{e}");
         let e = packet("fn g(a: f32) -> f32 { var x = a; loop { x += 1.0; if (x > 3.0) { break; } } return x; }").unwrap_err();
+        assert_eq!(e.function.as_deref(), Some("g"));
         assert!(e.to_string().contains("loops"), "{e}");
     }
 

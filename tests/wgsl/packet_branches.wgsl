@@ -36,3 +36,21 @@ fn flags(a: f32) -> f32 {
     }
     return select(0.5, 1.5, hit) + f32(n);
 }
+fn early(a: f32, b: f32) -> f32 {
+    if (a > 1.0) {
+        return a;
+    }
+    if (b > 0.0) {
+        if (a < -1.0) {
+            return -10.0;
+        }
+        return b * 3.0;
+    }
+    return a + b;
+}
+fn early_vec(v: vec2<f32>) -> vec2<f32> {
+    if (v.x > v.y) {
+        return v.yx;
+    }
+    return v * 2.0;
+}

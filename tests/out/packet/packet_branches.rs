@@ -81,3 +81,53 @@ pub fn flags<S: Simd>(s: S, a_1: S::F) -> S::F {
     let _e16 = (_e13 + _e15);
     return _e16;
 }
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn early<S: Simd>(s: S, a_2: S::F, b_1: S::F) -> S::F {
+    let mut _ret: S::F = s.splat(0.0);
+    let mut _done = s.first_lanes(0);
+    let _e3 = a_2.gt(s.splat(1.0f32));
+    let _m1 = _e3;
+    if _m1.any() {
+        _ret = (_m1 & !_done).select(a_2, _ret);
+        _done = _done | _m1;
+    }
+    if _done.all() { return _ret; }
+    let _e5 = b_1.gt(s.splat(0.0f32));
+    let _m2 = _e5;
+    if _m2.any() {
+        let _e7 = a_2.lt(s.splat(-1.0f32));
+        let _m3 = _m2 & _e7;
+        if _m3.any() {
+            _ret = (_m3 & !_done).select(s.splat(-10.0f32), _ret);
+            _done = _done | _m3;
+        }
+        if _done.all() { return _ret; }
+        let _e10 = (b_1 * s.splat(3.0f32));
+        _ret = (_m2 & !_done).select(_e10, _ret);
+        _done = _done | _m2;
+    }
+    if _done.all() { return _ret; }
+    let _e11 = (a_2 + b_1);
+    return (!_done).select(_e11, _ret);
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn early_vec<S: Simd>(s: S, v_1: [S::F; 2]) -> [S::F; 2] {
+    let mut _ret: [S::F; 2] = [s.splat(0.0); 2];
+    let mut _done = s.first_lanes(0);
+    let _e1 = v_1[0];
+    let _e2 = v_1[1];
+    let _e3 = _e1.gt(_e2);
+    let _m1 = _e3;
+    if _m1.any() {
+        let _e4 = [v_1[1], v_1[0]];
+        _ret = uplift_simd::vector::select_all::<S, 2>((_m1 & !_done), _e4, _ret);
+        _done = _done | _m1;
+    }
+    if _done.all() { return _ret; }
+    let _e6 = uplift_simd::vector::mul::<S, 2>(v_1, [s.splat(2.0f32); 2]);
+    return uplift_simd::vector::select_all::<S, 2>((!_done), _e6, _ret);
+}

@@ -1,6 +1,6 @@
 //! The packet writer against the scalar writer (its oracle): every function of
-//! tests/wgsl/packet_straight.wgsl and packet_branches.wgsl (varying `if`s, about half the lanes
-//! on each side), as packet Rust (tests/out/packet/) on every SIMD level this
+//! tests/wgsl/packet_straight.wgsl and packet_branches.wgsl (varying `if`s and returns inside
+//! them, about half the lanes on each side), as packet Rust (tests/out/packet/) on every SIMD level this
 //! machine has (plus `Emu<16>` and `Emu<1>`), and as scalar Rust (tests/out/rs_wgsl/), on the
 //! same seeded inputs — lanes differ from each other, so a lane mix-up fails. Values must agree
 //! to 1e-5 relative (`max(1, |x|)`): the writers may order a dot product's sums differently
@@ -94,6 +94,9 @@ impl WithSimd for Compare {
         check("branches", lanes(s, |i| cols::<S, 1>([pb::branches(s, s.load(&a[i..]), s.load(&b[i..]))])), &|i| vec![sb::branches(a[i], b[i])]);
         check("nested", lanes(s, |i| cols::<S, 3>(pb::nested(s, v3(&a, &b, &c, i), s.load(&f[i..])))), &|i| sb::nested(Vec3::new(a[i], b[i], c[i]), f[i]).to_array().to_vec());
         check("flags", lanes(s, |i| cols::<S, 1>([pb::flags(s, s.load(&d[i..]))])), &|i| vec![sb::flags(d[i])]);
+        // Returns under masks: lanes leave at different returns.
+        check("early", lanes(s, |i| cols::<S, 1>([pb::early(s, s.load(&a[i..]), s.load(&b[i..]))])), &|i| vec![sb::early(a[i], b[i])]);
+        check("early_vec", lanes(s, |i| cols::<S, 2>(pb::early_vec(s, [s.load(&a[i..]), s.load(&b[i..])]))), &|i| sb::early_vec(Vec2::new(a[i], b[i])).to_array().to_vec());
         failures
     }
 }
