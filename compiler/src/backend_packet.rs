@@ -12,9 +12,11 @@
 //! An `if` runs ISPC's mask-mixed way: each side under the mask of the lanes that take it,
 //! skipped when none does, its stores blended into the locals; a `return` inside one stores its
 //! lanes' result into `_ret` and marks them done (`_done`, ISPC's return mask), later returns
-//! leave done lanes alone, and the function leaves as soon as every lane is done. `switch` and
-//! loops are the next stage (masked loops, and the variance analysis of `variance.rs` to keep
-//! uniform branches and loop counters scalar); here they are a
+//! leave done lanes alone, and the function leaves as soon as every lane is done. A loop runs
+//! while some lane still loops, `break` and `continue` lanes recorded in masks and stores
+//! blended under the looping lanes'. `switch` is the next stage, and so is the variance
+//! analysis of `variance.rs` keeping uniform branches and loop counters scalar (today every
+//! loop and branch is treated as varying: correct, slower); here they are a
 //! [`PacketError`] naming the construct, as are structs, matrices, arrays, textures and integer
 //! or boolean vectors. Generated code has no `unsafe`.
 
@@ -96,7 +98,7 @@ pub fn write_packet(module: &Module) -> R<String> {
         for (eh, _) in f.expressions.iter() {
             typifier.grow(eh, &f.expressions, &ctx).map_err(|e| PacketError { construct: format!("an expression whose type naga cannot resolve ({e})"), function: f.name.clone() })?;
         }
-        let mut w = FunctionWriter { module, f, names: &names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), calls: HashMap::new() };
+        let mut w = FunctionWriter { module, f, names: &names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), loops: Vec::new(), loop_count: 0, calls: HashMap::new() };
         let text = w.function().map_err(|mut e| {
             e.function = f.name.clone();
             e
@@ -114,6 +116,18 @@ fn returns_in(block: &naga::Block) -> bool {
         Statement::Block(b) => returns_in(b),
         Statement::If { accept, reject, .. } => returns_in(accept) || returns_in(reject),
         Statement::Switch { cases, .. } => cases.iter().any(|c| returns_in(&c.body)),
+        Statement::Loop { body, continuing, .. } => returns_in(body) || returns_in(continuing),
+        _ => false,
+    })
+}
+
+/// Whether `block` leaves its loop or function early (`break`, `continue`, `return`), outside
+/// nested loops for the first two.
+fn jumps_in(block: &naga::Block) -> bool {
+    block.iter().any(|s| match s {
+        Statement::Break | Statement::Continue | Statement::Return { .. } => true,
+        Statement::Block(b) => jumps_in(b),
+        Statement::If { accept, reject, .. } => jumps_in(accept) || jumps_in(reject),
         Statement::Loop { body, continuing, .. } => returns_in(body) || returns_in(continuing),
         _ => false,
     })
@@ -147,6 +161,10 @@ struct FunctionWriter<'a> {
     /// The function returns under a mask somewhere: results gather in `_ret`, and `_done`
     /// holds the lanes that have returned.
     returns_masked: bool,
+    /// The loops around the current statement, innermost last: (break lanes, continue lanes,
+    /// looping lanes) variable names.
+    loops: Vec<(String, String, String)>,
+    loop_count: usize,
     /// Call results: the name of the `let` holding each.
     calls: HashMap<Handle<naga::Expression>, String>,
 }
@@ -282,6 +300,77 @@ impl FunctionWriter<'_> {
                     let done = if self.f.result.is_some() { "return _ret;" } else { "return;" };
                     self.line(&format!("if _done.all() {{ {done} }}"));
                 }
+                // Lanes that left the loop (break), its iteration (continue) or the function
+                // inside the `if` sit out the rest of this block.
+                if let (Some((brk, cont, _)), Some(m)) = (self.loops.last().cloned(), self.mask.clone()) {
+                    if jumps_in(accept) || jumps_in(reject) {
+                        self.masks += 1;
+                        let n = format!("_m{}", self.masks);
+                        let done = if self.returns_masked { " & !_done" } else { "" };
+                        self.line(&format!("let {n} = {m} & !{brk} & !{cont}{done};"));
+                        self.mask = Some(n);
+                    }
+                }
+            }
+            Statement::Loop { body, continuing, break_if } => {
+                // A varying loop: it runs while some lane still loops; `break` and `continue`
+                // lanes are recorded in masks (ISPC's loop bookkeeping), stores blend under the
+                // looping lanes' mask.
+                self.loop_count += 1;
+                let k = self.loop_count;
+                let (lm, brk, cont) = (format!("_lm{k}"), format!("_brk{k}"), format!("_cont{k}"));
+                let done = if self.returns_masked { " & !_done" } else { "" };
+                let entry = match &self.mask {
+                    Some(m) => m.clone(),
+                    None if self.returns_masked => "!_done".to_string(),
+                    None => "s.first_lanes(usize::MAX)".to_string(),
+                };
+                self.line(&format!("let mut {lm} = {entry};"));
+                self.line(&format!("let mut {brk} = s.first_lanes(0);"));
+                self.line("loop {");
+                self.depth += 1;
+                self.line(&format!("let mut {cont} = s.first_lanes(0);"));
+                let outer = self.mask.clone();
+                self.loops.push((brk.clone(), cont.clone(), lm.clone()));
+                self.mask = Some(lm.clone());
+                for st in body.iter() {
+                    self.statement(st)?;
+                }
+                // The continuing block: every lane still looping, `continue` ones included.
+                self.masks += 1;
+                let mc = format!("_m{}", self.masks);
+                self.line(&format!("let {mc} = {lm} & !{brk}{done};"));
+                self.mask = Some(mc.clone());
+                for st in continuing.iter() {
+                    self.statement(st)?;
+                }
+                if let Some(b) = break_if {
+                    let c = self.expr(*b)?;
+                    self.line(&format!("{brk} = {brk} | ({mc} & {c});"));
+                }
+                self.line(&format!("{lm} = {lm} & !{brk}{done};"));
+                self.line(&format!("if !{lm}.any() {{ break; }}"));
+                self.depth -= 1;
+                self.line("}");
+                self.loops.pop();
+                self.mask = outer;
+                if self.returns_masked && (returns_in(body) || returns_in(continuing)) {
+                    let ret = if self.f.result.is_some() { "return _ret;" } else { "return;" };
+                    self.line(&format!("if _done.all() {{ {ret} }}"));
+                }
+            }
+            Statement::Break | Statement::Continue => {
+                let Some((brk, cont, _)) = self.loops.last().cloned() else {
+                    return Err(unsupported("`break` or `continue` outside a loop (a switch's)"));
+                };
+                let m = self.mask.clone().unwrap_or_else(|| "s.first_lanes(usize::MAX)".into());
+                let set = if matches!(s, Statement::Break) { brk } else { cont };
+                self.line(&format!("{set} = {set} | {m};"));
+                // Whatever follows in this block runs for no lane.
+                self.masks += 1;
+                let n = format!("_m{}", self.masks);
+                self.line(&format!("let {n} = s.first_lanes(0);"));
+                self.mask = Some(n);
             }
             Statement::Call { function, arguments, result } => {
                 let mut args = vec!["s".to_string()];
@@ -299,7 +388,6 @@ impl FunctionWriter<'_> {
                 }
             }
             Statement::Switch { .. } => return Err(unsupported("`switch` (control flow is the next stage)")),
-            Statement::Loop { .. } => return Err(unsupported("loops (control flow is the next stage)")),
             other => return Err(unsupported(format!("the statement {other:?}"))),
         }
         Ok(())
@@ -627,9 +715,9 @@ mod tests {
 
     #[test]
     fn control_flow_beyond_this_stage_is_named() {
-        let e = packet("fn g(a: f32) -> f32 { var x = a; loop { x += 1.0; if (x > 3.0) { break; } } return x; }").unwrap_err();
+        let e = packet("fn g(a: i32) -> f32 { switch (a) { case 1: { return 1.0; } default: { return 2.0; } } }").unwrap_err();
         assert_eq!(e.function.as_deref(), Some("g"));
-        assert!(e.to_string().contains("loops"), "{e}");
+        assert!(e.to_string().contains("switch"), "{e}");
     }
 
     #[test]

@@ -54,3 +54,51 @@ fn early_vec(v: vec2<f32>) -> vec2<f32> {
     }
     return v * 2.0;
 }
+// Loops: lanes leave at different iterations (break, continue, return, break if).
+fn count_up(x: f32) -> f32 {
+    var acc = 0.0;
+    for (var i = 0; i < 8; i++) {
+        if (f32(i) > x * 3.0) {
+            break;
+        }
+        acc += 1.5;
+    }
+    return acc;
+}
+fn skip_odd(n: i32) -> i32 {
+    var total = 0;
+    var i = 0;
+    loop {
+        if (i >= n) {
+            break;
+        }
+        i++;
+        if (i % 2 == 1) {
+            continue;
+        }
+        total += i;
+    }
+    return total;
+}
+fn find(x: f32) -> f32 {
+    var v = x;
+    for (var k = 0; k < 10; k++) {
+        v = v * 0.5 + 1.0;
+        if (v < 2.1) {
+            return f32(k);
+        }
+    }
+    return -1.0;
+}
+fn halvings(x: f32) -> f32 {
+    var t = abs(x) + 0.2;
+    var n = 0.0;
+    loop {
+        t = t * 0.7;
+        n += 1.0;
+        continuing {
+            break if t < 0.1;
+        }
+    }
+    return n;
+}

@@ -131,3 +131,160 @@ pub fn early_vec<S: Simd>(s: S, v_1: [S::F; 2]) -> [S::F; 2] {
     let _e6 = uplift_simd::vector::mul::<S, 2>(v_1, [s.splat(2.0f32); 2]);
     return uplift_simd::vector::select_all::<S, 2>((!_done), _e6, _ret);
 }
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn count_up<S: Simd>(s: S, x: S::F) -> S::F {
+    let mut acc: S::F = s.splat(0.0f32);
+    let mut i: S::I = s.splat_i(0i32);
+    let mut _lm1 = s.first_lanes(usize::MAX);
+    let mut _brk1 = s.first_lanes(0);
+    loop {
+        let mut _cont1 = s.first_lanes(0);
+        let _e5 = i;
+        let _e7 = _e5.lt(s.splat_i(8i32));
+        let _m1 = _lm1 & !_e7;
+        if _m1.any() {
+            _brk1 = _brk1 | _m1;
+            let _m2 = s.first_lanes(0);
+        }
+        let _m3 = _lm1 & !_brk1 & !_cont1;
+        let _e8 = i;
+        let _e9 = _e8.to_f32();
+        let _e11 = (x * s.splat(3.0f32));
+        let _e12 = _e9.gt(_e11);
+        let _m4 = _m3 & _e12;
+        if _m4.any() {
+            _brk1 = _brk1 | _m4;
+            let _m5 = s.first_lanes(0);
+        }
+        let _m6 = _m3 & !_brk1 & !_cont1;
+        let _e13 = acc;
+        let _e15 = (_e13 + s.splat(1.5f32));
+        acc = _m6.select(_e15, acc);
+        let _m7 = _lm1 & !_brk1;
+        let _e17 = i;
+        let _e18 = (_e17 + s.splat_i(1i32));
+        i = _m7.select_i(_e18, i);
+        _lm1 = _lm1 & !_brk1;
+        if !_lm1.any() { break; }
+    }
+    let _e19 = acc;
+    return _e19;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn skip_odd<S: Simd>(s: S, n_1: S::I) -> S::I {
+    let mut total: S::I = s.splat_i(0i32);
+    let mut i_1: S::I = s.splat_i(0i32);
+    let mut _lm1 = s.first_lanes(usize::MAX);
+    let mut _brk1 = s.first_lanes(0);
+    loop {
+        let mut _cont1 = s.first_lanes(0);
+        let _e5 = i_1;
+        let _e6 = !_e5.lt(n_1);
+        let _m1 = _lm1 & _e6;
+        if _m1.any() {
+            _brk1 = _brk1 | _m1;
+            let _m2 = s.first_lanes(0);
+        }
+        let _m3 = _lm1 & !_brk1 & !_cont1;
+        let _e8 = i_1;
+        let _e9 = (_e8 + s.splat_i(1i32));
+        i_1 = _m3.select_i(_e9, i_1);
+        let _e10 = i_1;
+        let _e12 = _e10.rem(s.splat_i(2i32));
+        let _e14 = _e12.eq(s.splat_i(1i32));
+        let _m4 = _m3 & _e14;
+        if _m4.any() {
+            _cont1 = _cont1 | _m4;
+            let _m5 = s.first_lanes(0);
+        }
+        let _m6 = _m3 & !_brk1 & !_cont1;
+        let _e15 = total;
+        let _e16 = i_1;
+        let _e17 = (_e15 + _e16);
+        total = _m6.select_i(_e17, total);
+        let _m7 = _lm1 & !_brk1;
+        _lm1 = _lm1 & !_brk1;
+        if !_lm1.any() { break; }
+    }
+    let _e18 = total;
+    return _e18;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn find<S: Simd>(s: S, x_1: S::F) -> S::F {
+    let mut v_2: S::F = s.splat(0.0);
+    let mut k_1: S::I = s.splat_i(0i32);
+    let mut _ret: S::F = s.splat(0.0);
+    let mut _done = s.first_lanes(0);
+    v_2 = x_1;
+    let mut _lm1 = !_done;
+    let mut _brk1 = s.first_lanes(0);
+    loop {
+        let mut _cont1 = s.first_lanes(0);
+        let _e4 = k_1;
+        let _e6 = _e4.lt(s.splat_i(10i32));
+        let _m1 = _lm1 & !_e6;
+        if _m1.any() {
+            _brk1 = _brk1 | _m1;
+            let _m2 = s.first_lanes(0);
+        }
+        let _m3 = _lm1 & !_brk1 & !_cont1 & !_done;
+        let _e7 = v_2;
+        let _e9 = (_e7 * s.splat(0.5f32));
+        let _e11 = (_e9 + s.splat(1.0f32));
+        v_2 = _m3.select(_e11, v_2);
+        let _e12 = v_2;
+        let _e14 = _e12.lt(s.splat(2.1f32));
+        let _m4 = _m3 & _e14;
+        if _m4.any() {
+            let _e15 = k_1;
+            let _e16 = _e15.to_f32();
+            _ret = (_m4 & !_done).select(_e16, _ret);
+            _done = _done | _m4;
+        }
+        if _done.all() { return _ret; }
+        let _m5 = _m3 & !_brk1 & !_cont1 & !_done;
+        let _m6 = _lm1 & !_brk1 & !_done;
+        let _e18 = k_1;
+        let _e19 = (_e18 + s.splat_i(1i32));
+        k_1 = _m6.select_i(_e19, k_1);
+        _lm1 = _lm1 & !_brk1 & !_done;
+        if !_lm1.any() { break; }
+    }
+    if _done.all() { return _ret; }
+    return (!_done).select(s.splat(-1.0f32), _ret);
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn halvings<S: Simd>(s: S, x_2: S::F) -> S::F {
+    let mut t_1: S::F = s.splat(0.0);
+    let mut n_2: S::F = s.splat(0.0f32);
+    let _e1 = { let x = x_2; x.abs() };
+    let _e3 = (_e1 + s.splat(0.2f32));
+    t_1 = _e3;
+    let mut _lm1 = s.first_lanes(usize::MAX);
+    let mut _brk1 = s.first_lanes(0);
+    loop {
+        let mut _cont1 = s.first_lanes(0);
+        let _e7 = t_1;
+        let _e9 = (_e7 * s.splat(0.7f32));
+        t_1 = _lm1.select(_e9, t_1);
+        let _e10 = n_2;
+        let _e12 = (_e10 + s.splat(1.0f32));
+        n_2 = _lm1.select(_e12, n_2);
+        let _m1 = _lm1 & !_brk1;
+        let _e13 = t_1;
+        let _e15 = _e13.lt(s.splat(0.1f32));
+        _brk1 = _brk1 | (_m1 & _e15);
+        _lm1 = _lm1 & !_brk1;
+        if !_lm1.any() { break; }
+    }
+    let _e16 = n_2;
+    return _e16;
+}

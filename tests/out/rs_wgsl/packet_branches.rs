@@ -75,3 +75,105 @@ pub fn early_vec(v_1: Vec2) -> Vec2 {
     }
     v_1 * 2.0f32
 }
+
+#[inline(always)]
+#[allow(unused_assignments)]
+pub fn count_up(x: f32) -> f32 {
+    let mut acc: f32 = 0.0f32;
+    let mut i: i32 = 0i32;
+    loop {
+        let _e5 = i;
+        if _e5 < 8i32 {
+        } else {
+            break;
+        }
+        {
+            let _e8 = i;
+            if _e8 as f32 > x * 3.0f32 {
+                break;
+            }
+            let _e13 = acc;
+            acc = _e13 + 1.5f32;
+        }
+        let _e17 = i;
+        i = _e17.wrapping_add(1i32);
+    }
+    let _e19 = acc;
+    _e19
+}
+
+#[inline(always)]
+#[allow(unused_assignments)]
+pub fn skip_odd(n_1: i32) -> i32 {
+    let mut total: i32 = 0i32;
+    let mut i_1: i32 = 0i32;
+    loop {
+        let _e5 = i_1;
+        if _e5 >= n_1 {
+            break;
+        }
+        let _e8 = i_1;
+        i_1 = _e8.wrapping_add(1i32);
+        let _e10 = i_1;
+        if wgsl_rem_i32_i32(_e10, 2i32) == 1i32 {
+            continue;
+        }
+        let _e15 = total;
+        let _e16 = i_1;
+        total = _e15.wrapping_add(_e16);
+    }
+    let _e18 = total;
+    _e18
+}
+
+#[inline(always)]
+#[allow(unused_assignments)]
+pub fn find(x_1: f32) -> f32 {
+    let mut v_2: f32 = 0.0f32;
+    let mut k_1: i32 = 0i32;
+    v_2 = x_1;
+    loop {
+        let _e4 = k_1;
+        if _e4 < 10i32 {
+        } else {
+            break;
+        }
+        {
+            let _e7 = v_2;
+            v_2 = _e7 * 0.5f32 + 1.0f32;
+            let _e12 = v_2;
+            if _e12 < 2.1f32 {
+                let _e15 = k_1;
+                return _e15 as f32;
+            }
+        }
+        let _e18 = k_1;
+        k_1 = _e18.wrapping_add(1i32);
+    }
+    -1.0f32
+}
+
+#[inline(always)]
+#[allow(unused_assignments)]
+pub fn halvings(x_2: f32) -> f32 {
+    let mut t_1: f32 = 0.0f32;
+    let mut n_2: f32 = 0.0f32;
+    t_1 = x_2.abs() + 0.2f32;
+    loop {
+        let _e7 = t_1;
+        t_1 = _e7 * 0.7f32;
+        let _e10 = n_2;
+        n_2 = _e10 + 1.0f32;
+        let _e13 = t_1;
+        if _e13 < 0.1f32 {
+            break;
+        }
+    }
+    let _e16 = n_2;
+    _e16
+}
+
+#[inline(always)]
+fn wgsl_rem_i32_i32(a: i32, b: i32) -> i32 {
+    a.checked_rem(b).unwrap_or(0)
+}

@@ -1,6 +1,6 @@
 //! The packet writer against the scalar writer (its oracle): every function of
-//! tests/wgsl/packet_straight.wgsl and packet_branches.wgsl (varying `if`s and returns inside
-//! them, about half the lanes on each side), as packet Rust (tests/out/packet/) on every SIMD level this
+//! tests/wgsl/packet_straight.wgsl and packet_branches.wgsl (varying `if`s, returns inside them,
+//! loops that lanes leave at different iterations), as packet Rust (tests/out/packet/) on every SIMD level this
 //! machine has (plus `Emu<16>` and `Emu<1>`), and as scalar Rust (tests/out/rs_wgsl/), on the
 //! same seeded inputs — lanes differ from each other, so a lane mix-up fails. Values must agree
 //! to 1e-5 relative (`max(1, |x|)`): the writers may order a dot product's sums differently
@@ -96,6 +96,12 @@ impl WithSimd for Compare {
         check("flags", lanes(s, |i| cols::<S, 1>([pb::flags(s, s.load(&d[i..]))])), &|i| vec![sb::flags(d[i])]);
         // Returns under masks: lanes leave at different returns.
         check("early", lanes(s, |i| cols::<S, 1>([pb::early(s, s.load(&a[i..]), s.load(&b[i..]))])), &|i| vec![sb::early(a[i], b[i])]);
+        // Loops: break, continue, return inside, break if; lanes leave at different iterations.
+        let small: Vec<i32> = ints.iter().map(|x| x.rem_euclid(40) - 5).collect();
+        check("count_up", lanes(s, |i| cols::<S, 1>([pb::count_up(s, s.load(&a[i..]))])), &|i| vec![sb::count_up(a[i])]);
+        check("skip_odd", lanes(s, |i| cols::<S, 1>([pb::skip_odd(s, s.load_i(&small[i..])).to_f32()])), &|i| vec![sb::skip_odd(small[i]) as f32]);
+        check("find", lanes(s, |i| cols::<S, 1>([pb::find(s, s.load(&a[i..]) * s.splat(4.0))])), &|i| vec![sb::find(a[i] * 4.0)]);
+        check("halvings", lanes(s, |i| cols::<S, 1>([pb::halvings(s, s.load(&a[i..]))])), &|i| vec![sb::halvings(a[i])]);
         check("early_vec", lanes(s, |i| cols::<S, 2>(pb::early_vec(s, [s.load(&a[i..]), s.load(&b[i..])]))), &|i| sb::early_vec(Vec2::new(a[i], b[i])).to_array().to_vec());
         failures
     }
