@@ -56,6 +56,8 @@ enum Ty {
     Scalar(ScalarKind),
     /// `vecN<f32>`: `[S::F; N]`.
     Vec(usize),
+    /// A struct: `Name<S>`, its members packets.
+    Struct(Handle<naga::Type>),
 }
 
 fn vsize(s: VectorSize) -> usize {
@@ -74,14 +76,57 @@ fn ty_of(inner: &TypeInner) -> R<Ty> {
     }
 }
 
-fn rust_type(t: Ty) -> String {
+/// The packet kind of the type `th` (structs by handle).
+fn ty_of_handle(module: &Module, th: Handle<naga::Type>) -> R<Ty> {
+    match &module.types[th].inner {
+        TypeInner::Struct { .. } => Ok(Ty::Struct(th)),
+        inner => ty_of(inner),
+    }
+}
+
+fn rust_type(t: Ty, names: &naga::FastHashMap<NameKey, String>) -> String {
     match t {
         Ty::Scalar(ScalarKind::Float) => "S::F".into(),
         Ty::Scalar(ScalarKind::Sint) => "S::I".into(),
         Ty::Scalar(ScalarKind::Uint) => "S::U".into(),
         Ty::Scalar(_) => "S::M".into(),
         Ty::Vec(n) => format!("[S::F; {n}]"),
+        Ty::Struct(th) => format!("{}<S>", names[&NameKey::Type(th)]),
     }
+}
+
+/// `on` where mask `m` is on, else `off`, for a value of type `t`.
+fn blend(m: &str, on: &str, off: &str, t: Ty, names: &naga::FastHashMap<NameKey, String>) -> String {
+    match t {
+        Ty::Scalar(ScalarKind::Float) => format!("{m}.select({on}, {off})"),
+        Ty::Scalar(ScalarKind::Sint) => format!("{m}.select_i({on}, {off})"),
+        Ty::Scalar(ScalarKind::Uint) => format!("{m}.select_u({on}, {off})"),
+        Ty::Scalar(_) => format!("(({m} & {on}) | (!{m} & {off}))"),
+        Ty::Vec(n) => format!("uplift_simd::vector::select_all::<S, {n}>({m}, {on}, {off})"),
+        Ty::Struct(th) => format!("{}::<S>::select({m}, {on}, {off})", names[&NameKey::Type(th)]),
+    }
+}
+
+/// The packet struct for a WGSL struct whose members the writer handles: the struct, and its
+/// lane blend (stores and returns under masks). `None` for others.
+fn write_struct(module: &Module, th: Handle<naga::Type>, names: &naga::FastHashMap<NameKey, String>) -> Option<String> {
+    let TypeInner::Struct { members, .. } = &module.types[th].inner else { return None };
+    let name = &names[&NameKey::Type(th)];
+    let mut fields = String::new();
+    let mut blends = Vec::new();
+    for (k, m) in members.iter().enumerate() {
+        let t = ty_of_handle(module, m.ty).ok()?;
+        if t == Ty::Struct(th) {
+            return None;
+        }
+        let field = &names[&NameKey::StructMember(th, k as u32)];
+        let _ = writeln!(fields, "    pub {field}: {},", rust_type(t, names));
+        blends.push(format!("{field}: {}", blend("m", &format!("on.{field}"), &format!("off.{field}"), t, names)));
+    }
+    Some(format!(
+        "#[derive(Clone, Copy, Debug)]\n#[allow(non_camel_case_types)]\npub struct {name}<S: Simd> {{\n{fields}}}\n\nimpl<S: Simd> {name}<S> {{\n    #[inline(always)]\n    #[allow(unused_parens)]\n    pub fn select(m: S::M, on: Self, off: Self) -> Self {{\n        {name} {{ {} }}\n    }}\n}}\n",
+        blends.join(", ")
+    ))
 }
 
 /// Writes every function of `module` as a packet function. The file needs
@@ -92,6 +137,14 @@ pub fn write_packet(module: &Module) -> R<String> {
     namer.reset(module, crate::backend_rust::reserved_set(), KeywordSet::empty(), CaseInsensitiveKeywordSet::empty(), &["_e", "wgsl_"], &mut names);
     let mut out = String::new();
     out += "#[allow(unused_imports)]\nuse uplift_simd::{F32s, I32s, M32s, Simd, U32s};\n";
+    for (th, t) in module.types.iter() {
+        if matches!(t.inner, TypeInner::Struct { .. }) {
+            if let Some(text) = write_struct(module, th, &names) {
+                out += "\n";
+                out += &text;
+            }
+        }
+    }
     for (h, f) in module.functions.iter() {
         let ctx = naga::proc::ResolveContext::with_locals(module, &f.local_variables, &f.arguments);
         let mut typifier = naga::front::Typifier::new();
@@ -174,25 +227,25 @@ impl FunctionWriter<'_> {
         let name = &self.names[&NameKey::Function(self.handle)];
         let mut params = vec!["s: S".to_string()];
         for (i, a) in self.f.arguments.iter().enumerate() {
-            let t = ty_of(&self.module.types[a.ty].inner)?;
-            params.push(format!("{}: {}", self.names[&NameKey::FunctionArgument(self.handle, i as u32)], rust_type(t)));
+            let t = ty_of_handle(self.module, a.ty)?;
+            params.push(format!("{}: {}", self.names[&NameKey::FunctionArgument(self.handle, i as u32)], rust_type(t, self.names)));
         }
         let ret = match &self.f.result {
-            Some(r) => format!(" -> {}", rust_type(ty_of(&self.module.types[r.ty].inner)?)),
+            Some(r) => format!(" -> {}", rust_type(ty_of_handle(self.module, r.ty)?, self.names)),
             None => String::new(),
         };
         for (lh, l) in self.f.local_variables.iter() {
-            let t = ty_of(&self.module.types[l.ty].inner)?;
+            let t = ty_of_handle(self.module, l.ty)?;
             let init = match l.init {
                 Some(e) => self.expr(e)?,
                 None => self.zero(t),
             };
-            let _ = writeln!(self.body, "    let mut {}: {} = {init};", self.names[&NameKey::FunctionLocal(self.handle, lh)], rust_type(t));
+            let _ = writeln!(self.body, "    let mut {}: {} = {init};", self.names[&NameKey::FunctionLocal(self.handle, lh)], rust_type(t, self.names));
         }
         if self.returns_masked {
             if let Some(r) = &self.f.result {
-                let t = ty_of(&self.module.types[r.ty].inner)?;
-                let _ = writeln!(self.body, "    let mut _ret: {} = {};", rust_type(t), self.zero(t));
+                let t = ty_of_handle(self.module, r.ty)?;
+                let _ = writeln!(self.body, "    let mut _ret: {} = {};", rust_type(t, self.names), self.zero(t));
             }
             let _ = writeln!(self.body, "    let mut _done = s.first_lanes(0);");
         }
@@ -203,7 +256,10 @@ impl FunctionWriter<'_> {
     }
 
     fn ty(&self, h: Handle<naga::Expression>) -> R<Ty> {
-        ty_of(&self.resolve(h)?)
+        match &self.typifier[h] {
+            naga::proc::TypeResolution::Handle(th) => ty_of_handle(self.module, *th),
+            naga::proc::TypeResolution::Value(inner) => ty_of(inner),
+        }
     }
 
     /// The type of an expression.
@@ -213,6 +269,18 @@ impl FunctionWriter<'_> {
 
     fn zero(&self, t: Ty) -> String {
         match t {
+            Ty::Struct(th) => {
+                let TypeInner::Struct { members, .. } = &self.module.types[th].inner else { unreachable!("a struct type") };
+                let fields: Vec<String> = members
+                    .iter()
+                    .enumerate()
+                    .map(|(k, m)| {
+                        let z = ty_of_handle(self.module, m.ty).map(|t| self.zero(t)).unwrap_or_default();
+                        format!("{}: {z}", self.names[&NameKey::StructMember(th, k as u32)])
+                    })
+                    .collect();
+                format!("{} {{ {} }}", self.names[&NameKey::Type(th)], fields.join(", "))
+            }
             Ty::Scalar(ScalarKind::Float) => "s.splat(0.0)".into(),
             Ty::Scalar(ScalarKind::Sint) => "s.splat_i(0)".into(),
             Ty::Scalar(ScalarKind::Uint) => "s.splat_u(0)".into(),
@@ -243,7 +311,7 @@ impl FunctionWriter<'_> {
                 // Under a mask only the active lanes take the stored value.
                 let v = match &self.mask {
                     None => v,
-                    Some(m) => Self::blend(m, &v, &place, self.ty(*value)?),
+                    Some(m) => blend(m, &v, &place, self.ty(*value)?, self.names),
                 };
                 self.line(&format!("{place} = {v};"));
             }
@@ -254,7 +322,7 @@ impl FunctionWriter<'_> {
                 if let Some(v) = value {
                     let t = self.ty(*v)?;
                     let v = self.expr(*v)?;
-                    let on = Self::blend(&format!("({m} & !_done)"), &v, "_ret", t);
+                    let on = blend(&format!("({m} & !_done)"), &v, "_ret", t, self.names);
                     self.line(&format!("_ret = {on};"));
                 }
                 self.line(&format!("_done = _done | {m};"));
@@ -262,7 +330,7 @@ impl FunctionWriter<'_> {
             Statement::Return { value: Some(v) } if self.returns_masked => {
                 let t = self.ty(*v)?;
                 let v = self.expr(*v)?;
-                let on = Self::blend("(!_done)", &v, "_ret", t);
+                let on = blend("(!_done)", &v, "_ret", t, self.names);
                 self.line(&format!("return {on};"));
             }
             Statement::Return { value: Some(v) } => {
@@ -393,17 +461,6 @@ impl FunctionWriter<'_> {
         Ok(())
     }
 
-    /// `on` where mask `m` is on, else `off`, for a value of type `t`.
-    fn blend(m: &str, on: &str, off: &str, t: Ty) -> String {
-        match t {
-            Ty::Scalar(ScalarKind::Float) => format!("{m}.select({on}, {off})"),
-            Ty::Scalar(ScalarKind::Sint) => format!("{m}.select_i({on}, {off})"),
-            Ty::Scalar(ScalarKind::Uint) => format!("{m}.select_u({on}, {off})"),
-            Ty::Scalar(_) => format!("(({m} & {on}) | (!{m} & {off}))"),
-            Ty::Vec(n) => format!("uplift_simd::vector::select_all::<S, {n}>({m}, {on}, {off})"),
-        }
-    }
-
     fn line(&mut self, text: &str) {
         let _ = writeln!(self.body, "{}{text}", "    ".repeat(self.depth));
     }
@@ -412,7 +469,15 @@ impl FunctionWriter<'_> {
     fn place(&self, pointer: Handle<naga::Expression>) -> R<String> {
         match &self.f.expressions[pointer] {
             E::LocalVariable(l) => Ok(self.names[&NameKey::FunctionLocal(self.handle, *l)].clone()),
-            E::AccessIndex { base, index } => Ok(format!("{}[{index}]", self.place(*base)?)),
+            E::AccessIndex { base, index } => {
+                let b = self.place(*base)?;
+                match self.resolve(*base)? {
+                    TypeInner::Pointer { base: th, .. } if matches!(self.module.types[th].inner, TypeInner::Struct { .. }) => {
+                        Ok(format!("{b}.{}", self.names[&NameKey::StructMember(th, *index)]))
+                    }
+                    _ => Ok(format!("{b}[{index}]")),
+                }
+            }
             other => Err(unsupported(format!("a store through {other:?}"))),
         }
     }
@@ -447,7 +512,7 @@ impl FunctionWriter<'_> {
                 Ok(format!("[{}]", parts?.join(", ")))
             }
             E::Splat { size, value } => Ok(format!("[{}; {}]", self.constant(*value)?, vsize(*size))),
-            E::ZeroValue(t) => Ok(self.zero(ty_of(&self.module.types[*t].inner)?)),
+            E::ZeroValue(t) => Ok(self.zero(ty_of_handle(self.module, *t)?)),
             other => Err(unsupported(format!("the constant expression {other:?}"))),
         }
     }
@@ -458,10 +523,17 @@ impl FunctionWriter<'_> {
         Ok(match e {
             E::Literal(l) => self.literal(&l)?,
             E::Constant(c) => self.constant(self.module.constants[c].init)?,
-            E::ZeroValue(t) => self.zero(ty_of(&self.module.types[t].inner)?),
+            E::ZeroValue(t) => self.zero(ty_of_handle(self.module, t)?),
             E::FunctionArgument(i) => self.names[&NameKey::FunctionArgument(self.handle, i)].clone(),
             E::LocalVariable(l) => self.names[&NameKey::FunctionLocal(self.handle, l)].clone(),
             E::Load { pointer } => self.place(pointer)?,
+            E::Compose { ty, components } if matches!(self.module.types[ty].inner, TypeInner::Struct { .. }) => {
+                let mut fields = Vec::new();
+                for (k, c) in components.iter().enumerate() {
+                    fields.push(format!("{}: {}", self.names[&NameKey::StructMember(ty, k as u32)], self.expr(*c)?));
+                }
+                format!("{} {{ {} }}", self.names[&NameKey::Type(ty)], fields.join(", "))
+            }
             E::Compose { components, .. } => {
                 let mut lanes = Vec::new();
                 for c in components {
@@ -481,6 +553,10 @@ impl FunctionWriter<'_> {
             }
             E::AccessIndex { base, index } => match self.resolve(base)? {
                 TypeInner::Vector { .. } => format!("{}[{index}]", self.expr(base)?),
+                TypeInner::Struct { .. } => {
+                    let Ty::Struct(th) = self.ty(base)? else { return Err(unsupported("a member of an anonymous struct")) };
+                    format!("{}.{}", self.expr(base)?, self.names[&NameKey::StructMember(th, index)])
+                }
                 other => return Err(unsupported(format!("a component of {other:?}"))),
             },
             E::Unary { op, expr } => {

@@ -1,6 +1,6 @@
 //! The packet writer against the scalar writer (its oracle): every function of
-//! tests/wgsl/packet_straight.wgsl and packet_branches.wgsl (varying `if`s, returns inside them,
-//! loops that lanes leave at different iterations), as packet Rust (tests/out/packet/) on every SIMD level this
+//! tests/wgsl/packet_straight.wgsl, packet_branches.wgsl (varying `if`s, returns inside them,
+//! loops that lanes leave at different iterations) and packet_structs.wgsl, as packet Rust (tests/out/packet/) on every SIMD level this
 //! machine has (plus `Emu<16>` and `Emu<1>`), and as scalar Rust (tests/out/rs_wgsl/), on the
 //! same seeded inputs — lanes differ from each other, so a lane mix-up fails. Values must agree
 //! to 1e-5 relative (`max(1, |x|)`): the writers may order a dot product's sums differently
@@ -10,6 +10,8 @@
 use glam::{Vec2, Vec3, Vec4};
 use uplift_rs_snapshots::packet_packet_branches as pb;
 use uplift_rs_snapshots::packet_packet_straight as p;
+use uplift_rs_snapshots::packet_packet_structs as pst;
+use uplift_rs_snapshots::wgsl_packet_structs as sst;
 use uplift_rs_snapshots::wgsl_packet_branches as sb;
 use uplift_rs_snapshots::wgsl_packet_straight as sc;
 use uplift_simd::{F32s, I32s, Level, Simd, WithSimd};
@@ -102,6 +104,11 @@ impl WithSimd for Compare {
         check("skip_odd", lanes(s, |i| cols::<S, 1>([pb::skip_odd(s, s.load_i(&small[i..])).to_f32()])), &|i| vec![sb::skip_odd(small[i]) as f32]);
         check("find", lanes(s, |i| cols::<S, 1>([pb::find(s, s.load(&a[i..]) * s.splat(4.0))])), &|i| vec![sb::find(a[i] * 4.0)]);
         check("halvings", lanes(s, |i| cols::<S, 1>([pb::halvings(s, s.load(&a[i..]))])), &|i| vec![sb::halvings(a[i])]);
+        // Structs: built, passed, returned, stored member-wise, blended under masks.
+        check("trace", lanes(s, |i| cols::<S, 1>([pst::trace(s, v3(&a, &b, &c, i), v3(&d, &e, &f, i), s.load(&c[i..]))])), &|i| {
+            vec![sst::trace(Vec3::new(a[i], b[i], c[i]), Vec3::new(d[i], e[i], f[i]), c[i])]
+        });
+        check("pick_ray", lanes(s, |i| cols::<S, 3>(pst::pick_ray(s, s.load(&a[i..]), v3(&d, &e, &f, i)))), &|i| sst::pick_ray(a[i], Vec3::new(d[i], e[i], f[i])).to_array().to_vec());
         check("early_vec", lanes(s, |i| cols::<S, 2>(pb::early_vec(s, [s.load(&a[i..]), s.load(&b[i..])]))), &|i| sb::early_vec(Vec2::new(a[i], b[i])).to_array().to_vec());
         failures
     }
