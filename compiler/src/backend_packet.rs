@@ -129,12 +129,34 @@ fn write_struct(module: &Module, th: Handle<naga::Type>, names: &naga::FastHashM
     ))
 }
 
-/// Writes every function of `module` as a packet function. The file needs
-/// `use uplift_simd::{F32s, I32s, M32s, Simd, U32s};` (written first).
+/// The scalar writer's reserved names, and the level token `s` every packet function takes.
+fn reserved_set() -> &'static KeywordSet {
+    static SET: std::sync::OnceLock<KeywordSet> = std::sync::OnceLock::new();
+    SET.get_or_init(|| KeywordSet::from_iter(crate::backend_rust::RESERVED.iter().copied().chain(["s", "S"])))
+}
+
+/// Prefixes of the writer's own names (bound expressions, masks, loop and return state).
+const RESERVED_PREFIXES: &[&str] = &["_e", "_m", "_lm", "_brk", "_cont", "_ret", "_done", "wgsl_"];
+
+/// Options of the packet writer.
+#[derive(Clone, Debug, Default)]
+pub struct PacketOptions {
+    /// A path to a `static [f32; N]` holding the albedo tables (`mx_albedo_table_data`), as the
+    /// scalar writer's `RustOptions::albedo_table_data`: written as a `use` instead of the
+    /// array's values. `None` writes every constant array as a `static`.
+    pub table_data: Option<String>,
+}
+
+/// Writes every function of `module` as a packet function, with default options.
 pub fn write_packet(module: &Module) -> R<String> {
+    write_packet_with(module, &PacketOptions::default())
+}
+
+/// Writes `module`'s structs, constant f32 arrays (`static`s, read by gathers) and functions.
+pub fn write_packet_with(module: &Module, options: &PacketOptions) -> R<String> {
     let mut names = naga::FastHashMap::default();
     let mut namer = Namer::default();
-    namer.reset(module, crate::backend_rust::reserved_set(), KeywordSet::empty(), CaseInsensitiveKeywordSet::empty(), &["_e", "wgsl_"], &mut names);
+    namer.reset(module, reserved_set(), KeywordSet::empty(), CaseInsensitiveKeywordSet::empty(), RESERVED_PREFIXES, &mut names);
     let mut out = String::new();
     out += "#[allow(unused_imports)]\nuse uplift_simd::{F32s, I32s, M32s, Simd, U32s};\n";
     for (th, t) in module.types.iter() {
@@ -145,19 +167,32 @@ pub fn write_packet(module: &Module) -> R<String> {
             }
         }
     }
-    for (h, f) in module.functions.iter() {
-        let ctx = naga::proc::ResolveContext::with_locals(module, &f.local_variables, &f.arguments);
-        let mut typifier = naga::front::Typifier::new();
-        for (eh, _) in f.expressions.iter() {
-            typifier.grow(eh, &f.expressions, &ctx).map_err(|e| PacketError { construct: format!("an expression whose type naga cannot resolve ({e})"), function: f.name.clone() })?;
+    for (h, c) in module.constants.iter() {
+        let TypeInner::Array { base, size: naga::ArraySize::Constant(n), .. } = module.types[c.ty].inner else { continue };
+        if module.types[base].inner != TypeInner::Scalar(naga::Scalar::F32) {
+            continue;
         }
-        let mut w = FunctionWriter { module, f, names: &names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), loops: Vec::new(), loop_count: 0, calls: HashMap::new() };
-        let text = w.function().map_err(|mut e| {
-            e.function = f.name.clone();
-            e
-        })?;
+        let name = &names[&NameKey::Constant(h)];
+        match (&options.table_data, c.name.as_deref()) {
+            (Some(path), Some(crate::node_library::TABLE_DATA)) => out += &format!("\n#[allow(unused_imports)]\npub use {path} as {name};\n"),
+            _ => {
+                let E::Compose { components, .. } = &module.global_expressions[c.init] else {
+                    return Err(unsupported(format!("the constant array `{name}` (not a list of values)")));
+                };
+                let mut values = Vec::new();
+                for v in components {
+                    match module.global_expressions[*v] {
+                        E::Literal(Literal::F32(x)) => values.push(format!("{x:?}")),
+                        _ => return Err(unsupported(format!("the constant array `{name}` (not a list of literals)"))),
+                    }
+                }
+                out += &format!("\n#[allow(non_upper_case_globals)]\npub static {name}: [f32; {n}] = [{}];\n", values.join(", "));
+            }
+        }
+    }
+    for (h, f) in module.functions.iter() {
         out += "\n";
-        out += &text;
+        out += &write_function(module, &names, h, f)?;
     }
     Ok(out)
 }
@@ -198,6 +233,30 @@ fn masked_return(block: &naga::Block, inside: bool) -> bool {
     })
 }
 
+/// One function as a packet function.
+fn write_function(module: &Module, names: &naga::FastHashMap<NameKey, String>, h: Handle<Function>, f: &Function) -> R<String> {
+    let ctx = naga::proc::ResolveContext::with_locals(module, &f.local_variables, &f.arguments);
+    let mut typifier = naga::front::Typifier::new();
+    for (eh, _) in f.expressions.iter() {
+        typifier.grow(eh, &f.expressions, &ctx).map_err(|e| PacketError { construct: format!("an expression whose type naga cannot resolve ({e})"), function: f.name.clone() })?;
+    }
+    let mut w = FunctionWriter { module, f, names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), loops: Vec::new(), loop_count: 0, inline_all: false, calls: HashMap::new() };
+    let text = w.function().map_err(|mut e| {
+        e.function = f.name.clone();
+        e
+    })?;
+    Ok(text)
+}
+
+/// Every function of `module` the writer cannot write yet, with the reason (the next stages'
+/// work list).
+pub fn unsupported_functions(module: &Module) -> Vec<PacketError> {
+    let mut names = naga::FastHashMap::default();
+    let mut namer = Namer::default();
+    namer.reset(module, reserved_set(), KeywordSet::empty(), CaseInsensitiveKeywordSet::empty(), RESERVED_PREFIXES, &mut names);
+    module.functions.iter().filter_map(|(h, f)| write_function(module, &names, h, f).err()).collect()
+}
+
 struct FunctionWriter<'a> {
     module: &'a Module,
     f: &'a Function,
@@ -218,6 +277,8 @@ struct FunctionWriter<'a> {
     /// looping lanes) variable names.
     loops: Vec<(String, String, String)>,
     loop_count: usize,
+    /// Writing a local's constant initialiser: operands are written out, not referenced.
+    inline_all: bool,
     /// Call results: the name of the `let` holding each.
     calls: HashMap<Handle<naga::Expression>, String>,
 }
@@ -237,7 +298,13 @@ impl FunctionWriter<'_> {
         for (lh, l) in self.f.local_variables.iter() {
             let t = ty_of_handle(self.module, l.ty)?;
             let init = match l.init {
-                Some(e) => self.expr(e)?,
+                // A constant expression, never emitted: written out whole.
+                Some(e) => {
+                    self.inline_all = true;
+                    let r = self.expr_inline(e);
+                    self.inline_all = false;
+                    r?
+                }
                 None => self.zero(t),
             };
             let _ = writeln!(self.body, "    let mut {}: {} = {init};", self.names[&NameKey::FunctionLocal(self.handle, lh)], rust_type(t, self.names));
@@ -485,6 +552,9 @@ impl FunctionWriter<'_> {
     /// A reference to an expression already bound (by `Emit` or a call), or written in place
     /// for those naga never emits (literals, constants, arguments, zero values).
     fn expr(&mut self, h: Handle<naga::Expression>) -> R<String> {
+        if self.inline_all {
+            return self.expr_inline(h);
+        }
         match &self.f.expressions[h] {
             E::Literal(_) | E::Constant(_) | E::ZeroValue(_) | E::FunctionArgument(_) | E::LocalVariable(_) => self.expr_inline(h),
             E::CallResult(_) => self.calls.get(&h).cloned().ok_or_else(|| unsupported("a call result used before its call")),
@@ -550,6 +620,20 @@ impl FunctionWriter<'_> {
                 let v = self.expr(vector)?;
                 let parts: Vec<String> = pattern[..vsize(size)].iter().map(|c| format!("{v}[{}]", *c as usize)).collect();
                 format!("[{}]", parts.join(", "))
+            }
+            // A runtime index into a constant f32 array: a gather, the index clamped as the scalar
+            // writer clamps it (`(i as u32).min(n − 1)`).
+            E::Access { base, index } if matches!(self.f.expressions[base], E::Constant(_)) => {
+                let E::Constant(c) = self.f.expressions[base] else { unreachable!() };
+                let TypeInner::Array { size: naga::ArraySize::Constant(n), .. } = self.module.types[self.module.constants[c].ty].inner else {
+                    return Err(unsupported("a runtime index into a constant that is no sized array"));
+                };
+                let i = self.expr(index)?;
+                let as_u32 = match self.ty(index)? {
+                    Ty::Scalar(ScalarKind::Sint) => format!("{i}.to_u32_bits()"),
+                    _ => i,
+                };
+                format!("s.gather(&{}, {as_u32}.min(s.splat_u({})).to_i32_bits())", self.names[&NameKey::Constant(c)], n.get() - 1)
             }
             E::AccessIndex { base, index } => match self.resolve(base)? {
                 TypeInner::Vector { .. } => format!("{}[{index}]", self.expr(base)?),
@@ -801,5 +885,27 @@ mod tests {
         let rs = packet("fn f(a: f32) -> f32 { var r = 0.0; if (a > 0.0) { r = a; } else { r = -a; } return r; }").unwrap();
         assert!(rs.contains("if _m1.any() {") && rs.contains("let _m2 = !"), "{rs}");
         assert!(rs.contains("r = _m1.select("), "{rs}");
+    }
+}
+
+#[cfg(test)]
+mod library {
+    /// The shipped BSDF graphs' CPU modules (the pbrlib closures, the albedo tables, the
+    /// 8-lobe stack) in every closure context: the packet writer handles every function.
+    #[test]
+    fn the_shipped_bsdf_kernels_are_written_whole() {
+        for graph in ["bsdf_conductor", "uplift_stack"] {
+            for ctx in [crate::ClosureContext::Eval, crate::ClosureContext::Albedo, crate::ClosureContext::Sample, crate::ClosureContext::Pdf] {
+                let path = format!("{}/../runtime/kernels/graphs/bsdf/{graph}.mtlx", env!("CARGO_MANIFEST_DIR"));
+                let c = crate::Compiler::builtin().compile_file_in(std::path::Path::new(&path), &crate::OutputSelection::AllNumeric, Some(ctx));
+                let k = c.kernel.expect("a shipped graph compiles");
+                let module = k.cpu_module.as_ref().map_or(&k.module, |m| &m.0);
+                let errors: Vec<String> = super::unsupported_functions(module).iter().map(|e| e.to_string()).collect();
+                assert!(errors.is_empty(), "{graph} ({}): {errors:?}", ctx.name());
+                let options = super::PacketOptions { table_data: Some("crate::TABLE".into()) };
+                let rs = super::write_packet_with(module, &options).unwrap();
+                assert!(rs.contains("pub fn mx_pattern<S: Simd>") && rs.contains("pub use crate::TABLE as"), "{graph}");
+            }
+        }
     }
 }

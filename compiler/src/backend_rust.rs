@@ -111,7 +111,7 @@ pub trait MxTextures {
 /// Identifiers naga names must not take: Rust keywords, primitive and glam type names, and the
 /// names the writer and the kernel template use themselves (a naga name equal to one of these
 /// gets a trailing `_`, as `in` → `in_`).
-const RESERVED: &[&str] = &[
+pub(crate) const RESERVED: &[&str] = &[
     // Rust keywords (strict, reserved, and weak ones that cannot be plain identifiers).
     "as", "break", "const", "continue", "crate", "else", "enum", "extern", "false", "fn", "for", "if", "impl", "in",
     "let", "loop", "match", "mod", "move", "mut", "pub", "ref", "return", "self", "Self", "static", "struct", "super",

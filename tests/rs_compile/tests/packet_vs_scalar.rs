@@ -1,6 +1,7 @@
 //! The packet writer against the scalar writer (its oracle): every function of
 //! tests/wgsl/packet_straight.wgsl, packet_branches.wgsl (varying `if`s, returns inside them,
-//! loops that lanes leave at different iterations) and packet_structs.wgsl, as packet Rust (tests/out/packet/) on every SIMD level this
+//! loops that lanes leave at different iterations), packet_structs.wgsl and packet_tables.wgsl
+//! (gathers), as packet Rust (tests/out/packet/) on every SIMD level this
 //! machine has (plus `Emu<16>` and `Emu<1>`), and as scalar Rust (tests/out/rs_wgsl/), on the
 //! same seeded inputs — lanes differ from each other, so a lane mix-up fails. Values must agree
 //! to 1e-5 relative (`max(1, |x|)`): the writers may order a dot product's sums differently
@@ -11,6 +12,8 @@ use glam::{Vec2, Vec3, Vec4};
 use uplift_rs_snapshots::packet_packet_branches as pb;
 use uplift_rs_snapshots::packet_packet_straight as p;
 use uplift_rs_snapshots::packet_packet_structs as pst;
+use uplift_rs_snapshots::packet_packet_tables as pt;
+use uplift_rs_snapshots::wgsl_packet_tables as stb;
 use uplift_rs_snapshots::wgsl_packet_structs as sst;
 use uplift_rs_snapshots::wgsl_packet_branches as sb;
 use uplift_rs_snapshots::wgsl_packet_straight as sc;
@@ -109,6 +112,8 @@ impl WithSimd for Compare {
             vec![sst::trace(Vec3::new(a[i], b[i], c[i]), Vec3::new(d[i], e[i], f[i]), c[i])]
         });
         check("pick_ray", lanes(s, |i| cols::<S, 3>(pst::pick_ray(s, s.load(&a[i..]), v3(&d, &e, &f, i)))), &|i| sst::pick_ray(a[i], Vec3::new(d[i], e[i], f[i])).to_array().to_vec());
+        // Gathers from a constant array, indices in and out of bounds.
+        check("lookup", lanes(s, |i| cols::<S, 1>([pt::lookup(s, s.load(&a[i..]))])), &|i| vec![stb::lookup(a[i])]);
         check("early_vec", lanes(s, |i| cols::<S, 2>(pb::early_vec(s, [s.load(&a[i..]), s.load(&b[i..])]))), &|i| sb::early_vec(Vec2::new(a[i], b[i])).to_array().to_vec());
         failures
     }
