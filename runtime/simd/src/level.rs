@@ -5,6 +5,12 @@ use crate::emu::Emu;
 use crate::packets::Simd;
 
 /// An operation written once, generic over the level.
+///
+/// **Mark `with_simd` `#[inline(always)]`** (and everything generic it calls): it is inlined
+/// into the level's `#[target_feature]` entry and compiled with the level's instructions there.
+/// A `with_simd` compiled on its own is compiled for the baseline CPU, and every packet
+/// operation in it becomes an out-of-line call to its intrinsic: measured 100× slower than
+/// scalar code (the conductor BSDF: 0.4 M evals/s on AVX-512 against 47 M scalar).
 pub trait WithSimd {
     type Output;
     fn with_simd<S: Simd>(self, s: S) -> Self::Output;

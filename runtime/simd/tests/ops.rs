@@ -110,6 +110,7 @@ struct AllOps;
 
 impl WithSimd for AllOps {
     type Output = Vec<String>;
+    #[inline(always)]
     fn with_simd<S: Simd>(self, s: S) -> Vec<String> {
         let mut c = Checker { level: S::NAME, failures: Vec::new() };
         float_ops(s, &mut c);
@@ -403,6 +404,7 @@ fn dispatch_runs_the_widest_level_and_refuses_a_missing_one() {
     struct Lanes;
     impl WithSimd for Lanes {
         type Output = usize;
+        #[inline(always)]
         fn with_simd<S: Simd>(self, _: S) -> usize {
             S::LANES
         }

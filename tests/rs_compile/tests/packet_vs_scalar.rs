@@ -59,6 +59,7 @@ struct Compare;
 
 impl WithSimd for Compare {
     type Output = Vec<String>;
+    #[inline(always)]
     fn with_simd<S: Simd>(self, s: S) -> Vec<String> {
         let (a, b, c) = (inputs(1, -3.0, 3.0), inputs(2, -3.0, 3.0), inputs(3, -3.0, 3.0));
         let (d, e, f) = (inputs(4, -2.0, 2.0), inputs(5, -2.0, 2.0), inputs(6, 0.0, 1.0));
