@@ -102,3 +102,46 @@ fn halvings(x: f32) -> f32 {
     }
     return n;
 }
+// Switch on a varying selector: case lists, default, a break ending a case, a switch in a loop
+// with continue.
+fn classify(n: i32) -> f32 {
+    var r = 0.0;
+    switch (n % 5) {
+        case 0, 1: {
+            r = 10.0;
+        }
+        case 2: {
+            if (n > 20) {
+                r = -1.0;
+                break;
+            }
+            r = 20.0;
+        }
+        case -3: {
+            return 99.0;
+        }
+        default: {
+            r = f32(n) * 0.5;
+        }
+    }
+    return r + 1.0;
+}
+fn switch_in_loop(n: i32) -> i32 {
+    var total = 0;
+    for (var i = 0; i < n; i++) {
+        switch (i % 3) {
+            case 0: {
+                continue;
+            }
+            case 1: {
+                total += i;
+            }
+            default: {
+                total += 100;
+                break;
+            }
+        }
+        total += 1;
+    }
+    return total;
+}

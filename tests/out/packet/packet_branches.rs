@@ -104,9 +104,10 @@ pub fn early<S: Simd>(s: S, a_2: S::F, b_1: S::F) -> S::F {
             _done = _done | _m3;
         }
         if _done.all() { return _ret; }
+        let _m4 = _m2 & !_done;
         let _e10 = (b_1 * s.splat(3.0f32));
-        _ret = (_m2 & !_done).select(_e10, _ret);
-        _done = _done | _m2;
+        _ret = (_m4 & !_done).select(_e10, _ret);
+        _done = _done | _m4;
     }
     if _done.all() { return _ret; }
     let _e11 = (a_2 + b_1);
@@ -287,4 +288,105 @@ pub fn halvings<S: Simd>(s: S, x_2: S::F) -> S::F {
     }
     let _e16 = n_2;
     return _e16;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn classify<S: Simd>(s: S, n_3: S::I) -> S::F {
+    let mut r_1: S::F = s.splat(0.0f32);
+    let mut _ret: S::F = s.splat(0.0);
+    let mut _done = s.first_lanes(0);
+    let _e4 = n_3.rem(s.splat_i(5i32));
+    let _m1 = (_e4.eq(s.splat_i(0i32)) | _e4.eq(s.splat_i(1i32)));
+    if _m1.any() {
+        let mut _sbrk1 = s.first_lanes(0);
+        r_1 = _m1.select(s.splat(10.0f32), r_1);
+    }
+    let _m2 = (_e4.eq(s.splat_i(2i32)));
+    if _m2.any() {
+        let mut _sbrk2 = s.first_lanes(0);
+        let _e7 = n_3.gt(s.splat_i(20i32));
+        let _m3 = _m2 & _e7;
+        if _m3.any() {
+            r_1 = _m3.select(s.splat(-1.0f32), r_1);
+            _sbrk2 = _sbrk2 | _m3;
+            let _m4 = s.first_lanes(0);
+        }
+        let _m5 = _m2 & !_sbrk2 & !_done;
+        r_1 = _m5.select(s.splat(20.0f32), r_1);
+    }
+    let _m6 = (_e4.eq(s.splat_i(-3i32)));
+    if _m6.any() {
+        let mut _sbrk6 = s.first_lanes(0);
+        _ret = (_m6 & !_done).select(s.splat(99.0f32), _ret);
+        _done = _done | _m6;
+    }
+    let _m7 = (!(_e4.eq(s.splat_i(0i32)) | _e4.eq(s.splat_i(1i32)) | _e4.eq(s.splat_i(2i32)) | _e4.eq(s.splat_i(-3i32))));
+    if _m7.any() {
+        let mut _sbrk7 = s.first_lanes(0);
+        let _e11 = n_3.to_f32();
+        let _e13 = (_e11 * s.splat(0.5f32));
+        r_1 = _m7.select(_e13, r_1);
+    }
+    if _done.all() { return _ret; }
+    let _e14 = r_1;
+    let _e16 = (_e14 + s.splat(1.0f32));
+    return (!_done).select(_e16, _ret);
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn switch_in_loop<S: Simd>(s: S, n_4: S::I) -> S::I {
+    let mut total_1: S::I = s.splat_i(0i32);
+    let mut i_2: S::I = s.splat_i(0i32);
+    let mut _lm1 = s.first_lanes(usize::MAX);
+    let mut _brk1 = s.first_lanes(0);
+    loop {
+        let mut _cont1 = s.first_lanes(0);
+        let _e5 = i_2;
+        let _e6 = _e5.lt(n_4);
+        let _m1 = _lm1 & !_e6;
+        if _m1.any() {
+            _brk1 = _brk1 | _m1;
+            let _m2 = s.first_lanes(0);
+        }
+        let _m3 = _lm1 & !_brk1 & !_cont1;
+        let _e7 = i_2;
+        let _e9 = _e7.rem(s.splat_i(3i32));
+        let _m4 = _m3 & (_e9.eq(s.splat_i(0i32)));
+        if _m4.any() {
+            let mut _sbrk4 = s.first_lanes(0);
+            _cont1 = _cont1 | _m4;
+            let _m5 = s.first_lanes(0);
+        }
+        let _m6 = _m3 & (_e9.eq(s.splat_i(1i32)));
+        if _m6.any() {
+            let mut _sbrk6 = s.first_lanes(0);
+            let _e10 = total_1;
+            let _e11 = i_2;
+            let _e12 = (_e10 + _e11);
+            total_1 = _m6.select_i(_e12, total_1);
+        }
+        let _m7 = _m3 & (!(_e9.eq(s.splat_i(0i32)) | _e9.eq(s.splat_i(1i32))));
+        if _m7.any() {
+            let mut _sbrk7 = s.first_lanes(0);
+            let _e13 = total_1;
+            let _e15 = (_e13 + s.splat_i(100i32));
+            total_1 = _m7.select_i(_e15, total_1);
+            _sbrk7 = _sbrk7 | _m7;
+            let _m8 = s.first_lanes(0);
+        }
+        let _m9 = _m3 & !_brk1 & !_cont1;
+        let _e16 = total_1;
+        let _e18 = (_e16 + s.splat_i(1i32));
+        total_1 = _m9.select_i(_e18, total_1);
+        let _m10 = _lm1 & !_brk1;
+        let _e20 = i_2;
+        let _e21 = (_e20 + s.splat_i(1i32));
+        i_2 = _m10.select_i(_e21, i_2);
+        _lm1 = _lm1 & !_brk1;
+        if !_lm1.any() { break; }
+    }
+    let _e22 = total_1;
+    return _e22;
 }

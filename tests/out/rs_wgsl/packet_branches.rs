@@ -174,6 +174,75 @@ pub fn halvings(x_2: f32) -> f32 {
 }
 
 #[inline(always)]
+#[allow(unused_assignments)]
+pub fn classify(n_3: i32) -> f32 {
+    let mut r_1: f32 = 0.0f32;
+    'sw: {
+        match wgsl_rem_i32_i32(n_3, 5i32) {
+            0i32 | 1i32 => {
+                r_1 = 10.0f32;
+            }
+            2i32 => {
+                if n_3 > 20i32 {
+                    r_1 = -1.0f32;
+                    break 'sw;
+                }
+                r_1 = 20.0f32;
+            }
+            -3i32 => {
+                return 99.0f32;
+            }
+            _ => {
+                r_1 = n_3 as f32 * 0.5f32;
+            }
+        }
+    }
+    let _e14 = r_1;
+    _e14 + 1.0f32
+}
+
+#[inline(always)]
+#[allow(unused_assignments)]
+pub fn switch_in_loop(n_4: i32) -> i32 {
+    let mut total_1: i32 = 0i32;
+    let mut i_2: i32 = 0i32;
+    let mut loop_init = true;
+    loop {
+        if !loop_init {
+            let _e20 = i_2;
+            i_2 = _e20.wrapping_add(1i32);
+        }
+        loop_init = false;
+        let _e5 = i_2;
+        if _e5 < n_4 {
+        } else {
+            break;
+        }
+        {
+            let _e7 = i_2;
+            match wgsl_rem_i32_i32(_e7, 3i32) {
+                0i32 => {
+                    continue;
+                }
+                1i32 => {
+                    let _e10 = total_1;
+                    let _e11 = i_2;
+                    total_1 = _e10.wrapping_add(_e11);
+                }
+                _ => {
+                    let _e13 = total_1;
+                    total_1 = _e13.wrapping_add(100i32);
+                }
+            }
+            let _e16 = total_1;
+            total_1 = _e16.wrapping_add(1i32);
+        }
+    }
+    let _e22 = total_1;
+    _e22
+}
+
+#[inline(always)]
 fn wgsl_rem_i32_i32(a: i32, b: i32) -> i32 {
     a.checked_rem(b).unwrap_or(0)
 }

@@ -115,6 +115,9 @@ impl WithSimd for Compare {
         check("pick_ray", lanes(s, |i| cols::<S, 3>(pst::pick_ray(s, s.load(&a[i..]), v3(&d, &e, &f, i)))), &|i| sst::pick_ray(a[i], Vec3::new(d[i], e[i], f[i])).to_array().to_vec());
         // Gathers from a constant array, indices in and out of bounds.
         check("lookup", lanes(s, |i| cols::<S, 1>([pt::lookup(s, s.load(&a[i..]))])), &|i| vec![stb::lookup(a[i])]);
+        // Switches: case lists, default, a break inside a case, a switch in a loop.
+        check("classify", lanes(s, |i| cols::<S, 1>([pb::classify(s, s.load_i(&ints[i..]))])), &|i| vec![sb::classify(ints[i])]);
+        check("switch_in_loop", lanes(s, |i| cols::<S, 1>([pb::switch_in_loop(s, s.load_i(&small[i..])).to_f32()])), &|i| vec![sb::switch_in_loop(small[i]) as f32]);
         check("early_vec", lanes(s, |i| cols::<S, 2>(pb::early_vec(s, [s.load(&a[i..]), s.load(&b[i..])]))), &|i| sb::early_vec(Vec2::new(a[i], b[i])).to_array().to_vec());
         failures
     }
