@@ -139,6 +139,13 @@ fn reserved_set() -> &'static KeywordSet {
 /// Prefixes of the writer's own names (bound expressions, masks, loop and return state).
 const RESERVED_PREFIXES: &[&str] = &["_e", "_m", "_lm", "_brk", "_sbrk", "_cont", "_ret", "_done", "wgsl_"];
 
+/// The Rust names of `module`'s items, clear of the writer's own names.
+fn packet_names(module: &Module) -> naga::FastHashMap<NameKey, String> {
+    let mut names = naga::FastHashMap::default();
+    Namer::default().reset(module, reserved_set(), KeywordSet::empty(), CaseInsensitiveKeywordSet::empty(), RESERVED_PREFIXES, &mut names);
+    names
+}
+
 /// Options of the packet writer.
 #[derive(Clone, Debug, Default)]
 pub struct PacketOptions {
@@ -155,9 +162,7 @@ pub fn write_packet(module: &Module) -> R<String> {
 
 /// Writes `module`'s structs, constant f32 arrays (`static`s, read by gathers) and functions.
 pub fn write_packet_with(module: &Module, options: &PacketOptions) -> R<String> {
-    let mut names = naga::FastHashMap::default();
-    let mut namer = Namer::default();
-    namer.reset(module, reserved_set(), KeywordSet::empty(), CaseInsensitiveKeywordSet::empty(), RESERVED_PREFIXES, &mut names);
+    let names = packet_names(module);
     let mut out = String::new();
     out += "#[allow(unused_imports)]\nuse uplift_simd::{F32s, I32s, M32s, Simd, U32s};\n";
     for (th, t) in module.types.iter() {
@@ -266,9 +271,7 @@ fn write_function(module: &Module, names: &naga::FastHashMap<NameKey, String>, h
 /// Every function of `module` the writer cannot write yet, with the reason (the next stages'
 /// work list).
 pub fn unsupported_functions(module: &Module) -> Vec<PacketError> {
-    let mut names = naga::FastHashMap::default();
-    let mut namer = Namer::default();
-    namer.reset(module, reserved_set(), KeywordSet::empty(), CaseInsensitiveKeywordSet::empty(), RESERVED_PREFIXES, &mut names);
+    let names = packet_names(module);
     module.functions.iter().filter_map(|(h, f)| write_function(module, &names, h, f).err()).collect()
 }
 
@@ -432,13 +435,11 @@ impl FunctionWriter<'_> {
                     if block.is_empty() {
                         continue;
                     }
-                    self.masks += 1;
-                    let m = format!("_m{}", self.masks);
                     let value = match &outer {
                         Some(o) => format!("{o} & {test}"),
                         None => test,
                     };
-                    self.line(&format!("let {m} = {value};"));
+                    let m = self.fresh_mask(&value);
                     self.line(&format!("if {m}.any() {{"));
                     self.mask = Some(m);
                     self.depth += 1;
@@ -449,9 +450,8 @@ impl FunctionWriter<'_> {
                     self.line("}");
                 }
                 self.mask = outer;
-                if self.returns_masked && returns_in(accept).max(returns_in(reject)) {
-                    let done = if self.f.result.is_some() { "return _ret;" } else { "return;" };
-                    self.line(&format!("if _done.all() {{ {done} }}"));
+                if self.returns_masked && (returns_in(accept) || returns_in(reject)) {
+                    self.leave_if_all_done();
                 }
                 // Lanes that left the loop (break), its iteration (continue), their switch case
                 // or the function inside the `if` sit out the rest of this block.
@@ -484,9 +484,7 @@ impl FunctionWriter<'_> {
                     self.statement(st)?;
                 }
                 // The continuing block: every lane still looping, `continue` ones included.
-                self.masks += 1;
-                let mc = format!("_m{}", self.masks);
-                self.line(&format!("let {mc} = {lm} & !{brk}{done};"));
+                let mc = self.fresh_mask(&format!("{lm} & !{brk}{done}"));
                 self.mask = Some(mc.clone());
                 for st in continuing.iter() {
                     self.statement(st)?;
@@ -502,8 +500,7 @@ impl FunctionWriter<'_> {
                 self.loops.pop();
                 self.mask = outer;
                 if self.returns_masked && (returns_in(body) || returns_in(continuing)) {
-                    let ret = if self.f.result.is_some() { "return _ret;" } else { "return;" };
-                    self.line(&format!("if _done.all() {{ {ret} }}"));
+                    self.leave_if_all_done();
                 }
             }
             Statement::Break | Statement::Continue => {
@@ -520,10 +517,7 @@ impl FunctionWriter<'_> {
                     self.line(&format!("{set} = {set} | {m};"));
                 }
                 // Whatever follows in this block runs for no lane.
-                self.masks += 1;
-                let n = format!("_m{}", self.masks);
-                self.line(&format!("let {n} = s.first_lanes(0);"));
-                self.mask = Some(n);
+                self.mask = Some(self.fresh_mask("s.first_lanes(0)"));
             }
             Statement::Call { function, arguments, result } => {
                 let mut args = vec!["s".to_string()];
@@ -550,21 +544,19 @@ impl FunctionWriter<'_> {
                     _ => "splat_u",
                 };
                 let outer = self.mask.clone();
-                let all_values: Vec<String> = cases
-                    .iter()
-                    .filter_map(|c| match c.value {
-                        naga::SwitchValue::I32(v) => Some(format!("{sel}.eq(s.{splat}({v}i32))")),
-                        naga::SwitchValue::U32(v) => Some(format!("{sel}.eq(s.{splat}({v}u32))")),
-                        naga::SwitchValue::Default => None,
-                    })
-                    .collect();
+                // The lanes a case value picks (`None` for the default).
+                let picks = |value: naga::SwitchValue| match value {
+                    naga::SwitchValue::I32(v) => Some(format!("{sel}.eq(s.{splat}({v}i32))")),
+                    naga::SwitchValue::U32(v) => Some(format!("{sel}.eq(s.{splat}({v}u32))")),
+                    naga::SwitchValue::Default => None,
+                };
+                let all_values: Vec<String> = cases.iter().filter_map(|c| picks(c.value)).collect();
                 let mut pending: Vec<String> = Vec::new();
                 let mut default_pending = false;
                 for case in cases {
-                    match case.value {
-                        naga::SwitchValue::I32(v) => pending.push(format!("{sel}.eq(s.{splat}({v}i32))")),
-                        naga::SwitchValue::U32(v) => pending.push(format!("{sel}.eq(s.{splat}({v}u32))")),
-                        naga::SwitchValue::Default => default_pending = true,
+                    match picks(case.value) {
+                        Some(p) => pending.push(p),
+                        None => default_pending = true,
                     }
                     if case.fall_through && case.body.is_empty() {
                         continue;
@@ -572,20 +564,18 @@ impl FunctionWriter<'_> {
                     if case.fall_through {
                         return Err(unsupported("a switch case falling through into the next"));
                     }
-                    let mut picks = pending.clone();
+                    let mut tests = pending.clone();
                     if default_pending {
-                        picks.push(if all_values.is_empty() { "s.first_lanes(usize::MAX)".to_string() } else { format!("!({})", all_values.join(" | ")) });
+                        tests.push(if all_values.is_empty() { "s.first_lanes(usize::MAX)".to_string() } else { format!("!({})", all_values.join(" | ")) });
                     }
                     pending.clear();
                     default_pending = false;
-                    self.masks += 1;
-                    let m = format!("_m{}", self.masks);
-                    let test = format!("({})", picks.join(" | "));
+                    let test = format!("({})", tests.join(" | "));
                     let value = match &outer {
                         Some(o) => format!("{o} & {test}"),
                         None => test,
                     };
-                    self.line(&format!("let {m} = {value};"));
+                    let m = self.fresh_mask(&value);
                     self.line(&format!("if {m}.any() {{"));
                     self.mask = Some(m.clone());
                     self.depth += 1;
@@ -601,8 +591,7 @@ impl FunctionWriter<'_> {
                     self.mask = outer.clone();
                 }
                 if self.returns_masked && cases.iter().any(|c| returns_in(&c.body)) {
-                    let done = if self.f.result.is_some() { "return _ret;" } else { "return;" };
-                    self.line(&format!("if _done.all() {{ {done} }}"));
+                    self.leave_if_all_done();
                 }
                 if cases.iter().any(|c| continues_or_returns(&c.body)) {
                     self.exclude_left_lanes();
@@ -611,6 +600,20 @@ impl FunctionWriter<'_> {
             other => return Err(unsupported(format!("the statement {other:?}"))),
         }
         Ok(())
+    }
+
+    /// Binds `value` to a fresh mask variable; returns its name.
+    fn fresh_mask(&mut self, value: &str) -> String {
+        self.masks += 1;
+        let m = format!("_m{}", self.masks);
+        self.line(&format!("let {m} = {value};"));
+        m
+    }
+
+    /// After a statement some lanes may have returned in: leave as soon as every lane has.
+    fn leave_if_all_done(&mut self) {
+        let done = if self.f.result.is_some() { "return _ret;" } else { "return;" };
+        self.line(&format!("if _done.all() {{ {done} }}"));
     }
 
     /// After a statement some lanes may have left by: the current mask minus the lanes that
@@ -633,10 +636,7 @@ impl FunctionWriter<'_> {
         if ex.is_empty() {
             return;
         }
-        self.masks += 1;
-        let n = format!("_m{}", self.masks);
-        self.line(&format!("let {n} = {m}{ex};"));
-        self.mask = Some(n);
+        self.mask = Some(self.fresh_mask(&format!("{m}{ex}")));
     }
 
     fn line(&mut self, text: &str) {
