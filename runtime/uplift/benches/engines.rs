@@ -136,11 +136,19 @@ fn batch(kernel: &PatternKernel, n: usize, params: &[(String, Vec<f32>)], random
     }
     let mut rows: Vec<f32> = (0..n).flat_map(|_| defaults.iter().copied()).collect();
     if random_params {
-        // Every uplift_stack parameter per row, inside its range (weights ≥ 5 % of it).
-        for row in rows.chunks_mut(kernel.input_stride) {
-            for p in &uplift_engines::stack_params::PARAMETER_TABLE {
+        // Every uplift_stack parameter per row, inside its range (weights ≥ 5 % of it); each
+        // parameter's column found once.
+        let table = &uplift_engines::stack_params::PARAMETER_TABLE;
+        let columns: Vec<usize> = table
+            .iter()
+            .map(|p| {
                 let input = kernel.inputs.iter().find(|i| i.input.name == p.input).unwrap_or_else(|| panic!("--random-params: the graph has no input {} (uplift_stack only)", p.input));
-                row[input.offset + p.component] = p.lo + (p.hi - p.lo) * (0.05 + 0.95 * next());
+                input.offset + p.component
+            })
+            .collect();
+        for row in rows.chunks_mut(kernel.input_stride) {
+            for (p, &c) in table.iter().zip(&columns) {
+                row[c] = p.lo + (p.hi - p.lo) * (0.05 + 0.95 * next());
             }
         }
     }
