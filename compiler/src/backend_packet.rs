@@ -15,7 +15,9 @@
 //! leave done lanes alone, and the function leaves as soon as every lane is done. A loop runs
 //! while some lane still loops, `break` and `continue` lanes recorded in masks and stores
 //! blended under the looping lanes'. A `switch` runs each case under the mask of the lanes its
-//! values pick. The next stage is the variance analysis of `variance.rs` keeping uniform
+//! values pick. A call whose result only one side of `select`s needs runs only where some
+//! active lane takes that side (`packet_guards.rs`): WGSL's `select` evaluates both sides, and
+//! a kernel would otherwise pay for the thin-film Airy Fresnel at film thickness 0. The next stage is the variance analysis of `variance.rs` keeping uniform
 //! branches and loop counters scalar (today every loop and branch is treated as varying:
 //! correct, but slower, and a masked loop's trip count is unknown to LLVM). Matrices, local
 //! arrays, textures and integer or boolean vectors are a [`PacketError`] naming the construct.
@@ -260,7 +262,7 @@ fn write_function(module: &Module, names: &naga::FastHashMap<NameKey, String>, h
     for (eh, _) in f.expressions.iter() {
         typifier.grow(eh, &f.expressions, &ctx).map_err(|e| PacketError { construct: format!("an expression whose type naga cannot resolve ({e})"), function: f.name.clone() })?;
     }
-    let mut w = FunctionWriter { module, f, names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), loops: Vec::new(), loop_count: 0, inline_all: false, switch_breaks: Vec::new(), calls: HashMap::new() };
+    let mut w = FunctionWriter { module, f, names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), loops: Vec::new(), loop_count: 0, inline_all: false, switch_breaks: Vec::new(), calls: HashMap::new(), guards: crate::packet_guards::guarded_calls(module, f), early: None };
     let text = w.function().map_err(|mut e| {
         e.function = f.name.clone();
         e
@@ -302,6 +304,10 @@ struct FunctionWriter<'a> {
     switch_breaks: Vec<(usize, String)>,
     /// Call results: the name of the `let` holding each.
     calls: HashMap<Handle<naga::Expression>, String>,
+    /// Calls run only where a lane needs their result (`packet_guards.rs`), by result.
+    guards: HashMap<Handle<naga::Expression>, crate::packet_guards::Guard>,
+    /// Writing a guard's condition: expressions not bound here are written out.
+    early: Option<std::collections::HashSet<Handle<naga::Expression>>>,
 }
 
 impl FunctionWriter<'_> {
@@ -528,7 +534,13 @@ impl FunctionWriter<'_> {
                 match result {
                     Some(r) => {
                         let name = format!("_e{}", r.index());
-                        self.line(&format!("let {name} = {call};"));
+                        match self.guard(*r)? {
+                            Some(lanes) => {
+                                let zero = self.zero(self.ty(*r)?);
+                                self.line(&format!("let {name} = if ({lanes}).any() {{ {call} }} else {{ {zero} }};"));
+                            }
+                            None => self.line(&format!("let {name} = {call};")),
+                        }
                         self.calls.insert(*r, name);
                     }
                     None => self.line(&format!("{call};")),
@@ -603,6 +615,22 @@ impl FunctionWriter<'_> {
     }
 
     /// Binds `value` to a fresh mask variable; returns its name.
+    /// The lanes that need the call with result `r`, if it is guarded (`packet_guards.rs`).
+    fn guard(&mut self, r: Handle<naga::Expression>) -> R<Option<String>> {
+        let Some(g) = self.guards.get(&r).cloned() else { return Ok(None) };
+        if self.ty(g.condition)? != Ty::Scalar(ScalarKind::Bool) {
+            return Ok(None);
+        }
+        self.early = Some(g.visible);
+        let c = self.expr(g.condition);
+        self.early = None;
+        let c = if g.take { c? } else { format!("!({})", c?) };
+        Ok(Some(match &self.mask {
+            Some(m) => format!("{m} & {c}"),
+            None => c,
+        }))
+    }
+
     fn fresh_mask(&mut self, value: &str) -> String {
         self.masks += 1;
         let m = format!("_m{}", self.masks);
@@ -665,6 +693,12 @@ impl FunctionWriter<'_> {
     fn expr(&mut self, h: Handle<naga::Expression>) -> R<String> {
         if self.inline_all {
             return self.expr_inline(h);
+        }
+        if let Some(visible) = &self.early {
+            let leaf = matches!(self.f.expressions[h], E::Literal(_) | E::Constant(_) | E::ZeroValue(_) | E::FunctionArgument(_) | E::LocalVariable(_));
+            if !leaf && !visible.contains(&h) {
+                return self.expr_inline(h);
+            }
         }
         match &self.f.expressions[h] {
             E::Literal(_) | E::Constant(_) | E::ZeroValue(_) | E::FunctionArgument(_) | E::LocalVariable(_) => self.expr_inline(h),

@@ -145,3 +145,26 @@ fn switch_in_loop(n: i32) -> i32 {
     }
     return total;
 }
+// Guarded calls (compiler/src/packet_guards.rs): each call feeds one side of a select, through
+// an expression or another call, and runs only where some lane takes that side; the condition
+// is written at the call although WGSL computes it after.
+fn dear(x: f32) -> f32 {
+    var a = x;
+    for (var i = 0; i < 4; i++) {
+        a = a * 0.5 + sin(a);
+    }
+    return a;
+}
+fn cheap(x: f32) -> f32 {
+    return x * x;
+}
+fn chosen(a: f32, t: f32) -> f32 {
+    return select(cheap(a), 2.0 * dear(cheap(a + 1.0)), t > 0.5) + select(dear(a), 1.0, a < -2.5);
+}
+fn chosen_masked(a: f32, b: f32, t: f32) -> vec2<f32> {
+    var r = vec2(b, 0.0);
+    if (b > 0.0) {
+        r = select(vec2(cheap(a)), vec2(dear(b), t), (t > 0.25) & (a < 1.0));
+    }
+    return r;
+}

@@ -390,3 +390,85 @@ pub fn switch_in_loop<S: Simd>(s: S, n_4: S::I) -> S::I {
     let _e22 = total_1;
     return _e22;
 }
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn dear<S: Simd>(s: S, x_3: S::F) -> S::F {
+    let mut a_3: S::F = s.splat(0.0);
+    let mut i_3: S::I = s.splat_i(0i32);
+    a_3 = x_3;
+    let mut _lm1 = s.first_lanes(usize::MAX);
+    let mut _brk1 = s.first_lanes(0);
+    loop {
+        let mut _cont1 = s.first_lanes(0);
+        let _e4 = i_3;
+        let _e6 = _e4.lt(s.splat_i(4i32));
+        let _m1 = _lm1 & !_e6;
+        if _m1.any() {
+            _brk1 = _brk1 | _m1;
+            let _m2 = s.first_lanes(0);
+        }
+        let _m3 = _lm1 & !_brk1 & !_cont1;
+        let _e7 = a_3;
+        let _e9 = (_e7 * s.splat(0.5f32));
+        let _e10 = a_3;
+        let _e11 = { let x = _e10; x.map(f32::sin) };
+        let _e12 = (_e9 + _e11);
+        a_3 = _m3.select(_e12, a_3);
+        let _m4 = _lm1 & !_brk1;
+        let _e14 = i_3;
+        let _e15 = (_e14 + s.splat_i(1i32));
+        i_3 = _m4.select_i(_e15, i_3);
+        _lm1 = _lm1 & !_brk1;
+        if !_lm1.any() { break; }
+    }
+    let _e16 = a_3;
+    return _e16;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn cheap<S: Simd>(s: S, x_4: S::F) -> S::F {
+    let _e1 = (x_4 * x_4);
+    return _e1;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn chosen<S: Simd>(s: S, a_4: S::F, t_2: S::F) -> S::F {
+    let _e2 = if (!(t_2.gt(s.splat(0.5f32)))).any() { cheap(s, a_4) } else { s.splat(0.0) };
+    let _e4 = (a_4 + s.splat(1.0f32));
+    let _e5 = if (t_2.gt(s.splat(0.5f32))).any() { cheap(s, _e4) } else { s.splat(0.0) };
+    let _e6 = if (t_2.gt(s.splat(0.5f32))).any() { dear(s, _e5) } else { s.splat(0.0) };
+    let _e8 = (s.splat(2.0f32) * _e6);
+    let _e10 = t_2.gt(s.splat(0.5f32));
+    let _e11 = _e10.select(_e8, _e2);
+    let _e12 = if (!(a_4.lt(s.splat(-2.5f32)))).any() { dear(s, a_4) } else { s.splat(0.0) };
+    let _e14 = a_4.lt(s.splat(-2.5f32));
+    let _e16 = _e14.select(s.splat(1.0f32), _e12);
+    let _e17 = (_e11 + _e16);
+    return _e17;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn chosen_masked<S: Simd>(s: S, a_5: S::F, b_2: S::F, t_3: S::F) -> [S::F; 2] {
+    let mut r_2: [S::F; 2] = [s.splat(0.0); 2];
+    let _e4 = [b_2, s.splat(0.0f32)];
+    r_2 = _e4;
+    let _e7 = b_2.gt(s.splat(0.0f32));
+    let _m1 = _e7;
+    if _m1.any() {
+        let _e8 = if (_m1 & !((t_3.gt(s.splat(0.25f32)) & a_5.lt(s.splat(1.0f32))))).any() { cheap(s, a_5) } else { s.splat(0.0) };
+        let _e9 = [_e8; 2];
+        let _e10 = if (_m1 & (t_3.gt(s.splat(0.25f32)) & a_5.lt(s.splat(1.0f32)))).any() { dear(s, b_2) } else { s.splat(0.0) };
+        let _e11 = [_e10, t_3];
+        let _e13 = t_3.gt(s.splat(0.25f32));
+        let _e15 = a_5.lt(s.splat(1.0f32));
+        let _e16 = (_e13 & _e15);
+        let _e17 = uplift_simd::vector::select_all::<S, 2>(_e16, _e11, _e9);
+        r_2 = uplift_simd::vector::select_all::<S, 2>(_m1, _e17, r_2);
+    }
+    let _e18 = r_2;
+    return _e18;
+}

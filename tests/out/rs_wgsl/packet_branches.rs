@@ -243,6 +243,58 @@ pub fn switch_in_loop(n_4: i32) -> i32 {
 }
 
 #[inline(always)]
+#[allow(unused_assignments)]
+pub fn dear(x_3: f32) -> f32 {
+    let mut a_3: f32 = 0.0f32;
+    let mut i_3: i32 = 0i32;
+    a_3 = x_3;
+    loop {
+        let _e4 = i_3;
+        if _e4 < 4i32 {
+        } else {
+            break;
+        }
+        {
+            let _e7 = a_3;
+            let _e10 = a_3;
+            a_3 = _e7 * 0.5f32 + _e10.sin();
+        }
+        let _e14 = i_3;
+        i_3 = _e14.wrapping_add(1i32);
+    }
+    let _e16 = a_3;
+    _e16
+}
+
+#[inline(always)]
+pub fn cheap(x_4: f32) -> f32 {
+    x_4 * x_4
+}
+
+#[inline(always)]
+pub fn chosen(a_4: f32, t_2: f32) -> f32 {
+    let _e2 = cheap(a_4);
+    let _e5 = cheap(a_4 + 1.0f32);
+    let _e6 = dear(_e5);
+    let _e12 = dear(a_4);
+    (if t_2 > 0.5f32 { 2.0f32 * _e6 } else { _e2 }) + (if a_4 < -2.5f32 { 1.0f32 } else { _e12 })
+}
+
+#[inline(always)]
+#[allow(unused_assignments)]
+pub fn chosen_masked(a_5: f32, b_2: f32, t_3: f32) -> Vec2 {
+    let mut r_2: Vec2 = Vec2::ZERO;
+    r_2 = Vec2::new(b_2, 0.0f32);
+    if b_2 > 0.0f32 {
+        let _e8 = cheap(a_5);
+        let _e10 = dear(b_2);
+        r_2 = if (t_3 > 0.25f32) & (a_5 < 1.0f32) { Vec2::new(_e10, t_3) } else { Vec2::splat(_e8) };
+    }
+    let _e18 = r_2;
+    _e18
+}
+
+#[inline(always)]
 fn wgsl_rem_i32_i32(a: i32, b: i32) -> i32 {
     a.checked_rem(b).unwrap_or(0)
 }

@@ -1,6 +1,6 @@
 //! The packet writer against the scalar writer (its oracle): every function of
 //! tests/wgsl/packet_straight.wgsl, packet_branches.wgsl (varying `if`s, returns inside them,
-//! loops that lanes leave at different iterations), packet_structs.wgsl and packet_tables.wgsl
+//! loops that lanes leave at different iterations, calls guarded by the selects they feed), packet_structs.wgsl and packet_tables.wgsl
 //! (gathers), as packet Rust (tests/out/packet/) on every SIMD level this
 //! machine has (plus `Emu<16>` and `Emu<1>`), and as scalar Rust (tests/out/rs_wgsl/), on the
 //! same seeded inputs — lanes differ from each other, so a lane mix-up fails. Values must agree
@@ -119,6 +119,15 @@ impl WithSimd for Compare {
         check("classify", lanes(s, |i| cols::<S, 1>([pb::classify(s, s.load_i(&ints[i..]))])), &|i| vec![sb::classify(ints[i])]);
         check("switch_in_loop", lanes(s, |i| cols::<S, 1>([pb::switch_in_loop(s, s.load_i(&small[i..])).to_f32()])), &|i| vec![sb::switch_in_loop(small[i]) as f32]);
         check("early_vec", lanes(s, |i| cols::<S, 2>(pb::early_vec(s, [s.load(&a[i..]), s.load(&b[i..])]))), &|i| sb::early_vec(Vec2::new(a[i], b[i])).to_array().to_vec());
+        // Guarded calls: `t` in [0, 1] and `a` in [-3, 3] send lanes to both sides; a packet
+        // where no lane takes a side skips that side's calls.
+        check("chosen", lanes(s, |i| cols::<S, 1>([pb::chosen(s, s.load(&a[i..]), s.load(&f[i..]))])), &|i| vec![sb::chosen(a[i], f[i])]);
+        check("chosen_masked", lanes(s, |i| cols::<S, 2>(pb::chosen_masked(s, s.load(&a[i..]), s.load(&b[i..]), s.load(&f[i..])))), &|i| {
+            sb::chosen_masked(a[i], b[i], f[i]).to_array().to_vec()
+        });
+        // All lanes on one side: the other side's calls are skipped, the result unchanged.
+        let high = vec![0.9f32; N];
+        check("chosen_one_side", lanes(s, |i| cols::<S, 1>([pb::chosen(s, s.load(&a[i..]), s.load(&high[i..]))])), &|i| vec![sb::chosen(a[i], 0.9)]);
         failures
     }
 }
