@@ -123,7 +123,7 @@ pub fn guarded_calls(module: &Module, f: &Function) -> HashMap<H, Guard> {
 
 /// Records the expressions each statement uses; false for a statement this analysis does not know.
 fn statement_uses(block: &naga::Block, pure: &HashSet<Handle<Function>>, uses: &mut HashMap<H, Vec<Use>>) -> bool {
-    let mut other = |h: H, uses: &mut HashMap<H, Vec<Use>>| uses.entry(h).or_default().push(Use::Other);
+    let other = |h: H, uses: &mut HashMap<H, Vec<Use>>| uses.entry(h).or_default().push(Use::Other);
     for s in block.iter() {
         match s {
             Statement::Emit(_) | Statement::Break | Statement::Continue | Statement::Return { value: None } => {}
