@@ -48,7 +48,7 @@ impl std::error::Error for PacketError {}
 
 type R<T> = Result<T, PacketError>;
 
-fn unsupported(what: impl Into<String>) -> PacketError {
+pub(crate) fn unsupported(what: impl Into<String>) -> PacketError {
     PacketError { construct: what.into(), function: None }
 }
 
@@ -142,7 +142,7 @@ fn reserved_set() -> &'static KeywordSet {
 const RESERVED_PREFIXES: &[&str] = &["_e", "_m", "_lm", "_brk", "_sbrk", "_cont", "_ret", "_done", "wgsl_"];
 
 /// The Rust names of `module`'s items, clear of the writer's own names.
-fn packet_names(module: &Module) -> naga::FastHashMap<NameKey, String> {
+pub(crate) fn packet_names(module: &Module) -> naga::FastHashMap<NameKey, String> {
     let mut names = naga::FastHashMap::default();
     Namer::default().reset(module, reserved_set(), KeywordSet::empty(), CaseInsensitiveKeywordSet::empty(), RESERVED_PREFIXES, &mut names);
     names
@@ -198,9 +198,10 @@ pub fn write_packet_with(module: &Module, options: &PacketOptions) -> R<String> 
             }
         }
     }
+    let outlined = outlined_functions(module);
     for (h, f) in module.functions.iter() {
         out += "\n";
-        out += &write_function(module, &names, h, f)?;
+        out += &write_function(module, &names, h, f, &outlined)?;
     }
     Ok(out)
 }
@@ -256,13 +257,62 @@ fn masked_return(block: &naga::Block, inside: bool) -> bool {
 }
 
 /// One function as a packet function.
-fn write_function(module: &Module, names: &naga::FastHashMap<NameKey, String>, h: Handle<Function>, f: &Function) -> R<String> {
+/// Expressions (counting everything a function inlines) from which a function is outlined.
+const OUTLINE_SIZE: usize = 400;
+
+/// The functions whose calls are written as `s.outline(|| f(…))` (`uplift_simd::Simd::outline`):
+/// those that, with every function they inline, hold at least [`OUTLINE_SIZE`] expressions —
+/// the lobes, the albedo lookups and the thin-film Fresnel of a BSDF kernel. Everything else is
+/// `#[inline(always)]`. Each outlined call site is a function of its own per SIMD level, with
+/// the arguments known at the call (literals) folded into it. Without this a kernel is one
+/// function per level: the 8-lobe stack's took 150 s of release build for two levels and the
+/// scalar one; with it, 6.5 s. Speed, one thread, AVX-512 (Xeon), eval context: conductor 122
+/// → 148 M evals/s (rarely taken calls such as the Airy Fresnel stay out of the hot code), stack
+/// 30.3 → 23.7 (with one material per batch, a whole kernel lets LLVM hoist the material's work
+/// out of the point loop; outlined lobes recompute it per packet — the dependence split of issue
+/// 24 is the way to hoist it). Thresholds of 200 and 1,200 were slower for the stack (18.1 and
+/// 18.7).
+fn outlined_functions(module: &Module) -> std::collections::HashSet<Handle<Function>> {
+    fn calls(block: &naga::Block, out: &mut Vec<Handle<Function>>) {
+        for s in block.iter() {
+            match s {
+                Statement::Call { function, .. } => out.push(*function),
+                Statement::Block(b) => calls(b, out),
+                Statement::If { accept, reject, .. } => {
+                    calls(accept, out);
+                    calls(reject, out);
+                }
+                Statement::Switch { cases, .. } => cases.iter().for_each(|c| calls(&c.body, out)),
+                Statement::Loop { body, continuing, .. } => {
+                    calls(body, out);
+                    calls(continuing, out);
+                }
+                _ => {}
+            }
+        }
+    }
+    let mut size: HashMap<Handle<Function>, usize> = HashMap::new();
+    let mut outlined = std::collections::HashSet::new();
+    // Callees come before their callers in naga's arena.
+    for (h, f) in module.functions.iter() {
+        let mut callees = Vec::new();
+        calls(&f.body, &mut callees);
+        let n = f.expressions.len() + callees.iter().map(|c| if outlined.contains(c) { 1 } else { size.get(c).copied().unwrap_or(0) }).sum::<usize>();
+        size.insert(h, n);
+        if n >= OUTLINE_SIZE && f.name.as_deref() != Some("mx_pattern") {
+            outlined.insert(h);
+        }
+    }
+    outlined
+}
+
+fn write_function(module: &Module, names: &naga::FastHashMap<NameKey, String>, h: Handle<Function>, f: &Function, outlined: &std::collections::HashSet<Handle<Function>>) -> R<String> {
     let ctx = naga::proc::ResolveContext::with_locals(module, &f.local_variables, &f.arguments);
     let mut typifier = naga::front::Typifier::new();
     for (eh, _) in f.expressions.iter() {
         typifier.grow(eh, &f.expressions, &ctx).map_err(|e| PacketError { construct: format!("an expression whose type naga cannot resolve ({e})"), function: f.name.clone() })?;
     }
-    let mut w = FunctionWriter { module, f, names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), loops: Vec::new(), loop_count: 0, inline_all: false, switch_breaks: Vec::new(), calls: HashMap::new(), guards: crate::packet_guards::guarded_calls(module, f), early: None };
+    let mut w = FunctionWriter { module, f, names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), loops: Vec::new(), loop_count: 0, inline_all: false, switch_breaks: Vec::new(), calls: HashMap::new(), guards: crate::packet_guards::guarded_calls(module, f), early: None, outlined };
     let text = w.function().map_err(|mut e| {
         e.function = f.name.clone();
         e
@@ -274,7 +324,7 @@ fn write_function(module: &Module, names: &naga::FastHashMap<NameKey, String>, h
 /// work list).
 pub fn unsupported_functions(module: &Module) -> Vec<PacketError> {
     let names = packet_names(module);
-    module.functions.iter().filter_map(|(h, f)| write_function(module, &names, h, f).err()).collect()
+    module.functions.iter().filter_map(|(h, f)| write_function(module, &names, h, f, &Default::default()).err()).collect()
 }
 
 struct FunctionWriter<'a> {
@@ -308,6 +358,8 @@ struct FunctionWriter<'a> {
     guards: HashMap<Handle<naga::Expression>, crate::packet_guards::Guard>,
     /// Writing a guard's condition: expressions not bound here are written out.
     early: Option<std::collections::HashSet<Handle<naga::Expression>>>,
+    /// Functions whose calls run in `s.outline(…)` (`outlined_functions`).
+    outlined: &'a std::collections::HashSet<Handle<Function>>,
 }
 
 impl FunctionWriter<'_> {
@@ -530,7 +582,12 @@ impl FunctionWriter<'_> {
                 for a in arguments {
                     args.push(self.expr(*a)?);
                 }
-                let call = format!("{}(s{})", self.names[&NameKey::Function(*function)], args[1..].iter().map(|a| format!(", {a}")).collect::<String>());
+                let mut call = format!("{}(s{})", self.names[&NameKey::Function(*function)], args[1..].iter().map(|a| format!(", {a}")).collect::<String>());
+                if self.outlined.contains(function) {
+                    // The call, with the arguments known here (literals fold into it), in a
+                    // function of its own for the level.
+                    call = format!("s.outline(#[inline(always)] || {call})");
+                }
                 match result {
                     Some(r) => {
                         let name = format!("_e{}", r.index());
@@ -1050,6 +1107,8 @@ mod library {
                 let options = super::PacketOptions { table_data: Some("crate::TABLE".into()) };
                 let rs = super::write_packet_with(module, &options).unwrap();
                 assert!(rs.contains("pub fn mx_pattern<S: Simd>") && rs.contains("pub use crate::TABLE as"), "{graph}");
+                // The lobes run in functions of their own; the kernel's top never does.
+                assert!(rs.contains("s.outline(#[inline(always)] || mx_") && !rs.contains("|| mx_pattern("), "{graph}");
             }
         }
     }

@@ -94,7 +94,7 @@ fn unsupported(what: impl Into<String>) -> RustError {
 }
 
 /// The naga version whose IR this writer reads (pinned in the workspace).
-const NAGA_VERSION: &str = "30.0.1";
+pub(crate) const NAGA_VERSION: &str = "30.0.1";
 
 /// The texture trait the generated code calls (declared unless `RustOptions::textures_trait`).
 const TEXTURES_TRAIT: &str = "/// Textures of a kernel, by index (binding − 4 in the WGSL kernel), implemented by the runtime.

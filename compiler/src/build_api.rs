@@ -22,6 +22,8 @@ use std::path::{Path, PathBuf};
 pub struct Builder {
     libraries: Vec<PathBuf>,
     graphs: Vec<(PathBuf, OutputSelection, Option<ClosureContext>)>,
+    /// Indices into `graphs` of those that also get a packet kernel.
+    packet: Vec<usize>,
     albedo_table_data: Option<String>,
 }
 
@@ -45,6 +47,9 @@ pub struct GeneratedKernel {
     pub context: Option<ClosureContext>,
     /// The Rust module (its first line names the document by `source` as given).
     pub rust: String,
+    /// The packet kernel's module (`packet_kernel.rs`), for graphs added with
+    /// [`Builder::packet_closure_graph`].
+    pub packet: Option<String>,
     /// As [`BuiltKernel::fingerprint`].
     pub fingerprint: u64,
 }
@@ -71,6 +76,13 @@ impl Builder {
     pub fn closure_graph(mut self, path: impl Into<PathBuf>, context: ClosureContext) -> Builder {
         self.graphs.push((path.into(), OutputSelection::AllNumeric, Some(context)));
         self
+    }
+
+    /// [`Builder::closure_graph`], also writing the kernel as packet Rust
+    /// ([`crate::packet_kernel::write_packet_kernel`]; [`GeneratedKernel::packet`]).
+    pub fn packet_closure_graph(mut self, path: impl Into<PathBuf>, context: ClosureContext) -> Builder {
+        self.packet.push(self.graphs.len());
+        self.closure_graph(path, context)
     }
 
     /// Adds a document, compiling only the named outputs.
@@ -132,7 +144,7 @@ impl Builder {
             return Err(lines(&compiler.library.diagnostics));
         }
         let mut kernels = Vec::new();
-        for (path, selection, context) in &self.graphs {
+        for (index, (path, selection, context)) in self.graphs.iter().enumerate() {
             let c = compiler.compile_file_in(path, selection, *context);
             let Some(kernel) = c.kernel.filter(|_| !mtlx::has_errors(&c.diagnostics)) else {
                 let mut msg = lines(&c.diagnostics);
@@ -154,7 +166,14 @@ impl Builder {
             if let Some(c) = context {
                 stem = format!("{stem}_{}", c.name());
             }
-            kernels.push(GeneratedKernel { stem, source: path.clone(), context: *context, rust, fingerprint });
+            let packet = match self.packet.contains(&index) {
+                true => {
+                    let options = crate::backend_packet::PacketOptions { table_data: self.albedo_table_data.clone() };
+                    Some(crate::packet_kernel::write_packet_kernel(&kernel, &options).map_err(|e| format!("{} (packet kernel): {e}", path.display()))?)
+                }
+                false => None,
+            };
+            kernels.push(GeneratedKernel { stem, source: path.clone(), context: *context, rust, fingerprint, packet });
         }
         Ok(kernels)
     }

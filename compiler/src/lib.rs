@@ -8,6 +8,7 @@ pub mod arena;
 pub mod backend_neural;
 pub mod backend_packet;
 pub mod packet_guards;
+pub mod packet_kernel;
 pub mod backend_rust;
 pub mod build_api;
 pub mod compile;

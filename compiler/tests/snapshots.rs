@@ -271,6 +271,11 @@ fn wgsl_semantics_snapshots() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
+/// The shipped closure kernels that also ship in packet form (`<graph>_<context>`): the
+/// 8-lobe stack every enhanced material shades with (data generation, rendering, the furnace)
+/// and the conductor of the engines benchmark. Each costs build time (two SIMD levels).
+const PACKET_KERNELS: &[&str] = &["uplift_stack_eval", "uplift_stack_albedo", "uplift_stack_sample", "uplift_stack_pdf", "bsdf_conductor_eval"];
+
 /// The kernels the runtime ships, `runtime/kernels/src/generated/`, are snapshots too: the
 /// compiler's Rust for every graph in `runtime/kernels/graphs/`, `examples/marble.mtlx`, the
 /// uplift rules' baked pattern outputs (`mtlx/rules/`, `uplift_rule/<name>_out`) and every BSDF
@@ -315,7 +320,10 @@ fn shipped_kernels_are_current() {
     }
     for g in mtlx_files("runtime/kernels/graphs/bsdf") {
         for c in uplift_compiler::ClosureContext::ALL {
-            builder = builder.closure_graph(&g, c);
+            builder = match PACKET_KERNELS.contains(&format!("{}_{}", g.file_stem().unwrap().to_string_lossy(), c.name()).as_str()) {
+                true => builder.packet_closure_graph(&g, c),
+                false => builder.closure_graph(&g, c),
+            };
         }
     }
     let kernels = builder.generate().unwrap_or_else(|e| panic!("compiling the runtime's graphs:\n{e}"));
@@ -326,15 +334,23 @@ fn shipped_kernels_are_current() {
     let tables = builder.albedo_tables_source("MX_ALBEDO_TABLE_DATA").unwrap();
     files.push(("albedo_table_data.rs".into(), format!("{}//! The pbrlib albedo tables (mtlx/libraries/pbrlib/wgsl/albedo_tables.wgsl) as one static, which\n//! every shipped kernel that reads them uses.\n\n{tables}", header("the library's albedo tables"))));
     let mut table = header("the table of shipped kernels");
-    table += "//! The kernels the runtime ships (see `crate::shipped`): one module per kernel, and their table.\n\nuse crate::cpu_batch_fn;\nuse crate::driver::{BatchFn, TextureSet};\nuse crate::shipped::BuiltinKernel;\nuse crate::KernelShape;\n\npub mod albedo_table_data;\n";
+    table += "//! The kernels the runtime ships (see `crate::shipped`): one module per kernel, and their table.\n\nuse crate::{cpu_batch_fn, packet_batch_fn};\nuse crate::driver::{BatchFn, TextureSet};\nuse crate::shipped::BuiltinKernel;\nuse crate::KernelShape;\n\npub mod albedo_table_data;\n";
     let mut entries = String::new();
     for k in &kernels {
         let stem = &k.stem;
         let _ = writeln!(table, "#[allow(clippy::all, dead_code, unused_imports)]\npub mod {stem};");
+        let batch = match &k.packet {
+            Some(packet) => {
+                let _ = writeln!(table, "#[allow(clippy::all, dead_code, unused_imports)]\npub mod {stem}_packet;");
+                files.push((format!("{stem}_packet.rs"), packet.clone()));
+                format!("packet_batch_fn!({stem}_packet, {stem}), scalar: cpu_batch_fn!({stem}), packet: true")
+            }
+            None => format!("cpu_batch_fn!({stem}), scalar: cpu_batch_fn!({stem}), packet: false"),
+        };
         let context = k.context.map(|c| c.name());
         let _ = writeln!(
             entries,
-            "    BuiltinKernel {{ name: {stem:?}, source: {:?}, context: {context:?}, fingerprint: {:#x}, shape: KernelShape {{ input_columns: {stem}::INPUT_COLUMNS, output_columns: {stem}::OUTPUT_COLUMNS, texture_count: {stem}::TEXTURE_COUNT }}, batch: cpu_batch_fn!({stem}) }},",
+            "    BuiltinKernel {{ name: {stem:?}, source: {:?}, context: {context:?}, fingerprint: {:#x}, shape: KernelShape {{ input_columns: {stem}::INPUT_COLUMNS, output_columns: {stem}::OUTPUT_COLUMNS, texture_count: {stem}::TEXTURE_COUNT }}, batch: {batch} }},",
             k.source.display().to_string().replace('\\', "/"),
             k.fingerprint
         );

@@ -120,6 +120,23 @@ macro_rules! cpu_batch_fn {
     }};
 }
 
+/// The [`BatchFn`] of a kernel shipped in packet form too (`$packet`, a module holding a
+/// `templates/packet_kernel.rs` file, beside the scalar module `$kernel`): the packet kernel at
+/// this machine's SIMD level (AVX-512 or AVX2), the scalar kernel's [`cpu_batch_fn!`] on other
+/// machines. Packet kernels read no textures. The caller has `BatchFn` and `TextureSet` in scope.
+#[macro_export]
+macro_rules! packet_batch_fn {
+    ($packet:ident, $kernel:ident) => {{
+        fn batch<'t>(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut [f32]], tex: &TextureSet<'t>) {
+            if !$packet::mx_pattern_batch_simd(geom, inputs, outputs) {
+                let scalar: BatchFn = cpu_batch_fn!($kernel);
+                scalar(geom, inputs, outputs, tex)
+            }
+        }
+        batch as BatchFn
+    }};
+}
+
 /// Runs `batch` over `n` points: `geometry`, `inputs` and `outputs` are column-major (`*_columns`
 /// columns of `n` floats each). Blocks of [`BLOCK`] points run in parallel on the current rayon
 /// pool. The caller has checked the lengths.

@@ -8,6 +8,7 @@ use crate::driver::BatchFn;
 use crate::KernelShape;
 
 /// One shipped kernel.
+#[derive(Clone, Copy)]
 pub struct BuiltinKernel {
     /// The generated module's name (the document's stem).
     pub name: &'static str,
@@ -19,8 +20,14 @@ pub struct BuiltinKernel {
     /// albedo tables, as a runtime compiling the same document writes it).
     pub fingerprint: u64,
     pub shape: KernelShape,
-    /// `mx_pattern_batch` behind runtime CPU dispatch.
+    /// The kernel behind runtime CPU dispatch: its packet form (`packet_batch_fn!`) where it
+    /// ships one, else `mx_pattern_batch` (`cpu_batch_fn!`).
     pub batch: BatchFn,
+    /// The scalar writer's kernel (`cpu_batch_fn!`): the oracle a packet form is tested
+    /// against; the same function as `batch` where there is none.
+    pub scalar: BatchFn,
+    /// Whether `batch` is a packet kernel.
+    pub packet: bool,
 }
 
 /// The `uplift_stack` closure graph (source path, text): the stack every enhanced material

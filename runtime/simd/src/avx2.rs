@@ -138,6 +138,18 @@ impl Simd for Avx2 {
     type M = M32x8;
 
     #[inline(always)]
+    fn outline<R>(self, f: impl FnOnce() -> R) -> R {
+        /// A function of its own, compiled for AVX2, `f` inlined into it.
+        #[target_feature(enable = "avx2,fma")]
+        #[inline(never)]
+        fn part<R>(f: impl FnOnce() -> R) -> R {
+            f()
+        }
+        // SAFETY: the token exists, so the features were detected (module doc).
+        unsafe { part(f) }
+    }
+
+    #[inline(always)]
     fn splat(self, x: f32) -> F32x8 {
         F32x8(avx!(_mm256_set1_ps(x)))
     }

@@ -165,6 +165,18 @@ impl Simd for Avx512 {
     type M = M32x16;
 
     #[inline(always)]
+    fn outline<R>(self, f: impl FnOnce() -> R) -> R {
+        /// A function of its own, compiled for AVX-512, `f` inlined into it.
+        #[target_feature(enable = "avx512f,avx512bw,avx512dq,avx512vl,avx2,fma")]
+        #[inline(never)]
+        fn part<R>(f: impl FnOnce() -> R) -> R {
+            f()
+        }
+        // SAFETY: the token exists, so the features were detected (module doc).
+        unsafe { part(f) }
+    }
+
+    #[inline(always)]
     fn splat(self, x: f32) -> F32x16 {
         F32x16(avx!(_mm512_set1_ps(x)))
     }

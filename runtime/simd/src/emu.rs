@@ -88,6 +88,11 @@ impl<const N: usize> Simd for Emu<N> {
         16 => "emu16",
         _ => "emu",
     };
+
+    #[inline(always)]
+    fn outline<R>(self, f: impl FnOnce() -> R) -> R {
+        f()
+    }
     type F = EmuF32<N>;
     type I = EmuI32<N>;
     type U = EmuU32<N>;

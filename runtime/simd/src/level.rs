@@ -90,6 +90,36 @@ impl Level {
         Level::ALL.into_iter().filter(|l| l.is_available()).collect()
     }
 
+    /// The level [`Level::run_hardware`] uses: [`Level::detect`], once per process, with `Emu16` (a test
+    /// level) taken as `Scalar`.
+    pub fn current() -> Level {
+        static CURRENT: std::sync::OnceLock<Level> = std::sync::OnceLock::new();
+        *CURRENT.get_or_init(|| match Level::detect() {
+            Level::Emu16 => Level::Scalar,
+            l => l,
+        })
+    }
+
+    /// Runs `op` at [`Level::current`] if that is a hardware level (AVX-512 or AVX2), else
+    /// returns `None` and the caller runs its scalar code. Unlike [`Level::dispatch`] it
+    /// compiles `op` for the hardware levels only: generated kernels call it, each level they
+    /// are compiled for costs build time, and the scalar writer's kernel is the faster one
+    /// without SIMD (one lane of packet code pays for masks and selects it does not need).
+    pub fn run_hardware<Op: WithSimd>(op: Op) -> Option<Op::Output> {
+        match Level::current() {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `current` returns a hardware level only after detecting its features.
+            Level::Avx512 => Some(unsafe { crate::avx512::entry(op) }),
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: as above.
+            Level::Avx2 => Some(unsafe { crate::avx2::entry(op) }),
+            _ => {
+                let _ = op;
+                None
+            }
+        }
+    }
+
     /// Runs `op` at this level. Panics if the machine lacks it ([`Level::is_available`]): a
     /// level is chosen from [`Level::detect`] or [`Level::available`].
     pub fn dispatch<Op: WithSimd>(self, op: Op) -> Op::Output {

@@ -17,6 +17,13 @@ pub trait Simd: Copy + Send + Sync + Debug + 'static {
     type U: U32s<Self>;
     type M: M32s<Self>;
 
+    /// Runs `f` (an `#[inline(always)]` closure) in a function of its own compiled for this
+    /// level, instead of inlined into its caller: the packet writer outlines the large parts of
+    /// a kernel (its lobes) so that each is compiled once, not once per call site, and no
+    /// function grows so large that LLVM's optimisation time explodes (a kernel is otherwise
+    /// one function per level). `Emu` levels just call `f`.
+    fn outline<R>(self, f: impl FnOnce() -> R) -> R;
+
     fn splat(self, x: f32) -> Self::F;
     fn splat_i(self, x: i32) -> Self::I;
     fn splat_u(self, x: u32) -> Self::U;

@@ -419,3 +419,38 @@ fn dispatch_runs_the_widest_level_and_refuses_a_missing_one() {
         }
     }
 }
+
+#[test]
+fn outlined_code_computes_what_inlined_code_does_and_run_hardware_picks_the_current_level() {
+    struct Outlined;
+    impl WithSimd for Outlined {
+        type Output = Vec<f32>;
+        #[inline(always)]
+        fn with_simd<S: Simd>(self, s: S) -> Vec<f32> {
+            let x = s.load(&[0.5, -1.5, 2.0, 3.25, 0.0, 7.0, -2.0, 1.0, 9.0, 4.0, -3.0, 5.5, 6.0, 0.25, 8.0, -0.5][..S::LANES]);
+            // A captured packet, a result through the outlined function, and a nested one.
+            let y = s.outline(#[inline(always)] || x * x + s.outline(#[inline(always)] || x.sqrt().max(s.splat(-1.0))));
+            floats::<S>(y)
+        }
+    }
+    let want = |x: f32| x * x + x.sqrt().max(-1.0);
+    for level in Level::available() {
+        let got = level.dispatch(Outlined);
+        let xs = [0.5f32, -1.5, 2.0, 3.25, 0.0, 7.0, -2.0, 1.0, 9.0, 4.0, -3.0, 5.5, 6.0, 0.25, 8.0, -0.5];
+        for (k, g) in got.iter().enumerate() {
+            assert!(same(*g, want(xs[k])), "{} lane {k}: {g} vs {}", level.name(), want(xs[k]));
+        }
+    }
+    struct Lanes;
+    impl WithSimd for Lanes {
+        type Output = usize;
+        #[inline(always)]
+        fn with_simd<S: Simd>(self, _: S) -> usize {
+            S::LANES
+        }
+    }
+    match Level::current() {
+        Level::Scalar => assert_eq!(Level::run_hardware(Lanes), None),
+        l => assert_eq!(Level::run_hardware(Lanes), Some(l.lanes())),
+    }
+}

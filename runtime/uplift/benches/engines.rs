@@ -233,8 +233,26 @@ fn main() {
             let cpu_all = rate(o.points, o.seconds, || {
                 all.run_prepared(&prepared, &b).unwrap();
             });
-            println!("cpu  in-process   1 thread : {}", mega(cpu1));
+            let form = match &prepared {
+                CpuKernel::Builtin(k) if k.packet && uplift_simd::Level::current() != uplift_simd::Level::Scalar => format!("packet kernel, {}", uplift_simd::Level::current().name()),
+                _ => "scalar kernel".to_string(),
+            };
+            println!("cpu  in-process   1 thread : {}  ({form})", mega(cpu1));
             println!("cpu  in-process {threads:2} threads: {}  ({:.2}× one thread)", mega(cpu_all), cpu_all / cpu1);
+            // A kernel shipped in packet form: the scalar writer's kernel too (what it replaces).
+            if let CpuKernel::Builtin(k) = &prepared {
+                if k.packet {
+                    let scalar = CpuKernel::Builtin(Box::leak(Box::new(uplift_kernels::shipped::BuiltinKernel { batch: k.scalar, ..**k })));
+                    let s1 = rate(o.points, o.seconds, || {
+                        one.run_prepared(&scalar, &b).unwrap();
+                    });
+                    let s_all = rate(o.points, o.seconds, || {
+                        all.run_prepared(&scalar, &b).unwrap();
+                    });
+                    println!("cpu  in-process   1 thread : {}  (scalar kernel; packet {:.2}×)", mega(s1), cpu1 / s1);
+                    println!("cpu  in-process {threads:2} threads: {}  (scalar kernel; packet {:.2}×)", mega(s_all), cpu_all / s_all);
+                }
+            }
             (cpu1, cpu_all)
         }
         CpuKernel::External(runner) => {

@@ -646,7 +646,7 @@ fn degenerate_inputs_stay_finite() {
     let gpu = common::engine();
     let specials = [0.0f32, 1.0, -1.0, f32::NAN, 1e-9, 1e9];
     let views = [[0.0f32, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.6, 0.0, -0.8], [f32::NAN, 0.0, 1.0]];
-    for graph in ["bsdf_transparent_lobes", "bsdf_opaque_lobes", "bsdf_thin_film", "bsdf_hair", "bsdf_stack", "bsdf_conductor"] {
+    for graph in ["bsdf_transparent_lobes", "bsdf_opaque_lobes", "bsdf_thin_film", "bsdf_hair", "bsdf_stack", "bsdf_conductor", "uplift_stack"] {
         for context in ClosureContext::ALL {
             let b = bsdf(graph, context);
             // Every input takes every special value in turn, the others their defaults or 1.

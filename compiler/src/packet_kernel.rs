@@ -1,0 +1,152 @@
+//! The packet kernel of a pattern kernel (issue 24): the packet writer's module
+//! (`backend_packet.rs`) followed by its batch loop, one packet of points at a time, and the
+//! batch entry at this machine's SIMD level (askama template `templates/packet_kernel.rs`). The
+//! batch ABI is the scalar kernel's (`templates/pattern_kernel.rs`) without textures: the
+//! packet writer does not read textures yet, so a kernel with textures is a [`PacketError`].
+
+use crate::backend_packet::{packet_names, unsupported, write_packet_with, PacketError, PacketOptions};
+use crate::kernel::{PatternKernel, GEOMETRY_LAYOUT, GEOMETRY_STRIDE};
+use askama::Template;
+use mtlx::DataType;
+use naga::proc::NameKey;
+use naga::{Handle, TypeInner};
+
+struct Field {
+    name: String,
+    expr: String,
+}
+
+#[derive(Template)]
+#[template(path = "packet_kernel.rs", escape = "none")]
+struct PacketKernelTemplate<'a> {
+    source: &'a str,
+    naga_version: &'a str,
+    module: &'a str,
+    geometry_stride: usize,
+    input_stride: usize,
+    output_stride: usize,
+    geometry_struct: String,
+    geometry_fields: Vec<Field>,
+    inputs_struct: Option<String>,
+    input_fields: Vec<Field>,
+    call: String,
+    output_stores: Vec<String>,
+}
+
+/// Writes `kernel` as packet Rust with its batch loop (module doc).
+pub fn write_packet_kernel(kernel: &PatternKernel, options: &PacketOptions) -> Result<String, PacketError> {
+    if !kernel.textures.is_empty() {
+        return Err(unsupported("a kernel that reads textures"));
+    }
+    let module = kernel.cpu_module.as_ref().map_or(&kernel.module, |m| &m.0);
+    let body = write_packet_with(module, options)?;
+    let names = packet_names(module);
+    let err = |what: String| PacketError { construct: what, function: Some("mx_pattern".into()) };
+    let (ph, pf) = module.functions.iter().find(|(_, f)| f.name.as_deref() == Some("mx_pattern")).ok_or_else(|| err("a pattern kernel without `mx_pattern`".into()))?;
+    let struct_named = |name: &str| module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name) && matches!(t.inner, TypeInner::Struct { .. })).map(|(h, _)| h);
+    let members = |h: Handle<naga::Type>| -> Vec<(String, String)> {
+        match &module.types[h].inner {
+            TypeInner::Struct { members, .. } => members.iter().enumerate().map(|(k, m)| (m.name.clone().unwrap_or_default(), names[&NameKey::StructMember(h, k as u32)].clone())).collect(),
+            _ => Vec::new(),
+        }
+    };
+    // Geometry: every field from its columns; bitangents are normal × tangent.
+    let gh = struct_named("mx_geometry").ok_or_else(|| err("a pattern kernel without `mx_geometry`".into()))?;
+    let column = |field: &str| GEOMETRY_LAYOUT.iter().find(|(p, _)| p.field() == field).map(|(_, o)| *o);
+    let load3 = |o: usize| format!("[mx_g({o}), mx_g({}), mx_g({})]", o + 1, o + 2);
+    let mut geometry_fields = Vec::new();
+    for (wgsl_name, rust_name) in members(gh) {
+        let expr = match (column(&wgsl_name), wgsl_name.strip_prefix("bitangent_")) {
+            (Some(o), _) if wgsl_name == "texcoord" => format!("[mx_g({o}), mx_g({})]", o + 1),
+            (Some(o), _) => load3(o),
+            (None, Some(space)) => {
+                let n = column(&format!("normal_{space}")).ok_or_else(|| err(format!("the geometry field `{wgsl_name}`")))?;
+                let t = column(&format!("tangent_{space}")).ok_or_else(|| err(format!("the geometry field `{wgsl_name}`")))?;
+                format!("uplift_simd::vector::cross::<S>({}, {})", load3(n), load3(t))
+            }
+            _ => return Err(err(format!("the geometry field `{wgsl_name}`"))),
+        };
+        geometry_fields.push(Field { name: rust_name, expr });
+    }
+    let (inputs_struct, input_fields) = match struct_named("MxInputs") {
+        Some(ih) => {
+            let m = members(ih);
+            if m.len() != kernel.inputs.len() {
+                return Err(err("`MxInputs` that does not match the kernel's inputs".into()));
+            }
+            let mut fields = Vec::new();
+            for ((_, rust_name), inp) in m.into_iter().zip(&kernel.inputs) {
+                fields.push(Field { name: rust_name, expr: load(&inp.input.ty, inp.offset).map_err(err)? });
+            }
+            (Some(names[&NameKey::Type(ih)].clone()), fields)
+        }
+        None if kernel.inputs.is_empty() => (None, Vec::new()),
+        None => return Err(err("a kernel with inputs but no `MxInputs`".into())),
+    };
+    let oh = struct_named("MxOutputs").ok_or_else(|| err("a pattern kernel without `MxOutputs`".into()))?;
+    let out_members = members(oh);
+    if out_members.len() != kernel.outputs.len() {
+        return Err(err("`MxOutputs` that does not match the kernel's outputs".into()));
+    }
+    let mut output_stores = Vec::new();
+    for ((_, rust_name), out) in out_members.iter().zip(&kernel.outputs) {
+        output_stores.extend(store(&out.ty, &format!("mx_out.{rust_name}"), out.offset).map_err(err)?);
+    }
+    let mut args = vec!["s".to_string()];
+    for a in &pf.arguments {
+        match module.types[a.ty].name.as_deref() {
+            Some("mx_geometry") => args.push("mx_geom".into()),
+            Some("MxInputs") => args.push("mx_inputs".into()),
+            _ => return Err(err("an `mx_pattern` argument other than the geometry and the inputs".into())),
+        }
+    }
+    let call = format!("{}({})", names[&NameKey::Function(ph)], args.join(", "));
+    let source = kernel.wgsl.lines().next().and_then(|l| l.split(" from ").nth(1)).and_then(|l| l.strip_suffix(". Do not edit.")).unwrap_or("an unnamed document");
+    let template = PacketKernelTemplate {
+        source,
+        naga_version: crate::backend_rust::NAGA_VERSION,
+        module: &body,
+        geometry_stride: GEOMETRY_STRIDE,
+        input_stride: kernel.input_stride,
+        output_stride: kernel.output_stride,
+        geometry_struct: names[&NameKey::Type(gh)].clone(),
+        geometry_fields,
+        inputs_struct,
+        input_fields,
+        call,
+        output_stores,
+    };
+    let mut text = template.render().map_err(|e| unsupported(format!("(template error) {e}")))?;
+    if !text.ends_with('\n') {
+        text.push('\n');
+    }
+    Ok(text)
+}
+
+/// A value of MaterialX type `ty` from columns `offset..` of the current packet.
+fn load(ty: &DataType, offset: usize) -> Result<String, String> {
+    let list = |n: usize| (0..n).map(|k| format!("mx_x({})", offset + k)).collect::<Vec<_>>().join(", ");
+    Ok(match ty {
+        DataType::Boolean => format!("mx_x({offset}).ne(s.splat(0.0))"),
+        DataType::Integer => format!("mx_x({offset}).to_i32()"),
+        DataType::Float => format!("mx_x({offset})"),
+        t => match t.components() {
+            Some(n @ 2..=4) if !matches!(t, DataType::Matrix33 | DataType::Matrix44) => format!("[{}]", list(n)),
+            _ => return Err(format!("an input of type {t}")),
+        },
+    })
+}
+
+/// Stores of a value of MaterialX type `ty` into columns `offset..` of the current packet.
+fn store(ty: &DataType, value: &str, offset: usize) -> Result<Vec<String>, String> {
+    let at = |c: usize, v: String| format!("s.store_partial({v}, &mut outputs[{}][mx_start..mx_end]);", offset + c);
+    Ok(match ty {
+        DataType::Boolean => vec![at(0, format!("{value}.select(s.splat(1.0), s.splat(0.0))"))],
+        DataType::Integer => vec![at(0, format!("{value}.to_f32()"))],
+        DataType::Float => vec![at(0, value.to_string())],
+        t => match t.components() {
+            Some(n @ 2..=4) if !matches!(t, DataType::Matrix33 | DataType::Matrix44) => (0..n).map(|k| at(k, format!("{value}[{k}]"))).collect(),
+            _ => return Err(format!("an output of type {t}")),
+        },
+    })
+}
