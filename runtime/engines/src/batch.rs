@@ -7,17 +7,65 @@ use uplift_compiler::kernel::GEOMETRY_STRIDE;
 use uplift_compiler::PatternKernel;
 
 /// `width` columns of `n` floats each, stored column after column (`data[c * n + i]`).
-#[derive(Clone, Debug, Default, PartialEq)]
+///
+/// A column may be marked *uniform* ([`Columns::mark_uniform`], checked: every value equal):
+/// the CPU engine then hands kernels one value for it instead of streaming `n` equal floats
+/// from memory (a BSDF batch with one material and one frame is otherwise bound by memory
+/// bandwidth, not by the kernel). Marks never change the values; writing a column clears its
+/// mark. Equality compares values only.
+#[derive(Clone, Debug, Default)]
 pub struct Columns {
     n: usize,
     width: usize,
     data: Vec<f32>,
+    /// Per column, when marked; empty when none is.
+    uniform: Vec<bool>,
+}
+
+impl PartialEq for Columns {
+    fn eq(&self, o: &Columns) -> bool {
+        self.n == o.n && self.width == o.width && self.data == o.data
+    }
 }
 
 impl Columns {
     /// `width` columns of `n` zeros.
     pub fn zeros(n: usize, width: usize) -> Columns {
-        Columns { n, width, data: vec![0.0; n * width] }
+        Columns { n, width, data: vec![0.0; n * width], uniform: Vec::new() }
+    }
+
+    /// Marks column `k` uniform if every value in it is the same (bit for bit); returns whether
+    /// it did.
+    pub fn mark_uniform(&mut self, k: usize) -> bool {
+        let col = self.column(k);
+        let same = col.iter().all(|v| v.to_bits() == col[0].to_bits());
+        if same {
+            self.uniform.resize(self.width, false);
+            self.uniform[k] = true;
+        }
+        same
+    }
+
+    /// Marks every column whose values are all the same.
+    pub fn mark_uniform_columns(&mut self) {
+        for k in 0..self.width {
+            self.mark_uniform(k);
+        }
+    }
+
+    /// Whether column `k` is marked uniform.
+    pub fn is_uniform(&self, k: usize) -> bool {
+        self.uniform.get(k).copied().unwrap_or(false)
+    }
+
+    /// Column `k`, or its one value (a slice of length 1) if it is marked uniform: the form the
+    /// CPU kernels' block loop takes (`uplift_kernels::driver::run_column_blocks`).
+    pub fn column_or_uniform(&self, k: usize) -> &[f32] {
+        let c = self.column(k);
+        match self.is_uniform(k) {
+            true => &c[..c.len().min(1)],
+            false => c,
+        }
     }
 
     /// Columns from column-major data (`data.len()` must be `n * width`).
@@ -25,7 +73,7 @@ impl Columns {
         if data.len() != n * width {
             return Err(format!("{} floats cannot be {width} columns of {n}", data.len()));
         }
-        Ok(Columns { n, width, data })
+        Ok(Columns { n, width, data, uniform: Vec::new() })
     }
 
     /// Columns from row-major data: `rows.len() / width` rows of `width` floats. Panics when
@@ -68,6 +116,9 @@ impl Columns {
     }
 
     pub fn column_mut(&mut self, k: usize) -> &mut [f32] {
+        if let Some(u) = self.uniform.get_mut(k) {
+            *u = false;
+        }
         &mut self.data[k * self.n..(k + 1) * self.n]
     }
 
@@ -78,6 +129,7 @@ impl Columns {
 
     /// Every column as a mutable slice.
     pub fn columns_mut(&mut self) -> Vec<&mut [f32]> {
+        self.uniform.clear();
         let mut rest = self.data.as_mut_slice();
         let mut columns = Vec::with_capacity(self.width);
         for _ in 0..self.width {
@@ -94,6 +146,7 @@ impl Columns {
     }
 
     pub fn data_mut(&mut self) -> &mut [f32] {
+        self.uniform.clear();
         &mut self.data
     }
 
@@ -107,7 +160,7 @@ impl Columns {
         for k in 0..self.width {
             data.extend_from_slice(&self.column(k)[start..start + m]);
         }
-        Columns { n: m, width: self.width, data }
+        Columns { n: m, width: self.width, data, uniform: self.uniform.clone() }
     }
 
     /// Writes `part`'s points at `start..` of these columns.
@@ -167,12 +220,13 @@ impl Geometry {
     }
 
     /// The geometry columns of `n` points that all share this geometry (a constant fill, without
-    /// the row-to-column transpose of [`Geometry::columns`]).
+    /// the row-to-column transpose of [`Geometry::columns`]), every column marked uniform.
     pub fn repeated(&self, n: usize) -> Columns {
         let mut c = Columns::zeros(n, GEOMETRY_STRIDE);
         for (k, v) in self.row().into_iter().enumerate() {
             c.column_mut(k).fill(v);
         }
+        c.mark_uniform_columns();
         c
     }
 

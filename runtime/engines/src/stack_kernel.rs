@@ -90,7 +90,8 @@ impl StackKernel {
                 *x = params[r * PARAMETERS + k];
             }
         }
-        let geometry = Geometry::columns(&vec![Geometry::default(); n]);
+        // The local frame for every row: uniform columns, not streamed from memory.
+        let geometry = Geometry::default().repeated(n);
         let batch = PatternBatch { geometry, inputs, textures: vec![] };
         match (&self.prepared, engine) {
             (Prepared::Cpu(k), Engine::Cpu(e)) => e.run_prepared(k, &batch),

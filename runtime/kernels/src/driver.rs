@@ -148,6 +148,20 @@ pub fn run_blocks(batch: BatchFn, n: usize, geometry: &[f32], geometry_columns: 
     assert!(geometry.len() == n * geometry_columns && inputs.len() == n * input_columns && outputs.len() == n * output_columns, "run_blocks: buffer lengths");
     let geometry: Vec<&[f32]> = geometry.chunks_exact(n).collect();
     let inputs: Vec<&[f32]> = inputs.chunks_exact(n).collect();
+    run_column_blocks(batch, n, &geometry, &inputs, outputs, output_columns, tex);
+}
+
+/// [`run_blocks`] over column slices, where a column of length 1 (and `n` > 1) is *uniform*:
+/// every point reads its one value. Each block reads a uniform column from a block-sized buffer
+/// filled with that value, which stays in cache, instead of `n` equal floats streamed from
+/// memory — a batch of one material in one frame is otherwise bound by memory bandwidth.
+/// Kernels see ordinary columns. The caller has checked the lengths (`n` or 1).
+pub fn run_column_blocks(batch: BatchFn, n: usize, geometry: &[&[f32]], inputs: &[&[f32]], outputs: &mut [f32], output_columns: usize, tex: &TextureSet<'_>) {
+    if n == 0 {
+        return;
+    }
+    let ok = |c: &&[f32]| c.len() == n || c.len() == 1;
+    assert!(geometry.iter().all(ok) && inputs.iter().all(ok) && outputs.len() == n * output_columns, "run_column_blocks: buffer lengths");
     let blocks = n.div_ceil(BLOCK);
     let mut per_block: Vec<Vec<&mut [f32]>> = (0..blocks).map(|_| Vec::with_capacity(output_columns)).collect();
     for column in outputs.chunks_exact_mut(n) {
@@ -157,8 +171,10 @@ pub fn run_blocks(batch: BatchFn, n: usize, geometry: &[f32], geometry_columns: 
     }
     per_block.into_par_iter().enumerate().for_each(|(b, mut out)| {
         let range = b * BLOCK..(b * BLOCK + BLOCK).min(n);
-        let g: Vec<&[f32]> = geometry.iter().map(|c| &c[range.clone()]).collect();
-        let x: Vec<&[f32]> = inputs.iter().map(|c| &c[range.clone()]).collect();
+        let fill = |c: &[f32]| if c.len() == n { Vec::new() } else { vec![c[0]; range.len()] };
+        let (gf, xf): (Vec<Vec<f32>>, Vec<Vec<f32>>) = (geometry.iter().map(|c| fill(c)).collect(), inputs.iter().map(|c| fill(c)).collect());
+        let g: Vec<&[f32]> = geometry.iter().zip(&gf).map(|(c, f)| if c.len() == n { &c[range.clone()] } else { f.as_slice() }).collect();
+        let x: Vec<&[f32]> = inputs.iter().zip(&xf).map(|(c, f)| if c.len() == n { &c[range.clone()] } else { f.as_slice() }).collect();
         batch(&g, &x, &mut out, tex);
     });
 }

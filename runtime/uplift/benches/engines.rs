@@ -23,7 +23,9 @@
 //! defaults leave 6 of the 8 lobes at weight 0) and the conductor graph at GGX α 0.3 (gold, as
 //! Mitsuba's `roughconductor` below); `--random-params` draws every `uplift_stack` parameter
 //! per row inside its range (stack_params.rs; weights at least 5 % of their range, so no lobe
-//! is dead). Directions: `wv` and `wl` uniform on the upper hemisphere.
+//! is dead). Directions: `wv` and `wl` uniform on the upper hemisphere. Closure kernels: the
+//! frame and every parameter not drawn per row are uniform columns (`Columns::mark_uniform`),
+//! as Mitsuba's benchmark has one material and one frame.
 //!
 //! **Anchor.** `--mitsuba roughconductor|principled` also measures Mitsuba 3.9.1's BSDF `eval`
 //! (`llvm_ad_rgb`, all threads) on the same direction distribution in the same run
@@ -173,7 +175,13 @@ fn batch(kernel: &PatternKernel, n: usize, params: &[(String, Vec<f32>)], random
             row[kernel.inputs[d].offset..kernel.inputs[d].offset + 3].copy_from_slice(&v);
         }
     }
-    PatternBatch::from_rows(&vec![local; n], &rows, kernel.input_stride, vec![])
+    // One frame and (without --random-params) one material for the whole batch, as Mitsuba's
+    // benchmark has them: those columns are marked uniform, so the CPU engine does not stream
+    // them from memory.
+    let mut b = PatternBatch::from_rows(&vec![local; n], &rows, kernel.input_stride, vec![]);
+    b.geometry.mark_uniform_columns();
+    b.inputs.mark_uniform_columns();
+    b
 }
 
 fn mega(r: f64) -> String {

@@ -101,10 +101,10 @@ impl CpuEngine {
                 let textures = TextureSet(batch.textures.iter().map(|t| TextureImage { width: t.width, height: t.height, rgba: &t.rgba }).collect());
                 let s = &k.shape;
                 let mut out = Columns::zeros(n, s.output_columns);
-                let inputs: &[f32] = if s.input_columns == 0 { &[] } else { batch.inputs.data() };
-                self.pool.install(|| {
-                    driver::run_blocks(k.batch, n, batch.geometry.data(), GEOMETRY_STRIDE, inputs, s.input_columns, out.data_mut(), s.output_columns, &textures)
-                });
+                // Uniform columns (`Columns::mark_uniform`) go in as their one value.
+                let geometry: Vec<&[f32]> = (0..GEOMETRY_STRIDE).map(|c| batch.geometry.column_or_uniform(c)).collect();
+                let inputs: Vec<&[f32]> = (0..s.input_columns).map(|c| batch.inputs.column_or_uniform(c)).collect();
+                self.pool.install(|| driver::run_column_blocks(k.batch, n, &geometry, &inputs, out.data_mut(), s.output_columns, &textures));
                 Ok(out)
             }
             CpuKernel::External(k) => external::run(k, batch, self.threads),

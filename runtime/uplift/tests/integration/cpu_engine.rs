@@ -215,6 +215,36 @@ fn packet_kernels_agree_with_the_scalar_kernels() {
     }
 }
 
+/// Uniform columns (`Columns::mark_uniform`): the CPU engine hands them to the kernel as one
+/// value per block; results are bit for bit those of the same batch unmarked, for n below,
+/// at and above a block, and writing a column clears its mark.
+#[test]
+fn uniform_columns_give_the_bits_of_dense_ones() {
+    let compiler = Compiler::builtin();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../kernels/graphs/bsdf/uplift_stack.mtlx");
+    let kernel = compiler.compile_file_in(&path, &OutputSelection::AllNumeric, Some(uplift_compiler::ClosureContext::Eval)).kernel.unwrap();
+    let engine = cpu(2);
+    for n in [1usize, 7, 2048, 5000] {
+        let mut rng = Rng::new(n as u64);
+        let mut rows = random_inputs(&mut rng, &kernel, n);
+        // Parameters (every input after the two directions) the same on every row.
+        let first: Vec<f32> = rows[..kernel.input_stride].to_vec();
+        for r in rows.chunks_mut(kernel.input_stride) {
+            r[6..].copy_from_slice(&first[6..]);
+        }
+        let dense = PatternBatch::from_rows(&vec![Geometry::default(); n], &rows, kernel.input_stride, vec![]);
+        let mut marked = dense.clone();
+        marked.geometry.mark_uniform_columns();
+        marked.inputs.mark_uniform_columns();
+        assert!((0..20).all(|c| marked.geometry.is_uniform(c)) && (6..kernel.input_stride).all(|c| marked.inputs.is_uniform(c)));
+        assert_eq!(n == 1, marked.inputs.is_uniform(0), "n {n}: directions vary");
+        let (a, b) = (engine.run_pattern(&kernel, &dense).unwrap(), engine.run_pattern(&kernel, &marked).unwrap());
+        assert!(a.data().iter().zip(b.data()).all(|(x, y)| x.to_bits() == y.to_bits()), "n {n}: marked columns change results");
+        marked.inputs.column_mut(7)[0] += 1.0;
+        assert!(!marked.inputs.is_uniform(7) && marked.inputs.is_uniform(8));
+    }
+}
+
 /// A node that is not in the builtin library: f(x, k) = k·x² + sin(x), and a vector3 variant
 /// with a geometric default (the world position), written only as a nodedef and WGSL.
 const NEW_NODEDEFS: &str = r#"<?xml version="1.0"?>
