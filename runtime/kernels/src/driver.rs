@@ -123,14 +123,20 @@ macro_rules! cpu_batch_fn {
 /// The [`BatchFn`] of a kernel shipped in packet form too (`$packet`, a module holding a
 /// `templates/packet_kernel.rs` file, beside the scalar module `$kernel`): the packet kernel at
 /// this machine's SIMD level (AVX-512 or AVX2), the scalar kernel's [`cpu_batch_fn!`] on other
-/// machines. Packet kernels read no textures. The caller has `BatchFn` and `TextureSet` in scope.
+/// machines. Packet kernels read no textures. Columns of length 1 are uniform (`run_column_blocks`
+/// with `takes_uniform`): the packet kernel splats them, the scalar fallback gets them repeated.
+/// The caller has `BatchFn` and `TextureSet` in scope.
 #[macro_export]
 macro_rules! packet_batch_fn {
     ($packet:ident, $kernel:ident) => {{
         fn batch<'t>(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut [f32]], tex: &TextureSet<'t>) {
             if !$packet::mx_pattern_batch_simd(geom, inputs, outputs) {
+                let n = outputs.first().map_or(0, |o| o.len());
+                let (mut gb, mut xb) = (Vec::new(), Vec::new());
+                let geom = $crate::driver::expand_uniform(geom, n, &mut gb);
+                let inputs = $crate::driver::expand_uniform(inputs, n, &mut xb);
                 let scalar: BatchFn = cpu_batch_fn!($kernel);
-                scalar(geom, inputs, outputs, tex)
+                scalar(&geom, &inputs, outputs, tex)
             }
         }
         batch as BatchFn
@@ -148,15 +154,17 @@ pub fn run_blocks(batch: BatchFn, n: usize, geometry: &[f32], geometry_columns: 
     assert!(geometry.len() == n * geometry_columns && inputs.len() == n * input_columns && outputs.len() == n * output_columns, "run_blocks: buffer lengths");
     let geometry: Vec<&[f32]> = geometry.chunks_exact(n).collect();
     let inputs: Vec<&[f32]> = inputs.chunks_exact(n).collect();
-    run_column_blocks(batch, n, &geometry, &inputs, outputs, output_columns, tex);
+    run_column_blocks(batch, false, n, &geometry, &inputs, outputs, output_columns, tex);
 }
 
 /// [`run_blocks`] over column slices, where a column of length 1 (and `n` > 1) is *uniform*:
-/// every point reads its one value. Each block reads a uniform column from a block-sized buffer
-/// filled with that value, which stays in cache, instead of `n` equal floats streamed from
-/// memory — a batch of one material in one frame is otherwise bound by memory bandwidth.
-/// Kernels see ordinary columns. The caller has checked the lengths (`n` or 1).
-pub fn run_column_blocks(batch: BatchFn, n: usize, geometry: &[&[f32]], inputs: &[&[f32]], outputs: &mut [f32], output_columns: usize, tex: &TextureSet<'_>) {
+/// every point reads its one value. `batch` takes uniform columns as they are when
+/// `takes_uniform` (a packet kernel's `packet_batch_fn!`: it splats the value); otherwise each
+/// block reads them from a block-sized buffer filled with the value, which stays in cache
+/// instead of `n` equal floats streamed from memory. The caller has checked the lengths (`n`
+/// or 1).
+#[allow(clippy::too_many_arguments)]
+pub fn run_column_blocks(batch: BatchFn, takes_uniform: bool, n: usize, geometry: &[&[f32]], inputs: &[&[f32]], outputs: &mut [f32], output_columns: usize, tex: &TextureSet<'_>) {
     if n == 0 {
         return;
     }
@@ -171,12 +179,27 @@ pub fn run_column_blocks(batch: BatchFn, n: usize, geometry: &[&[f32]], inputs: 
     }
     per_block.into_par_iter().enumerate().for_each(|(b, mut out)| {
         let range = b * BLOCK..(b * BLOCK + BLOCK).min(n);
-        let fill = |c: &[f32]| if c.len() == n { Vec::new() } else { vec![c[0]; range.len()] };
+        // Full columns: this block's part; uniform ones: as they are, or a filled buffer.
+        let fill = |c: &[f32]| if c.len() == n || takes_uniform { Vec::new() } else { vec![c[0]; range.len()] };
         let (gf, xf): (Vec<Vec<f32>>, Vec<Vec<f32>>) = (geometry.iter().map(|c| fill(c)).collect(), inputs.iter().map(|c| fill(c)).collect());
-        let g: Vec<&[f32]> = geometry.iter().zip(&gf).map(|(c, f)| if c.len() == n { &c[range.clone()] } else { f.as_slice() }).collect();
-        let x: Vec<&[f32]> = inputs.iter().zip(&xf).map(|(c, f)| if c.len() == n { &c[range.clone()] } else { f.as_slice() }).collect();
+        fn pick<'a>(c: &'a [f32], f: &'a [f32], range: std::ops::Range<usize>, n: usize, takes_uniform: bool) -> &'a [f32] {
+            match (c.len() == n, takes_uniform) {
+                (true, _) => &c[range],
+                (false, true) => c,
+                (false, false) => f,
+            }
+        }
+        let g: Vec<&[f32]> = geometry.iter().zip(&gf).map(|(c, f)| pick(c, f, range.clone(), n, takes_uniform)).collect();
+        let x: Vec<&[f32]> = inputs.iter().zip(&xf).map(|(c, f)| pick(c, f, range.clone(), n, takes_uniform)).collect();
         batch(&g, &x, &mut out, tex);
     });
+}
+
+/// Columns of length 1 among `columns` (uniform, [`run_column_blocks`]) repeated to `n` values,
+/// for a kernel that reads every column at every point.
+pub fn expand_uniform<'a>(columns: &[&'a [f32]], n: usize, buffers: &'a mut Vec<Vec<f32>>) -> Vec<&'a [f32]> {
+    *buffers = columns.iter().map(|c| if c.len() == 1 && n != 1 { vec![c[0]; n] } else { Vec::new() }).collect();
+    columns.iter().zip(buffers.iter()).map(|(c, b)| if b.is_empty() { *c } else { b.as_slice() }).collect()
 }
 
 /// Evaluations per second of `run`, which evaluates `points` points: one warm-up run, then

@@ -250,7 +250,7 @@ fn main() {
             // A kernel shipped in packet form: the scalar writer's kernel too (what it replaces).
             if let CpuKernel::Builtin(k) = &prepared {
                 if k.packet {
-                    let scalar = CpuKernel::Builtin(Box::leak(Box::new(uplift_kernels::shipped::BuiltinKernel { batch: k.scalar, ..**k })));
+                    let scalar = CpuKernel::Builtin(Box::leak(Box::new(uplift_kernels::shipped::BuiltinKernel { batch: k.scalar, packet: false, ..**k })));
                     let s1 = rate(o.points, o.seconds, || {
                         one.run_prepared(&scalar, &b).unwrap();
                     });

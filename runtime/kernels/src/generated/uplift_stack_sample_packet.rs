@@ -2493,7 +2493,8 @@ pub const OUTPUT_COLUMNS: usize = 10;
 /// Evaluates `mx_pattern` for every point of a structure-of-arrays batch, `S::LANES` points at
 /// a time: `geom` holds `GEOMETRY_COLUMNS` columns, `inputs` `INPUT_COLUMNS`, `outputs`
 /// `OUTPUT_COLUMNS`, all of one length; point `i` reads `geom[c][i]` and `inputs[c][i]` and
-/// writes `outputs[c][i]`. The last packet's missing lanes read zeros and are not written.
+/// writes `outputs[c][i]`. A geometry or input column of length 1 is uniform: every point reads
+/// its one value. The last packet's missing lanes read zeros and are not written.
 /// Booleans are 0.0/1.0 and integers are floats in the columns, as in the WGSL kernel.
 ///
 /// Panics when a column count or a column length is wrong.
@@ -2505,14 +2506,15 @@ pub fn mx_pattern_packets<S: Simd>(s: S, geom: &[&[f32]], inputs: &[&[f32]], out
     );
     let mx_n = outputs[0].len();
     assert!(
-        geom.iter().chain(inputs.iter()).all(|c| c.len() == mx_n) && outputs.iter().all(|c| c.len() == mx_n),
+        geom.iter().chain(inputs.iter()).all(|c| c.len() == mx_n || c.len() == 1) && outputs.iter().all(|c| c.len() == mx_n),
         "mx_pattern_packets: columns of different lengths"
     );
     let mut mx_start = 0usize;
     while mx_start < mx_n {
         let mx_end = (mx_start + S::LANES).min(mx_n);
-        let mx_g = |c: usize| s.load_partial(&geom[c][mx_start..mx_end]);
-        let mx_x = |c: usize| s.load_partial(&inputs[c][mx_start..mx_end]);
+        let mx_col = |c: &[f32]| if c.len() == mx_n { s.load_partial(&c[mx_start..mx_end]) } else { s.splat(c[0]) };
+        let mx_g = |c: usize| mx_col(geom[c]);
+        let mx_x = |c: usize| mx_col(inputs[c]);
         let mx_geom = mx_geometry {
             texcoord: [mx_g(0), mx_g(1)],
             position_object: [mx_g(2), mx_g(3), mx_g(4)],
