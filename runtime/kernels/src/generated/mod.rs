@@ -81,15 +81,9 @@ pub mod uplift_stack_eval_packet;
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod uplift_stack_albedo;
 #[allow(clippy::all, dead_code, unused_imports)]
-pub mod uplift_stack_albedo_packet;
-#[allow(clippy::all, dead_code, unused_imports)]
 pub mod uplift_stack_sample;
 #[allow(clippy::all, dead_code, unused_imports)]
-pub mod uplift_stack_sample_packet;
-#[allow(clippy::all, dead_code, unused_imports)]
 pub mod uplift_stack_pdf;
-#[allow(clippy::all, dead_code, unused_imports)]
-pub mod uplift_stack_pdf_packet;
 
 /// Every shipped kernel.
 pub static BUILTIN_KERNELS: &[BuiltinKernel] = &[
@@ -126,7 +120,7 @@ pub static BUILTIN_KERNELS: &[BuiltinKernel] = &[
     BuiltinKernel { name: "bsdf_transparent_lobes_sample", source: "runtime/kernels/graphs/bsdf/bsdf_transparent_lobes.mtlx", context: Some("sample"), fingerprint: 0xf33e461349bdfedb, shape: KernelShape { input_columns: bsdf_transparent_lobes_sample::INPUT_COLUMNS, output_columns: bsdf_transparent_lobes_sample::OUTPUT_COLUMNS, texture_count: bsdf_transparent_lobes_sample::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_transparent_lobes_sample), scalar: cpu_batch_fn!(bsdf_transparent_lobes_sample), packet: false },
     BuiltinKernel { name: "bsdf_transparent_lobes_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_transparent_lobes.mtlx", context: Some("pdf"), fingerprint: 0xda674ffd87286df, shape: KernelShape { input_columns: bsdf_transparent_lobes_pdf::INPUT_COLUMNS, output_columns: bsdf_transparent_lobes_pdf::OUTPUT_COLUMNS, texture_count: bsdf_transparent_lobes_pdf::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_transparent_lobes_pdf), scalar: cpu_batch_fn!(bsdf_transparent_lobes_pdf), packet: false },
     BuiltinKernel { name: "uplift_stack_eval", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("eval"), fingerprint: 0xc07bfec91290932b, shape: KernelShape { input_columns: uplift_stack_eval::INPUT_COLUMNS, output_columns: uplift_stack_eval::OUTPUT_COLUMNS, texture_count: uplift_stack_eval::TEXTURE_COUNT }, batch: packet_batch_fn!(uplift_stack_eval_packet, uplift_stack_eval), scalar: cpu_batch_fn!(uplift_stack_eval), packet: true },
-    BuiltinKernel { name: "uplift_stack_albedo", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("albedo"), fingerprint: 0x2235bbc3d204f712, shape: KernelShape { input_columns: uplift_stack_albedo::INPUT_COLUMNS, output_columns: uplift_stack_albedo::OUTPUT_COLUMNS, texture_count: uplift_stack_albedo::TEXTURE_COUNT }, batch: packet_batch_fn!(uplift_stack_albedo_packet, uplift_stack_albedo), scalar: cpu_batch_fn!(uplift_stack_albedo), packet: true },
-    BuiltinKernel { name: "uplift_stack_sample", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("sample"), fingerprint: 0x1bd23a6b10a2a67f, shape: KernelShape { input_columns: uplift_stack_sample::INPUT_COLUMNS, output_columns: uplift_stack_sample::OUTPUT_COLUMNS, texture_count: uplift_stack_sample::TEXTURE_COUNT }, batch: packet_batch_fn!(uplift_stack_sample_packet, uplift_stack_sample), scalar: cpu_batch_fn!(uplift_stack_sample), packet: true },
-    BuiltinKernel { name: "uplift_stack_pdf", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("pdf"), fingerprint: 0x97b584553ef55ead, shape: KernelShape { input_columns: uplift_stack_pdf::INPUT_COLUMNS, output_columns: uplift_stack_pdf::OUTPUT_COLUMNS, texture_count: uplift_stack_pdf::TEXTURE_COUNT }, batch: packet_batch_fn!(uplift_stack_pdf_packet, uplift_stack_pdf), scalar: cpu_batch_fn!(uplift_stack_pdf), packet: true },
+    BuiltinKernel { name: "uplift_stack_albedo", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("albedo"), fingerprint: 0x2235bbc3d204f712, shape: KernelShape { input_columns: uplift_stack_albedo::INPUT_COLUMNS, output_columns: uplift_stack_albedo::OUTPUT_COLUMNS, texture_count: uplift_stack_albedo::TEXTURE_COUNT }, batch: cpu_batch_fn!(uplift_stack_albedo), scalar: cpu_batch_fn!(uplift_stack_albedo), packet: false },
+    BuiltinKernel { name: "uplift_stack_sample", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("sample"), fingerprint: 0x1bd23a6b10a2a67f, shape: KernelShape { input_columns: uplift_stack_sample::INPUT_COLUMNS, output_columns: uplift_stack_sample::OUTPUT_COLUMNS, texture_count: uplift_stack_sample::TEXTURE_COUNT }, batch: cpu_batch_fn!(uplift_stack_sample), scalar: cpu_batch_fn!(uplift_stack_sample), packet: false },
+    BuiltinKernel { name: "uplift_stack_pdf", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("pdf"), fingerprint: 0x97b584553ef55ead, shape: KernelShape { input_columns: uplift_stack_pdf::INPUT_COLUMNS, output_columns: uplift_stack_pdf::OUTPUT_COLUMNS, texture_count: uplift_stack_pdf::TEXTURE_COUNT }, batch: cpu_batch_fn!(uplift_stack_pdf), scalar: cpu_batch_fn!(uplift_stack_pdf), packet: false },
 ];
