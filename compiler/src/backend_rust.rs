@@ -1956,7 +1956,7 @@ pub fn write_rust_kernel_with(kernel: &PatternKernel, options: &RustOptions) -> 
     let uses_tex = args.first().is_some_and(|a| a == "tex");
     let call = format!("{pattern_name}({})", args.join(", "));
     let slots = |v: Vec<(String, usize, usize)>| v.into_iter().map(|(name, offset, components)| Slot { name: format!("{name:?}"), offset, components }).collect();
-    let source = kernel.wgsl.lines().next().and_then(|l| l.split(" from ").nth(1)).and_then(|l| l.strip_suffix(". Do not edit.")).unwrap_or("an unnamed document");
+    let source = kernel.source_name();
     let template = RustKernelTemplate {
         source,
         naga_version: NAGA_VERSION,

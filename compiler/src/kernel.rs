@@ -120,3 +120,11 @@ pub struct PatternKernel {
     /// The albedo-table data the GPU kernel's storage buffer must hold.
     pub albedo_tables: Option<std::sync::Arc<[f32]>>,
 }
+
+impl PatternKernel {
+    /// The document the kernel was compiled from, as its WGSL header names it (the generated
+    /// Rust files name it too).
+    pub fn source_name(&self) -> &str {
+        self.wgsl.lines().next().and_then(|l| l.split(" from ").nth(1)).and_then(|l| l.strip_suffix(". Do not edit.")).unwrap_or("an unnamed document")
+    }
+}

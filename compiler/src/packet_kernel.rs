@@ -101,7 +101,7 @@ pub fn write_packet_kernel(kernel: &PatternKernel, options: &PacketOptions) -> R
         }
     }
     let call = format!("{}({})", names[&NameKey::Function(ph)], args.join(", "));
-    let source = kernel.wgsl.lines().next().and_then(|l| l.split(" from ").nth(1)).and_then(|l| l.strip_suffix(". Do not edit.")).unwrap_or("an unnamed document");
+    let source = kernel.source_name();
     let template = PacketKernelTemplate {
         source,
         naga_version: crate::backend_rust::NAGA_VERSION,

@@ -121,22 +121,21 @@ macro_rules! cpu_batch_fn {
 }
 
 /// The [`BatchFn`] of a kernel shipped in packet form too (`$packet`, a module holding a
-/// `templates/packet_kernel.rs` file, beside the scalar module `$kernel`): the packet kernel at
-/// this machine's SIMD level (AVX-512 or AVX2), the scalar kernel's [`cpu_batch_fn!`] on other
-/// machines. Packet kernels read no textures. Columns of length 1 are uniform (`run_column_blocks`
+/// `templates/packet_kernel.rs` file; `$scalar`, a `static` holding the scalar kernel's
+/// [`cpu_batch_fn!`]): the packet kernel at this machine's SIMD level (AVX-512 or AVX2), the
+/// scalar kernel on other machines. Packet kernels read no textures. Columns of length 1 are uniform (`run_column_blocks`
 /// with `takes_uniform`): the packet kernel splats them, the scalar fallback gets them repeated.
 /// The caller has `BatchFn` and `TextureSet` in scope.
 #[macro_export]
 macro_rules! packet_batch_fn {
-    ($packet:ident, $kernel:ident) => {{
+    ($packet:ident, $scalar:ident) => {{
         fn batch<'t>(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut [f32]], tex: &TextureSet<'t>) {
             if !$packet::mx_pattern_batch_simd(geom, inputs, outputs) {
                 let n = outputs.first().map_or(0, |o| o.len());
                 let (mut gb, mut xb) = (Vec::new(), Vec::new());
                 let geom = $crate::driver::expand_uniform(geom, n, &mut gb);
                 let inputs = $crate::driver::expand_uniform(inputs, n, &mut xb);
-                let scalar: BatchFn = cpu_batch_fn!($kernel);
-                scalar(&geom, &inputs, outputs, tex)
+                $scalar(&geom, &inputs, outputs, tex)
             }
         }
         batch as BatchFn
@@ -179,18 +178,15 @@ pub fn run_column_blocks(batch: BatchFn, takes_uniform: bool, n: usize, geometry
     }
     per_block.into_par_iter().enumerate().for_each(|(b, mut out)| {
         let range = b * BLOCK..(b * BLOCK + BLOCK).min(n);
-        // Full columns: this block's part; uniform ones: as they are, or a filled buffer.
-        let fill = |c: &[f32]| if c.len() == n || takes_uniform { Vec::new() } else { vec![c[0]; range.len()] };
-        let (gf, xf): (Vec<Vec<f32>>, Vec<Vec<f32>>) = (geometry.iter().map(|c| fill(c)).collect(), inputs.iter().map(|c| fill(c)).collect());
-        fn pick<'a>(c: &'a [f32], f: &'a [f32], range: std::ops::Range<usize>, n: usize, takes_uniform: bool) -> &'a [f32] {
-            match (c.len() == n, takes_uniform) {
-                (true, _) => &c[range],
-                (false, true) => c,
-                (false, false) => f,
-            }
-        }
-        let g: Vec<&[f32]> = geometry.iter().zip(&gf).map(|(c, f)| pick(c, f, range.clone(), n, takes_uniform)).collect();
-        let x: Vec<&[f32]> = inputs.iter().zip(&xf).map(|(c, f)| pick(c, f, range.clone(), n, takes_uniform)).collect();
+        // Full columns: this block's part; uniform ones as they are, or (for a kernel that
+        // does not take them) repeated to the block's length.
+        let g: Vec<&[f32]> = geometry.iter().map(|c| if c.len() == n { &c[range.clone()] } else { *c }).collect();
+        let x: Vec<&[f32]> = inputs.iter().map(|c| if c.len() == n { &c[range.clone()] } else { *c }).collect();
+        let (mut gb, mut xb) = (Vec::new(), Vec::new());
+        let (g, x) = match takes_uniform {
+            true => (g, x),
+            false => (expand_uniform(&g, range.len(), &mut gb), expand_uniform(&x, range.len(), &mut xb)),
+        };
         batch(&g, &x, &mut out, tex);
     });
 }

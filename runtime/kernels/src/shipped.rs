@@ -23,11 +23,22 @@ pub struct BuiltinKernel {
     /// The kernel behind runtime CPU dispatch: its packet form (`packet_batch_fn!`) where it
     /// ships one, else `mx_pattern_batch` (`cpu_batch_fn!`).
     pub batch: BatchFn,
-    /// The scalar writer's kernel (`cpu_batch_fn!`): the oracle a packet form is tested
-    /// against; the same function as `batch` where there is none.
-    pub scalar: BatchFn,
-    /// Whether `batch` is a packet kernel.
-    pub packet: bool,
+    /// Where `batch` is a packet kernel: the scalar writer's kernel (`cpu_batch_fn!`), its
+    /// oracle and its fallback without SIMD (the same function, compiled once).
+    pub scalar: Option<BatchFn>,
+}
+
+impl BuiltinKernel {
+    /// Whether `batch` is a packet kernel (it takes uniform columns as one value,
+    /// `driver::run_column_blocks`).
+    pub fn is_packet(&self) -> bool {
+        self.scalar.is_some()
+    }
+
+    /// The scalar writer's kernel: `scalar` for a packet kernel, else `batch` itself.
+    pub fn scalar_batch(&self) -> BatchFn {
+        self.scalar.unwrap_or(self.batch)
+    }
 }
 
 /// The `uplift_stack` closure graph (source path, text): the stack every enhanced material

@@ -399,16 +399,19 @@ fn every_operation_matches_scalar_rust_on_every_level_here() {
     assert!(failures.is_empty(), "{} failure(s):\n{}", failures.len(), failures.join("\n"));
 }
 
+/// The lanes of the level it runs at.
+struct Lanes;
+
+impl WithSimd for Lanes {
+    type Output = usize;
+    #[inline(always)]
+    fn with_simd<S: Simd>(self, _: S) -> usize {
+        S::LANES
+    }
+}
+
 #[test]
 fn dispatch_runs_the_widest_level_and_refuses_a_missing_one() {
-    struct Lanes;
-    impl WithSimd for Lanes {
-        type Output = usize;
-        #[inline(always)]
-        fn with_simd<S: Simd>(self, _: S) -> usize {
-            S::LANES
-        }
-    }
     let best = Level::detect();
     assert_eq!(best.dispatch(Lanes), best.lanes());
     for level in Level::ALL {
@@ -439,14 +442,6 @@ fn outlined_code_computes_what_inlined_code_does_and_run_hardware_picks_the_curr
         let xs = [0.5f32, -1.5, 2.0, 3.25, 0.0, 7.0, -2.0, 1.0, 9.0, 4.0, -3.0, 5.5, 6.0, 0.25, 8.0, -0.5];
         for (k, g) in got.iter().enumerate() {
             assert!(same(*g, want(xs[k])), "{} lane {k}: {g} vs {}", level.name(), want(xs[k]));
-        }
-    }
-    struct Lanes;
-    impl WithSimd for Lanes {
-        type Output = usize;
-        #[inline(always)]
-        fn with_simd<S: Simd>(self, _: S) -> usize {
-            S::LANES
         }
     }
     match Level::current() {

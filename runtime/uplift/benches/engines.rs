@@ -242,15 +242,15 @@ fn main() {
                 all.run_prepared(&prepared, &b).unwrap();
             });
             let form = match &prepared {
-                CpuKernel::Builtin(k) if k.packet && uplift_simd::Level::current() != uplift_simd::Level::Scalar => format!("packet kernel, {}", uplift_simd::Level::current().name()),
+                CpuKernel::Builtin(k) if k.is_packet() && uplift_simd::Level::current() != uplift_simd::Level::Scalar => format!("packet kernel, {}", uplift_simd::Level::current().name()),
                 _ => "scalar kernel".to_string(),
             };
             println!("cpu  in-process   1 thread : {}  ({form})", mega(cpu1));
             println!("cpu  in-process {threads:2} threads: {}  ({:.2}× one thread)", mega(cpu_all), cpu_all / cpu1);
             // A kernel shipped in packet form: the scalar writer's kernel too (what it replaces).
             if let CpuKernel::Builtin(k) = &prepared {
-                if k.packet {
-                    let scalar = CpuKernel::Builtin(Box::leak(Box::new(uplift_kernels::shipped::BuiltinKernel { batch: k.scalar, packet: false, ..**k })));
+                if let Some(scalar) = k.scalar {
+                    let scalar = CpuKernel::Builtin(Box::leak(Box::new(uplift_kernels::shipped::BuiltinKernel { batch: scalar, scalar: None, ..**k })));
                     let s1 = rate(o.points, o.seconds, || {
                         one.run_prepared(&scalar, &b).unwrap();
                     });

@@ -104,7 +104,7 @@ impl CpuEngine {
                 // Uniform columns (`Columns::mark_uniform`) go in as their one value.
                 let geometry: Vec<&[f32]> = (0..GEOMETRY_STRIDE).map(|c| batch.geometry.column_or_uniform(c)).collect();
                 let inputs: Vec<&[f32]> = (0..s.input_columns).map(|c| batch.inputs.column_or_uniform(c)).collect();
-                self.pool.install(|| driver::run_column_blocks(k.batch, k.packet, n, &geometry, &inputs, out.data_mut(), s.output_columns, &textures));
+                self.pool.install(|| driver::run_column_blocks(k.batch, k.is_packet(), n, &geometry, &inputs, out.data_mut(), s.output_columns, &textures));
                 Ok(out)
             }
             CpuKernel::External(k) => external::run(k, batch, self.threads),

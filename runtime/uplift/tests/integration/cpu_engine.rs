@@ -170,7 +170,7 @@ fn packet_kernels_agree_with_the_scalar_kernels() {
     const N: usize = 4099;
     let level = uplift_simd::Level::current();
     let compiler = Compiler::builtin();
-    let packet: Vec<_> = BUILTIN_KERNELS.iter().enumerate().filter(|(_, k)| k.packet).collect();
+    let packet: Vec<_> = BUILTIN_KERNELS.iter().enumerate().filter(|(_, k)| k.is_packet()).collect();
     assert!(packet.len() >= 2, "{} packet kernels", packet.len());
     if level == uplift_simd::Level::Scalar {
         eprintln!("NOT TESTED on this machine: no AVX2 or AVX-512, the packet kernels defer to the scalar ones");
@@ -191,7 +191,7 @@ fn packet_kernels_agree_with_the_scalar_kernels() {
             f(&geometry, &inputs, &mut cols, &uplift_kernels::driver::TextureSet::default());
             out
         };
-        let (packet_out, scalar_out) = (run(shipped.batch), run(shipped.scalar));
+        let (packet_out, scalar_out) = (run(shipped.batch), run(shipped.scalar_batch()));
         let mut worst = 0.0f32;
         for (k, (x, y)) in packet_out.data().iter().zip(scalar_out.data()).enumerate() {
             let allowed = (1e-4 * x.abs().max(y.abs())).max(1e-6);
