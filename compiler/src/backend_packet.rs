@@ -199,9 +199,10 @@ pub fn write_packet_with(module: &Module, options: &PacketOptions) -> R<String> 
         }
     }
     let outlined = outlined_functions(module);
+    let pure = crate::packet_guards::pure_functions(module);
     for (h, f) in module.functions.iter() {
         out += "\n";
-        out += &write_function(module, &names, h, f, &outlined)?;
+        out += &write_function(module, &names, h, f, &outlined, &pure)?;
     }
     Ok(out)
 }
@@ -306,13 +307,20 @@ fn outlined_functions(module: &Module) -> std::collections::HashSet<Handle<Funct
     outlined
 }
 
-fn write_function(module: &Module, names: &naga::FastHashMap<NameKey, String>, h: Handle<Function>, f: &Function, outlined: &std::collections::HashSet<Handle<Function>>) -> R<String> {
+fn write_function(
+    module: &Module,
+    names: &naga::FastHashMap<NameKey, String>,
+    h: Handle<Function>,
+    f: &Function,
+    outlined: &std::collections::HashSet<Handle<Function>>,
+    pure: &std::collections::HashSet<Handle<Function>>,
+) -> R<String> {
     let ctx = naga::proc::ResolveContext::with_locals(module, &f.local_variables, &f.arguments);
     let mut typifier = naga::front::Typifier::new();
     for (eh, _) in f.expressions.iter() {
         typifier.grow(eh, &f.expressions, &ctx).map_err(|e| PacketError { construct: format!("an expression whose type naga cannot resolve ({e})"), function: f.name.clone() })?;
     }
-    let mut w = FunctionWriter { module, f, names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), loops: Vec::new(), loop_count: 0, inline_all: false, switch_breaks: Vec::new(), calls: HashMap::new(), guards: crate::packet_guards::guarded_calls(module, f), early: None, outlined };
+    let mut w = FunctionWriter { module, f, names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), loops: Vec::new(), loop_count: 0, inline_all: false, switch_breaks: Vec::new(), calls: HashMap::new(), guards: crate::packet_guards::guarded_calls(f, pure), early: None, outlined };
     let text = w.function().map_err(|mut e| {
         e.function = f.name.clone();
         e
@@ -324,7 +332,8 @@ fn write_function(module: &Module, names: &naga::FastHashMap<NameKey, String>, h
 /// work list).
 pub fn unsupported_functions(module: &Module) -> Vec<PacketError> {
     let names = packet_names(module);
-    module.functions.iter().filter_map(|(h, f)| write_function(module, &names, h, f, &Default::default()).err()).collect()
+    let pure = crate::packet_guards::pure_functions(module);
+    module.functions.iter().filter_map(|(h, f)| write_function(module, &names, h, f, &Default::default(), &pure).err()).collect()
 }
 
 struct FunctionWriter<'a> {

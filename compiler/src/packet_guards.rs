@@ -66,7 +66,7 @@ fn is_pure(e: &E) -> bool {
 
 /// A call is pure when no argument is a pointer and its callee, and everything it calls,
 /// stores only into its own locals.
-fn pure_functions(module: &Module) -> HashSet<Handle<Function>> {
+pub fn pure_functions(module: &Module) -> HashSet<Handle<Function>> {
     let mut impure: HashSet<Handle<Function>> = HashSet::new();
     // Functions appear after their callees in naga's arena: one pass in order suffices.
     for (h, f) in module.functions.iter() {
@@ -101,9 +101,9 @@ fn stores_into_local(f: &Function, mut p: H) -> bool {
     }
 }
 
-/// Every guarded call of `f`, by its result expression.
-pub fn guarded_calls(module: &Module, f: &Function) -> HashMap<H, Guard> {
-    let pure = pure_functions(module);
+/// Every guarded call of `f`, by its result expression; `pure` is the module's
+/// [`pure_functions`] (computed once per module).
+pub fn guarded_calls(f: &Function, pure: &HashSet<Handle<Function>>) -> HashMap<H, Guard> {
     let mut uses: HashMap<H, Vec<Use>> = HashMap::new();
     for (h, e) in f.expressions.iter() {
         let Some(ops) = operands(e) else { return HashMap::new() };
@@ -111,13 +111,13 @@ pub fn guarded_calls(module: &Module, f: &Function) -> HashMap<H, Guard> {
             uses.entry(o).or_default().push(Use::Expression(h));
         }
     }
-    if !statement_uses(&f.body, &pure, &mut uses) {
+    if !statement_uses(&f.body, pure, &mut uses) {
         return HashMap::new();
     }
     let mut finder = Finder { f, uses: &uses, memo: HashMap::new() };
     let mut guards = HashMap::new();
     let mut scopes: Vec<HashSet<H>> = vec![HashSet::new()];
-    finder.block(&f.body, &mut scopes, &pure, &mut guards);
+    finder.block(&f.body, &mut scopes, pure, &mut guards);
     guards
 }
 
@@ -261,7 +261,7 @@ mod tests {
     fn guards(src: &str, name: &str) -> (Module, HashMap<H, Guard>) {
         let m = naga::front::wgsl::parse_str(src).unwrap();
         let (_, f) = m.functions.iter().find(|(_, f)| f.name.as_deref() == Some(name)).unwrap();
-        let g = guarded_calls(&m, f);
+        let g = guarded_calls(f, &pure_functions(&m));
         (m.clone(), g)
     }
 
