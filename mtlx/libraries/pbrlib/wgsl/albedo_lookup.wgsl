@@ -2,14 +2,30 @@
 // `uplift tables`; grids and errors in docs/albedo-tables.md). Every table is a regular grid in
 // axis coordinates t ∈ [0, 1], interpolated multilinearly. Axes (runtime/kernels/src/albedo_tables):
 // log t = ln(1 + 100v)/ln(101) (GGX view and ᾱ, sheen view), angle t = 1 − acos(μ)·2/π
-// (diffuse view), sqrt (sheen roughness), linear (diffuse roughness), IOR t = √(2q),
-// q = (η − 1)/(η + 1) (η in [1, 3]).
+// (diffuse view), sqrt (sheen roughness), linear (diffuse roughness), IOR t = √(2|q|),
+// q = (η − 1)/(η + 1) (η in [1, 3], and [⅓, 1] for the inside table). Table indices are integers
+// (one conversion per axis; no float index arithmetic).
 
-// Position on an axis of `n` nodes over [0, 1]: (first node, fraction).
-fn mx_table_axis(t: f32, n: i32) -> vec2<f32> {
+// A position on a table axis: the first node and the fraction towards the next.
+struct mx_table_cell {
+    i: i32,
+    f: f32,
+}
+
+// Position on an axis of `n` nodes over [0, 1] (p ≥ 0, so the conversion truncates to floor).
+fn mx_table_axis(t: f32, n: i32) -> mx_table_cell {
     let p = clamp(t, 0.0, 1.0) * f32(n - 1);
-    let i = min(floor(p), f32(n - 2));
-    return vec2<f32>(i, p - i);
+    let i = min(i32(p), n - 2);
+    return mx_table_cell(i, p - f32(i));
+}
+
+// A position in a view × roughness plane: the index of the first node (in nodes of the plane,
+// times the values per node where a table holds several), and the fractions along view and
+// roughness.
+struct mx_table_point {
+    i: i32,
+    fx: f32,
+    fy: f32,
 }
 
 // ln(1 + 100v)/ln 101 = log2(1 + 100v)/log2 101. log2 of the mantissa m = 1 + t, t in [0, 1), is a
@@ -33,33 +49,26 @@ fn mx_albedo_ggx_ess(mu: f32, abar: f32) -> f32 {
     return mx_albedo_table_2d(MX_TABLE_GGX_ESS, mx_table_log_coordinate(mu), mx_table_log_coordinate(abar));
 }
 
-// GGX albedo for the exact dielectric Fresnel of relative IOR `eta`: the table for η ≥ 1 (η
-// above 3 reads as 3), the Fresnel moments below 1 (total internal reflection); η = 0
-// disables the Fresnel curve (E = E_ss).
+// GGX albedo for the exact dielectric Fresnel of relative IOR `eta`: the outside table for
+// η ≥ 1 (η above 3 reads as 3), the inside table below 1 (total internal reflection; η below ⅓
+// reads as ⅓), both on the axis of |q|, q = (η − 1)/(η + 1); η ≤ 0 disables the Fresnel curve
+// (E = E_ss).
 fn mx_albedo_ggx_dielectric(mu: f32, abar: f32, eta: f32) -> f32 {
     if (eta <= 0.0) {
         return mx_albedo_ggx_ess(mu, abar);
     }
-    if (eta < 1.0) {
-        let p = mx_ggx_moments_position(mu, abar, MX_TABLE_FRESNEL_NODES);
-        var e = 0.0;
-        for (var m = 0; m < MX_TABLE_FRESNEL_NODES; m++) {
-            e += mx_ggx_moment(MX_TABLE_GGX_MOMENTS, MX_TABLE_FRESNEL_NODES, p, m) * mx_fresnel_dielectric(mx_fresnel_node(m), eta);
-        }
-        return e;
-    }
-    let q = (eta - 1.0) / (eta + 1.0);
-    let px = mx_table_axis(mx_table_log_coordinate(mu), MX_TABLE_VIEW_NODES);
-    let py = mx_table_axis(mx_table_log_coordinate(abar), MX_TABLE_ROUGHNESS_NODES);
+    let base = select(MX_TABLE_GGX_DIELECTRIC, MX_TABLE_GGX_DIELECTRIC_INSIDE, eta < 1.0);
+    let q = abs(eta - 1.0) / (eta + 1.0);
+    let p = mx_table_2d_index(mx_table_log_coordinate(mu), mx_table_log_coordinate(abar));
     let pz = mx_table_axis(sqrt(min(2.0 * q, 1.0)), MX_TABLE_IOR_NODES);
     let n = MX_TABLE_VIEW_NODES;
-    let i = (i32(pz.x) * MX_TABLE_ROUGHNESS_NODES + i32(py.x)) * n + i32(px.x);
     let k = MX_TABLE_ROUGHNESS_NODES * n;
-    let a0 = mix(mx_albedo_table(MX_TABLE_GGX_DIELECTRIC + i), mx_albedo_table(MX_TABLE_GGX_DIELECTRIC + i + 1), px.y);
-    let b0 = mix(mx_albedo_table(MX_TABLE_GGX_DIELECTRIC + i + n), mx_albedo_table(MX_TABLE_GGX_DIELECTRIC + i + n + 1), px.y);
-    let a1 = mix(mx_albedo_table(MX_TABLE_GGX_DIELECTRIC + i + k), mx_albedo_table(MX_TABLE_GGX_DIELECTRIC + i + k + 1), px.y);
-    let b1 = mix(mx_albedo_table(MX_TABLE_GGX_DIELECTRIC + i + k + n), mx_albedo_table(MX_TABLE_GGX_DIELECTRIC + i + k + n + 1), px.y);
-    return mix(mix(a0, b0, py.y), mix(a1, b1, py.y), pz.y);
+    let i = base + pz.i * k + p.i;
+    let a0 = mix(mx_albedo_table(i), mx_albedo_table(i + 1), p.fx);
+    let b0 = mix(mx_albedo_table(i + n), mx_albedo_table(i + n + 1), p.fx);
+    let a1 = mix(mx_albedo_table(i + k), mx_albedo_table(i + k + 1), p.fx);
+    let b1 = mix(mx_albedo_table(i + k + n), mx_albedo_table(i + k + n + 1), p.fx);
+    return mix(mix(a0, b0, p.fy), mix(a1, b1, p.fy), pz.f);
 }
 
 // The Fresnel-moment weights W_j(μ, ᾱ) = ∫ hat_j(v·h) f_(F=1) cos dωl for the hat functions
@@ -68,21 +77,21 @@ fn mx_albedo_ggx_dielectric(mu: f32, abar: f32, eta: f32) -> f32 {
 // local array: a dynamically indexed array stays in memory and keeps LLVM from vectorising the
 // batch loop around it ("cannot identify array bounds").
 //
-// The position of (μ, ᾱ) in a moments table of `nodes` weights per cell: (first index,
-// fraction along view, fraction along ᾱ, 0); indices stay far below 2²⁴, exact in f32.
-fn mx_ggx_moments_position(mu: f32, abar: f32, nodes: i32) -> vec4<f32> {
+// The position of (μ, ᾱ) in a moments table of `nodes` weights per cell (the index counts
+// weights).
+fn mx_ggx_moments_position(mu: f32, abar: f32, nodes: i32) -> mx_table_point {
     let p = mx_table_2d_index(mx_table_log_coordinate(mu), mx_table_log_coordinate(abar));
-    return vec4<f32>(p.x * f32(nodes), p.y, p.z, 0.0);
+    return mx_table_point(p.i * nodes, p.fx, p.fy);
 }
 
 // W_m of the moments table at `offset` (`nodes` weights per cell), at a position from
 // mx_ggx_moments_position.
-fn mx_ggx_moment(offset: i32, nodes: i32, p: vec4<f32>, m: i32) -> f32 {
-    let i = offset + i32(p.x) + m;
+fn mx_ggx_moment(offset: i32, nodes: i32, p: mx_table_point, m: i32) -> f32 {
+    let i = offset + p.i + m;
     let j = i + MX_TABLE_VIEW_NODES * nodes;
-    let a = mix(mx_albedo_table(i), mx_albedo_table(i + nodes), p.y);
-    let b = mix(mx_albedo_table(j), mx_albedo_table(j + nodes), p.y);
-    return mix(a, b, p.z);
+    let a = mix(mx_albedo_table(i), mx_albedo_table(i + nodes), p.fx);
+    let b = mix(mx_albedo_table(j), mx_albedo_table(j + nodes), p.fx);
+    return mix(a, b, p.fy);
 }
 
 // The cosine of thin-film Fresnel node m (uniform in v·h).
@@ -116,22 +125,22 @@ fn mx_albedo_ggx_schlick(mu: f32, abar: f32, r0: vec3<f32>, r82: vec3<f32>, r90:
     return e;
 }
 
-// A 2-D table position at axis coordinates (x view, y roughness): (index, fx, fy, 0).
-fn mx_table_2d_index(x: f32, y: f32) -> vec4<f32> {
+// The position in a view × roughness plane at axis coordinates (x view, y roughness).
+fn mx_table_2d_index(x: f32, y: f32) -> mx_table_point {
     let px = mx_table_axis(x, MX_TABLE_VIEW_NODES);
     let py = mx_table_axis(y, MX_TABLE_ROUGHNESS_NODES);
-    return vec4<f32>(f32(i32(py.x) * MX_TABLE_VIEW_NODES + i32(px.x)), px.y, py.y, 0.0);
+    return mx_table_point(py.i * MX_TABLE_VIEW_NODES + px.i, px.f, py.f);
 }
 
 // Bilinear lookup in the view × roughness table that starts at `offset`, at axis coordinates
 // (x view, y roughness).
 fn mx_albedo_table_2d(offset: i32, x: f32, y: f32) -> f32 {
     let p = mx_table_2d_index(x, y);
-    let i = offset + i32(p.x);
+    let i = offset + p.i;
     let j = i + MX_TABLE_VIEW_NODES;
-    let a = mix(mx_albedo_table(i), mx_albedo_table(i + 1), p.y);
-    let b = mix(mx_albedo_table(j), mx_albedo_table(j + 1), p.y);
-    return mix(a, b, p.z);
+    let a = mix(mx_albedo_table(i), mx_albedo_table(i + 1), p.fx);
+    let b = mix(mx_albedo_table(j), mx_albedo_table(j + 1), p.fx);
+    return mix(a, b, p.fy);
 }
 
 // Albedo of sheen_bsdf mode conty_kulla over (μ, roughness).

@@ -60,10 +60,12 @@ fn centre(i: usize, n: usize) -> f64 {
     (i as f64 + 0.5) / (n - 1) as f64
 }
 
-/// Errors of the GGX tables at cell centres of (√μ, √ᾱ) (dielectric: also of q).
-pub fn ggx_errors(t: &Tables) -> [Vec<CellError>; 3] {
+/// Errors of the GGX tables at cell centres of (μ, ᾱ) (dielectric: also of q): E_ss, the
+/// moments, the dielectric outside (η ≥ 1) and inside (η ≤ 1, the third coordinate is η).
+pub fn ggx_errors(t: &Tables) -> [Vec<CellError>; 4] {
     let cells: Vec<(usize, usize)> = (0..ROUGHNESS_NODES - 1).flat_map(|j| (0..VIEW_NODES - 1).map(move |i| (j, i))).collect();
-    let per: Vec<(f64, f64, Vec<f64>, f64, (f64, f64))> = cells
+    type Cell = (f64, f64, Vec<f64>, Vec<f64>, (f64, f64));
+    let per: Vec<Cell> = cells
         .par_iter()
         .map(|&(j, i)| {
             let (mu, alpha) = (view_mu(GGX_VIEW, centre(i, VIEW_NODES)), ggx_alpha(centre(j, ROUGHNESS_NODES)));
@@ -81,27 +83,26 @@ pub fn ggx_errors(t: &Tables) -> [Vec<CellError>; 3] {
             }
             gold_exact /= n as f64;
             let e_mom = (t.with_fresnel(mu, alpha, gold) - gold_exact).abs();
-            // Dielectric at IOR cell centres.
-            let e_die: Vec<f64> = (0..IOR_NODES - 1)
-                .map(|k| {
-                    let tq = centre(k, IOR_NODES);
-                    let eta = ior_eta(tq);
-                    let mut ex = 0.0;
-                    for s in 0..n {
-                        let (u1, u2) = qmc::hammersley(s, n);
-                        let (c, w) = ggx_albedo_sample(v, alpha, u1, u2);
-                        ex += w * fresnel_dielectric(c, eta);
-                    }
-                    (t.dielectric(mu, alpha, eta) - ex / n as f64).abs()
-                })
-                .collect();
-            (e_ess, e_mom, e_die, 0.0, (mu, alpha))
+            // Dielectric at IOR cell centres, outside (η) and inside (1/η).
+            let dielectric_error = |eta: f64| {
+                let mut ex = 0.0;
+                for s in 0..n {
+                    let (u1, u2) = qmc::hammersley(s, n);
+                    let (c, w) = ggx_albedo_sample(v, alpha, u1, u2);
+                    ex += w * fresnel_dielectric(c, eta);
+                }
+                (t.dielectric(mu, alpha, eta) - ex / n as f64).abs()
+            };
+            let e_die: Vec<f64> = (0..IOR_NODES - 1).map(|k| dielectric_error(ior_eta(centre(k, IOR_NODES)))).collect();
+            let e_inside: Vec<f64> = (0..IOR_NODES - 1).map(|k| dielectric_error(1.0 / ior_eta(centre(k, IOR_NODES)))).collect();
+            (e_ess, e_mom, e_die, e_inside, (mu, alpha))
         })
         .collect();
     let ess = per.iter().map(|p| (p.0, (p.4 .0, p.4 .1, 0.0))).collect();
     let mom = per.iter().map(|p| (p.1, (p.4 .0, p.4 .1, 0.0))).collect();
     let die = per.iter().flat_map(|p| p.2.iter().enumerate().map(move |(k, e)| (*e, (p.4 .0, p.4 .1, ior_eta(centre(k, IOR_NODES)))))).collect();
-    [ess, mom, die]
+    let inside = per.iter().flat_map(|p| p.3.iter().enumerate().map(move |(k, e)| (*e, (p.4 .0, p.4 .1, 1.0 / ior_eta(centre(k, IOR_NODES)))))).collect();
+    [ess, mom, die, inside]
 }
 
 /// Errors of a cosine-sampled table at cell centres.
@@ -120,11 +121,12 @@ pub fn diffuse_errors(t: &Tables, which: DiffuseTable) -> Vec<CellError> {
 /// The Markdown error report.
 pub fn report(t: &Tables, progress: &(dyn Fn(&str) + Sync)) -> String {
     progress("GGX tables");
-    let [ess, mom, die] = ggx_errors(t);
+    let [ess, mom, die, inside] = ggx_errors(t);
     let mut rows = vec![
-        ("ggx_ess", ess, "E_ss(μ, ᾱ), F = 1", (0.0, 0.0)),
-        ("ggx_moments", mom, "Σ W_j F(c_j) for gold (n 0.183, k 3.424, red channel)", (0.0, 0.0)),
-        ("ggx_dielectric", die, "E(μ, ᾱ, η), IOR cell centres too", (0.0, 1.1)),
+        ("ggx_ess", ess, "E_ss(μ, ᾱ), F = 1", (0.0, 0.0, f64::INFINITY)),
+        ("ggx_moments", mom, "Σ W_j F(c_j) for gold (n 0.183, k 3.424, red channel)", (0.0, 0.0, f64::INFINITY)),
+        ("ggx_dielectric", die, "E(μ, ᾱ, η), IOR cell centres too", (0.0, 1.1, f64::INFINITY)),
+        ("ggx_dielectric_inside", inside, "E(μ, ᾱ, η), η < 1, IOR cell centres too", (0.0, 0.0, 1.0 / 1.1)),
     ];
     let mut diffuse = Vec::new();
     for w in DiffuseTable::ALL {
@@ -133,17 +135,21 @@ pub fn report(t: &Tables, progress: &(dyn Fn(&str) + Sync)) -> String {
     }
     for (w, e) in diffuse {
         let floor = if w == DiffuseTable::SheenContyKulla { 0.05 } else { 0.0 };
-        rows.push((w.name(), e, "albedo(μ, roughness), white", (floor, 0.0)));
+        rows.push((w.name(), e, "albedo(μ, roughness), white", (floor, 0.0, f64::INFINITY)));
     }
     let mut s = String::from("| table | range | max abs error | mean abs error | worst at (μ, axis 2, axis 3) | quantity |\n|---|---|---|---|---|---|\n");
-    for (name, cells, what, (floor2, floor3)) in &rows {
-        let tested: Vec<CellError> = cells.iter().copied().filter(|(_, at)| at.1 >= *floor2 && at.2 >= *floor3).collect();
+    // The tested domain of each table: axis 2 ≥ floor2 and floor3 ≤ axis 3 ≤ ceiling3.
+    for (name, cells, what, (floor2, floor3, ceiling3)) in &rows {
+        let tested: Vec<CellError> = cells.iter().copied().filter(|(_, at)| at.1 >= *floor2 && at.2 >= *floor3 && at.2 <= *ceiling3).collect();
         let mut range = String::from("μ ≥ 0.02");
         if *floor2 > 0.0 {
             range += &format!(", roughness ≥ {floor2}");
         }
         if *floor3 > 0.0 {
             range += &format!(", η ≥ {floor3}");
+        }
+        if ceiling3.is_finite() {
+            range += &format!(", η ≤ 1/{:.1}", 1.0 / ceiling3);
         }
         for (range, cells, floor) in [(range.as_str(), &tested, TESTED_MU), ("all", cells, 0.0)] {
             let e = summarize(cells, floor);

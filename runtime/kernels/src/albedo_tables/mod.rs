@@ -3,15 +3,19 @@
 //! checked in as `mtlx/libraries/pbrlib/wgsl/albedo_tables.wgsl` (WGSL `const` arrays, read by
 //! albedo_lookup.wgsl); docs/albedo-tables.md documents each grid and its measured error.
 //!
-//! Tables (every view axis is x = √μ over 32 nodes):
-//! - `ggx_ess` [√ᾱ 32][x 32]: GGX single scattering with F = 1 (energy compensation);
-//! - `ggx_moments` [√ᾱ 32][x 32][16]: the weights of 16 hat functions of v·h (nodes
+//! Tables (axes in [`Axis`]; the GGX view and ᾱ axes are logarithmic, 32 nodes each):
+//! - `ggx_ess` [ᾱ 32][μ 32]: GGX single scattering with F = 1 (energy compensation);
+//! - `ggx_moments` [ᾱ 32][μ 32][16]: the weights of 16 hat functions of v·h (nodes
 //!   c_j = (j/15)²), so that any Fresnel curve's albedo is Σ_j W_j F(c_j) — conductors,
 //!   generalized Schlick (the split pair of Schlick is its special case);
-//! - `ggx_film_moments` [√ᾱ 32][x 32][32]: the same for 32 hat functions at nodes c_j = j/31,
+//! - `ggx_film_moments` [ᾱ 32][μ 32][32]: the same for 32 hat functions at nodes c_j = j/31,
 //!   uniform in v·h, for curves that oscillate with angle (the Airy reflectance of a thin film);
-//! - `ggx_dielectric` [q 32][√ᾱ 32][x 32]: exact dielectric Fresnel, q = (η−1)/(η+1) ∈ [−½, ½];
-//! - `sheen_conty_kulla`, `oren_nayar`, `burley` [t 32][x 32], t = roughness ∈ [0, 1].
+//! - `ggx_dielectric` [q 32][ᾱ 32][μ 32]: exact dielectric Fresnel for η ∈ [1, 3],
+//!   q = (η−1)/(η+1) on the IOR axis t = √(2q);
+//! - `ggx_dielectric_inside` [q 32][ᾱ 32][μ 32]: the same for η ∈ [⅓, 1] (light inside the
+//!   denser medium, total internal reflection included), on the axis of |q| = (1−η)/(1+η), so
+//!   that node k holds the relative IOR 1/η_k of the outside table's node k;
+//! - `sheen_conty_kulla`, `oren_nayar`, `burley` [t 32][μ 32], t = roughness ∈ [0, 1].
 
 pub mod errors;
 pub mod qmc;
@@ -28,7 +32,7 @@ pub const FRESNEL_NODES: usize = 16;
 /// Nodes of the thin-film moments, uniform in v·h.
 pub const FILM_FRESNEL_NODES: usize = 32;
 /// Format version of the generated file (bump when layout or grids change).
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 /// Hammersley points per node: GGX tables (visible-normal sampling) and the cosine-sampled
 /// diffuse and sheen tables.
 pub const GGX_SAMPLES: u32 = 4096;
@@ -134,19 +138,20 @@ pub fn fresnel_hats(c: f64) -> [(usize, f64); 2] {
 }
 
 /// Everything the GGX tables need at one (μ, ᾱ): E_ss, the Fresnel moments and the dielectric
-/// albedos at every IOR node.
+/// albedos at every IOR node, outside (η_k ≥ 1) and inside (1/η_k).
 pub struct GgxNode {
     pub ess: f64,
     pub moments: [f64; FRESNEL_NODES],
     pub film_moments: [f64; FILM_FRESNEL_NODES],
     pub dielectric: [f64; IOR_NODES],
+    pub dielectric_inside: [f64; IOR_NODES],
 }
 
 /// Integrates the GGX quantities at (μ, α) with `n` Hammersley points.
 pub fn integrate_ggx(mu: f64, alpha: f64, n: u32) -> GgxNode {
     let v = view(mu);
     let etas: Vec<f64> = (0..IOR_NODES).map(|k| ior_eta(node(k, IOR_NODES))).collect();
-    let mut out = GgxNode { ess: 0.0, moments: [0.0; FRESNEL_NODES], film_moments: [0.0; FILM_FRESNEL_NODES], dielectric: [0.0; IOR_NODES] };
+    let mut out = GgxNode { ess: 0.0, moments: [0.0; FRESNEL_NODES], film_moments: [0.0; FILM_FRESNEL_NODES], dielectric: [0.0; IOR_NODES], dielectric_inside: [0.0; IOR_NODES] };
     for i in 0..n {
         let (u1, u2) = qmc::hammersley(i, n);
         let (c, w) = ggx_albedo_sample(v, alpha, u1, u2);
@@ -162,6 +167,7 @@ pub fn integrate_ggx(mu: f64, alpha: f64, n: u32) -> GgxNode {
         }
         for (k, &eta) in etas.iter().enumerate() {
             out.dielectric[k] += w * fresnel_dielectric(c, eta);
+            out.dielectric_inside[k] += w * fresnel_dielectric(c, 1.0 / eta);
         }
     }
     let s = 1.0 / n as f64;
@@ -169,6 +175,7 @@ pub fn integrate_ggx(mu: f64, alpha: f64, n: u32) -> GgxNode {
     out.moments.iter_mut().for_each(|x| *x *= s);
     out.film_moments.iter_mut().for_each(|x| *x *= s);
     out.dielectric.iter_mut().for_each(|x| *x *= s);
+    out.dielectric_inside.iter_mut().for_each(|x| *x *= s);
     out
 }
 
@@ -235,6 +242,7 @@ pub struct Tables {
     pub ggx_moments: Vec<f32>,
     pub ggx_film_moments: Vec<f32>,
     pub ggx_dielectric: Vec<f32>,
+    pub ggx_dielectric_inside: Vec<f32>,
     pub diffuse: Vec<(DiffuseTable, Vec<f32>)>,
 }
 
@@ -270,9 +278,11 @@ impl Tables {
         let ggx_moments = nodes.iter().flat_map(|n| n.moments.iter().map(|&x| stored(x))).collect();
         let ggx_film_moments = nodes.iter().flat_map(|n| n.film_moments.iter().map(|&x| stored(x))).collect();
         let mut ggx_dielectric = vec![0.0; IOR_NODES * ROUGHNESS_NODES * VIEW_NODES];
+        let mut ggx_dielectric_inside = vec![0.0; IOR_NODES * ROUGHNESS_NODES * VIEW_NODES];
         for (idx, n) in nodes.iter().enumerate() {
             for k in 0..IOR_NODES {
                 ggx_dielectric[k * ROUGHNESS_NODES * VIEW_NODES + idx] = stored(n.dielectric[k]);
+                ggx_dielectric_inside[k * ROUGHNESS_NODES * VIEW_NODES + idx] = stored(n.dielectric_inside[k]);
             }
         }
         let mut diffuse = Vec::new();
@@ -287,7 +297,7 @@ impl Tables {
                 .collect();
             diffuse.push((t, values));
         }
-        Tables { ggx_ess, ggx_moments, ggx_film_moments, ggx_dielectric, diffuse }
+        Tables { ggx_ess, ggx_moments, ggx_film_moments, ggx_dielectric, ggx_dielectric_inside, diffuse }
     }
 
     // ---- lookups (the same interpolation as albedo_lookup.wgsl) ---------------------------
@@ -326,20 +336,53 @@ impl Tables {
         (0..FILM_FRESNEL_NODES).map(|m| Self::bilinear(&self.ggx_film_moments, FILM_FRESNEL_NODES, m, x, y) * f(film_fresnel_node(m))).sum()
     }
 
-    /// The dielectric albedo for η ≥ 1 (η above 3 reads as 3; below 1 the kernels use the
-    /// moments instead).
+    /// The dielectric albedo for relative IOR η > 0: the outside table for η ≥ 1 (η above 3
+    /// reads as 3), the inside table of 1/η below 1 (η below ⅓ reads as ⅓).
     pub fn dielectric(&self, mu: f64, alpha: f64, eta: f64) -> f64 {
+        let (table, eta) = if eta < 1.0 { (&self.ggx_dielectric_inside, 1.0 / eta) } else { (&self.ggx_dielectric, eta) };
         let (k, fz) = Self::axis(GGX_IOR.coordinate(eta), IOR_NODES);
         let plane = ROUGHNESS_NODES * VIEW_NODES;
         let (x, y) = (GGX_VIEW.coordinate(mu), GGX_ROUGHNESS.coordinate(alpha));
-        let a = Self::bilinear(&self.ggx_dielectric, 1, k * plane, x, y);
-        let b = Self::bilinear(&self.ggx_dielectric, 1, (k + 1) * plane, x, y);
+        let a = Self::bilinear(table, 1, k * plane, x, y);
+        let b = Self::bilinear(table, 1, (k + 1) * plane, x, y);
         Self::lerp(a, b, fz)
     }
 
     pub fn diffuse(&self, which: DiffuseTable, mu: f64, t: f64) -> f64 {
         let table = &self.diffuse.iter().find(|(w, _)| *w == which).unwrap().1;
         Self::bilinear(table, 1, 0, which.view_axis().coordinate(mu), which.roughness_axis().coordinate(t))
+    }
+
+    /// Reads the tables back from [`Tables::to_wgsl`]'s text (the checked-in file): each table's
+    /// offset constant and the values of `mx_albedo_table_data`, sized by this module's grids.
+    pub fn from_wgsl(text: &str) -> Result<Tables, String> {
+        let start = text.find("const mx_albedo_table_data = array<f32, ").ok_or("no mx_albedo_table_data array")?;
+        let body = &text[start..];
+        let open = body.find('(').ok_or("no array body")? + 1;
+        let close = body.find(");").ok_or("unterminated array")?;
+        let values: Vec<f32> = body[open..close]
+            .lines()
+            .map(|l| l.split("//").next().unwrap_or(""))
+            .flat_map(|l| l.split(','))
+            .map(str::trim)
+            .filter(|v| !v.is_empty())
+            .map(|v| v.parse::<f32>().map_err(|e| format!("value {v:?}: {e}")))
+            .collect::<Result<_, _>>()?;
+        let table = |name: &str, len: usize| -> Result<Vec<f32>, String> {
+            let key = format!("const {} = ", name.to_uppercase());
+            let line = text.lines().find(|l| l.starts_with(&key)).ok_or_else(|| format!("no offset for {name}"))?;
+            let offset: usize = line[key.len()..].trim_end_matches(';').parse().map_err(|e| format!("{name}: {e}"))?;
+            values.get(offset..offset + len).map(<[f32]>::to_vec).ok_or_else(|| format!("{name} runs past the array"))
+        };
+        let plane = ROUGHNESS_NODES * VIEW_NODES;
+        Ok(Tables {
+            ggx_ess: table("mx_table_ggx_ess", plane)?,
+            ggx_moments: table("mx_table_ggx_moments", plane * FRESNEL_NODES)?,
+            ggx_film_moments: table("mx_table_ggx_film_moments", plane * FILM_FRESNEL_NODES)?,
+            ggx_dielectric: table("mx_table_ggx_dielectric", plane * IOR_NODES)?,
+            ggx_dielectric_inside: table("mx_table_ggx_dielectric_inside", plane * IOR_NODES)?,
+            diffuse: DiffuseTable::ALL.into_iter().map(|t| Ok((t, table(&format!("mx_table_{}", t.name()), plane)?))).collect::<Result<_, String>>()?,
+        })
     }
 
     /// The generated WGSL file: header, grid constants, one `const` array per table.
@@ -349,6 +392,7 @@ impl Tables {
         arrays.push(("mx_table_ggx_moments", &self.ggx_moments));
         arrays.push(("mx_table_ggx_film_moments", &self.ggx_film_moments));
         arrays.push(("mx_table_ggx_dielectric", &self.ggx_dielectric));
+        arrays.push(("mx_table_ggx_dielectric_inside", &self.ggx_dielectric_inside));
         let names: Vec<String> = self.diffuse.iter().map(|(t, _)| format!("mx_table_{}", t.name())).collect();
         for ((_, v), n) in self.diffuse.iter().zip(&names) {
             arrays.push((n.as_str(), v));
@@ -380,7 +424,8 @@ impl Tables {
         let _ = writeln!(s, "// roughness {ROUGHNESS_NODES}, IOR {IOR_NODES}, Fresnel moments {FRESNEL_NODES} (at cos = (j/15)^2), thin-film moments {FILM_FRESNEL_NODES} (at cos = j/31).");
         let _ = writeln!(s, "// Axes: log t = ln(1 + 100 v)/ln(101)");
         let _ = writeln!(s, "// (GGX view mu and alpha_bar, sheen view), angle t = 1 - acos(mu)*2/pi (diffuse view), sqrt t = sqrt(v) (sheen");
-        let _ = writeln!(s, "// roughness), linear (diffuse roughness), IOR t = sqrt(2q), q = (eta-1)/(eta+1), eta in [1, 3].");
+        let _ = writeln!(s, "// roughness), linear (diffuse roughness), IOR t = sqrt(2|q|), q = (eta-1)/(eta+1), eta in [1, 3]");
+        let _ = writeln!(s, "// (ggx_dielectric) or [1/3, 1] (ggx_dielectric_inside, whose node k is the IOR 1/eta_k).");
         let _ = writeln!(s, "// Integrator: 2-D Hammersley points, {GGX_SAMPLES} per node with visible-normal sampling (GGX tables), {COSINE_SAMPLES}");
         let _ = writeln!(s, "// per node with cosine sampling (sheen_conty_kulla, oren_nayar, burley). Values rounded to 6 decimals.");
         for (name, values) in &arrays {

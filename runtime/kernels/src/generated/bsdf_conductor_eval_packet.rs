@@ -115,6 +115,37 @@ impl<S: Simd> mx_polarized<S> {
 
 #[derive(Clone, Copy, Debug)]
 #[allow(non_camel_case_types)]
+pub struct mx_table_point<S: Simd> {
+    pub i: S::I,
+    pub fx: S::F,
+    pub fy: S::F,
+}
+
+impl<S: Simd> mx_table_point<S> {
+    #[inline(always)]
+    #[allow(unused_parens)]
+    pub fn select(m: S::M, on: Self, off: Self) -> Self {
+        mx_table_point { i: m.select_i(on.i, off.i), fx: m.select(on.fx, off.fx), fy: m.select(on.fy, off.fy) }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+#[allow(non_camel_case_types)]
+pub struct mx_table_cell<S: Simd> {
+    pub i: S::I,
+    pub f: S::F,
+}
+
+impl<S: Simd> mx_table_cell<S> {
+    #[inline(always)]
+    #[allow(unused_parens)]
+    pub fn select(m: S::M, on: Self, off: Self) -> Self {
+        mx_table_cell { i: m.select_i(on.i, off.i), f: m.select(on.f, off.f) }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+#[allow(non_camel_case_types)]
 pub struct MxInputs<S: Simd> {
     pub wv: [S::F; 3],
     pub wl: [S::F; 3],
@@ -785,42 +816,39 @@ pub fn mx_fresnel_airy_conductor<S: Simd>(s: S, cos_theta_5: S::F, n_2: [S::F; 3
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_table_axis<S: Simd>(s: S, t: S::F, n_3: S::I) -> [S::F; 2] {
+pub fn mx_table_axis<S: Simd>(s: S, t: S::F, n_3: S::I) -> mx_table_cell<S> {
     let _e4 = t.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e6 = (n_3 - s.splat_i(1i32));
     let _e7 = _e6.to_f32();
     let _e8 = (_e4 * _e7);
-    let _e9 = { let x = _e8; x.floor() };
+    let _e9 = _e8.to_i32();
     let _e11 = (n_3 - s.splat_i(2i32));
-    let _e12 = _e11.to_f32();
-    let _e13 = { let (x, y) = (_e9, _e12); x.min(y) };
+    let _e12 = _e9.min(_e11);
+    let _e13 = _e12.to_f32();
     let _e14 = (_e8 - _e13);
-    let _e15 = [_e13, _e14];
+    let _e15 = mx_table_cell { i: _e12, f: _e14 };
     return _e15;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_table_2d_index<S: Simd>(s: S, x_5: S::F, y_2: S::F) -> [S::F; 4] {
+pub fn mx_table_2d_index<S: Simd>(s: S, x_5: S::F, y_2: S::F) -> mx_table_point<S> {
     let _e3 = mx_table_axis(s, x_5, s.splat_i(32i32));
     let _e5 = mx_table_axis(s, y_2, s.splat_i(32i32));
-    let _e6 = _e5[0];
-    let _e7 = _e6.to_i32();
-    let _e9 = (_e7 * s.splat_i(32i32));
-    let _e10 = _e3[0];
-    let _e11 = _e10.to_i32();
-    let _e12 = (_e9 + _e11);
-    let _e13 = _e12.to_f32();
-    let _e14 = _e3[1];
-    let _e15 = _e5[1];
-    let _e17 = [_e13, _e14, _e15, s.splat(0.0f32)];
-    return _e17;
+    let _e6 = _e5.i;
+    let _e8 = (_e6 * s.splat_i(32i32));
+    let _e9 = _e3.i;
+    let _e10 = (_e8 + _e9);
+    let _e11 = _e3.f;
+    let _e12 = _e5.f;
+    let _e13 = mx_table_point { i: _e10, fx: _e11, fy: _e12 };
+    return _e13;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_albedo_table<S: Simd>(s: S, i: S::I) -> S::F {
-    let _e2 = s.gather(&mx_albedo_table_data, i.to_u32_bits().min(s.splat_u(86015)).to_i32_bits());
+    let _e2 = s.gather(&mx_albedo_table_data, i.to_u32_bits().min(s.splat_u(118783)).to_i32_bits());
     return _e2;
 }
 
@@ -828,23 +856,22 @@ pub fn mx_albedo_table<S: Simd>(s: S, i: S::I) -> S::F {
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_albedo_table_2d<S: Simd>(s: S, offset: S::I, x_6: S::F, y_3: S::F) -> S::F {
     let _e3 = mx_table_2d_index(s, x_6, y_3);
-    let _e4 = _e3[0];
-    let _e5 = _e4.to_i32();
-    let _e6 = (offset + _e5);
-    let _e8 = (_e6 + s.splat_i(32i32));
-    let _e9 = mx_albedo_table(s, _e6);
-    let _e11 = (_e6 + s.splat_i(1i32));
-    let _e12 = mx_albedo_table(s, _e11);
-    let _e13 = _e3[1];
-    let _e14 = { let t = _e13; _e9 * (s.splat(1.0) - t) + _e12 * t };
-    let _e15 = mx_albedo_table(s, _e8);
-    let _e17 = (_e8 + s.splat_i(1i32));
-    let _e18 = mx_albedo_table(s, _e17);
-    let _e19 = _e3[1];
-    let _e20 = { let t = _e19; _e15 * (s.splat(1.0) - t) + _e18 * t };
-    let _e21 = _e3[2];
-    let _e22 = { let t = _e21; _e14 * (s.splat(1.0) - t) + _e20 * t };
-    return _e22;
+    let _e4 = _e3.i;
+    let _e5 = (offset + _e4);
+    let _e7 = (_e5 + s.splat_i(32i32));
+    let _e8 = mx_albedo_table(s, _e5);
+    let _e10 = (_e5 + s.splat_i(1i32));
+    let _e11 = mx_albedo_table(s, _e10);
+    let _e12 = _e3.fx;
+    let _e13 = { let t = _e12; _e8 * (s.splat(1.0) - t) + _e11 * t };
+    let _e14 = mx_albedo_table(s, _e7);
+    let _e16 = (_e7 + s.splat_i(1i32));
+    let _e17 = mx_albedo_table(s, _e16);
+    let _e18 = _e3.fx;
+    let _e19 = { let t = _e18; _e14 * (s.splat(1.0) - t) + _e17 * t };
+    let _e20 = _e3.fy;
+    let _e21 = { let t = _e20; _e13 * (s.splat(1.0) - t) + _e19 * t };
+    return _e21;
 }
 
 #[inline(always)]
@@ -1073,41 +1100,39 @@ pub fn mx_bsdf_empty<S: Simd>(s: S) -> BSDF<S> {
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_moments_position<S: Simd>(s: S, mu_2: S::F, abar_2: S::F, nodes: S::I) -> [S::F; 4] {
+pub fn mx_ggx_moments_position<S: Simd>(s: S, mu_2: S::F, abar_2: S::F, nodes: S::I) -> mx_table_point<S> {
     let _e3 = mx_table_log_coordinate(s, mu_2);
     let _e4 = mx_table_log_coordinate(s, abar_2);
     let _e5 = mx_table_2d_index(s, _e3, _e4);
-    let _e6 = _e5[0];
-    let _e7 = nodes.to_f32();
-    let _e8 = (_e6 * _e7);
-    let _e9 = _e5[1];
-    let _e10 = _e5[2];
-    let _e12 = [_e8, _e9, _e10, s.splat(0.0f32)];
-    return _e12;
+    let _e6 = _e5.i;
+    let _e7 = (_e6 * nodes);
+    let _e8 = _e5.fx;
+    let _e9 = _e5.fy;
+    let _e10 = mx_table_point { i: _e7, fx: _e8, fy: _e9 };
+    return _e10;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_moment<S: Simd>(s: S, offset_1: S::I, nodes_1: S::I, p: [S::F; 4], m: S::I) -> S::F {
-    let _e4 = p[0];
-    let _e5 = _e4.to_i32();
-    let _e6 = (offset_1 + _e5);
-    let _e7 = (_e6 + m);
-    let _e9 = (s.splat_i(32i32) * nodes_1);
-    let _e10 = (_e7 + _e9);
-    let _e11 = mx_albedo_table(s, _e7);
-    let _e12 = (_e7 + nodes_1);
-    let _e13 = mx_albedo_table(s, _e12);
-    let _e14 = p[1];
-    let _e15 = { let t = _e14; _e11 * (s.splat(1.0) - t) + _e13 * t };
-    let _e16 = mx_albedo_table(s, _e10);
-    let _e17 = (_e10 + nodes_1);
-    let _e18 = mx_albedo_table(s, _e17);
-    let _e19 = p[1];
-    let _e20 = { let t = _e19; _e16 * (s.splat(1.0) - t) + _e18 * t };
-    let _e21 = p[2];
-    let _e22 = { let t = _e21; _e15 * (s.splat(1.0) - t) + _e20 * t };
-    return _e22;
+pub fn mx_ggx_moment<S: Simd>(s: S, offset_1: S::I, nodes_1: S::I, p: mx_table_point<S>, m: S::I) -> S::F {
+    let _e4 = p.i;
+    let _e5 = (offset_1 + _e4);
+    let _e6 = (_e5 + m);
+    let _e8 = (s.splat_i(32i32) * nodes_1);
+    let _e9 = (_e6 + _e8);
+    let _e10 = mx_albedo_table(s, _e6);
+    let _e11 = (_e6 + nodes_1);
+    let _e12 = mx_albedo_table(s, _e11);
+    let _e13 = p.fx;
+    let _e14 = { let t = _e13; _e10 * (s.splat(1.0) - t) + _e12 * t };
+    let _e15 = mx_albedo_table(s, _e9);
+    let _e16 = (_e9 + nodes_1);
+    let _e17 = mx_albedo_table(s, _e16);
+    let _e18 = p.fx;
+    let _e19 = { let t = _e18; _e15 * (s.splat(1.0) - t) + _e17 * t };
+    let _e20 = p.fy;
+    let _e21 = { let t = _e20; _e14 * (s.splat(1.0) - t) + _e19 * t };
+    return _e21;
 }
 
 #[inline(always)]

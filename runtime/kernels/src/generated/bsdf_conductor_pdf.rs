@@ -71,6 +71,21 @@ pub struct mx_polarized {
     pub s: Vec3,
 }
 
+#[allow(non_camel_case_types)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct mx_table_point {
+    pub i: i32,
+    pub fx: f32,
+    pub fy: f32,
+}
+
+#[allow(non_camel_case_types)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct mx_table_cell {
+    pub i: i32,
+    pub f: f32,
+}
+
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MxInputs {
     pub wv: Vec3,
@@ -366,36 +381,36 @@ pub fn mx_fresnel_airy_conductor(cos_theta_5: f32, n_2: Vec3, k_2: Vec3, thickne
 }
 
 #[inline(always)]
-pub fn mx_table_axis(t: f32, n_3: i32) -> Vec2 {
+pub fn mx_table_axis(t: f32, n_3: i32) -> mx_table_cell {
     let p_2 = t.max(0.0f32).min(1.0f32) * n_3.wrapping_sub(1i32) as f32;
-    let i_1 = p_2.floor().min(n_3.wrapping_sub(2i32) as f32);
-    Vec2::new(i_1, p_2 - i_1)
+    let i_1 = (p_2 as i32).min(n_3.wrapping_sub(2i32));
+    mx_table_cell { i: i_1, f: p_2 - i_1 as f32 }
 }
 
 #[inline(always)]
-pub fn mx_table_2d_index(x_5: f32, y_2: f32) -> Vec4 {
+pub fn mx_table_2d_index(x_5: f32, y_2: f32) -> mx_table_point {
     let px = mx_table_axis(x_5, MX_TABLE_VIEW_NODES);
     let py = mx_table_axis(y_2, MX_TABLE_ROUGHNESS_NODES);
-    Vec4::new((py.x as i32).wrapping_mul(MX_TABLE_VIEW_NODES).wrapping_add(px.x as i32) as f32, px.y, py.y, 0.0f32)
+    mx_table_point { i: py.i.wrapping_mul(MX_TABLE_VIEW_NODES).wrapping_add(px.i), fx: px.f, fy: py.f }
 }
 
 #[inline(always)]
 pub fn mx_albedo_table(i: i32) -> f32 {
-    mx_albedo_table_data[(i as u32).min(86015) as usize]
+    mx_albedo_table_data[(i as u32).min(118783) as usize]
 }
 
 #[inline(always)]
 pub fn mx_albedo_table_2d(offset: i32, x_6: f32, y_3: f32) -> f32 {
     let p_3 = mx_table_2d_index(x_6, y_3);
-    let i_2 = offset.wrapping_add(p_3.x as i32);
+    let i_2 = offset.wrapping_add(p_3.i);
     let j = i_2.wrapping_add(MX_TABLE_VIEW_NODES);
-    let _e9 = mx_albedo_table(i_2);
-    let _e12 = mx_albedo_table(i_2.wrapping_add(1i32));
-    let a_9 = wgsl_mix_f32_f32_f32(_e9, _e12, p_3.y);
-    let _e15 = mx_albedo_table(j);
-    let _e18 = mx_albedo_table(j.wrapping_add(1i32));
-    let b_3 = wgsl_mix_f32_f32_f32(_e15, _e18, p_3.y);
-    wgsl_mix_f32_f32_f32(a_9, b_3, p_3.z)
+    let _e8 = mx_albedo_table(i_2);
+    let _e11 = mx_albedo_table(i_2.wrapping_add(1i32));
+    let a_9 = wgsl_mix_f32_f32_f32(_e8, _e11, p_3.fx);
+    let _e14 = mx_albedo_table(j);
+    let _e17 = mx_albedo_table(j.wrapping_add(1i32));
+    let b_3 = wgsl_mix_f32_f32_f32(_e14, _e17, p_3.fx);
+    wgsl_mix_f32_f32_f32(a_9, b_3, p_3.fy)
 }
 
 #[inline(always)]
@@ -497,24 +512,24 @@ pub fn mx_bsdf_empty() -> BSDF {
 }
 
 #[inline(always)]
-pub fn mx_ggx_moments_position(mu_2: f32, abar_2: f32, nodes: i32) -> Vec4 {
+pub fn mx_ggx_moments_position(mu_2: f32, abar_2: f32, nodes: i32) -> mx_table_point {
     let _e3 = mx_table_log_coordinate(mu_2);
     let _e4 = mx_table_log_coordinate(abar_2);
     let p_5 = mx_table_2d_index(_e3, _e4);
-    Vec4::new(p_5.x * nodes as f32, p_5.y, p_5.z, 0.0f32)
+    mx_table_point { i: p_5.i.wrapping_mul(nodes), fx: p_5.fx, fy: p_5.fy }
 }
 
 #[inline(always)]
-pub fn mx_ggx_moment(offset_1: i32, nodes_1: i32, p: Vec4, m: i32) -> f32 {
-    let i_3 = offset_1.wrapping_add(p.x as i32).wrapping_add(m);
+pub fn mx_ggx_moment(offset_1: i32, nodes_1: i32, p: mx_table_point, m: i32) -> f32 {
+    let i_3 = offset_1.wrapping_add(p.i).wrapping_add(m);
     let j_1 = i_3.wrapping_add(MX_TABLE_VIEW_NODES.wrapping_mul(nodes_1));
-    let _e11 = mx_albedo_table(i_3);
-    let _e13 = mx_albedo_table(i_3.wrapping_add(nodes_1));
-    let a_11 = wgsl_mix_f32_f32_f32(_e11, _e13, p.y);
-    let _e16 = mx_albedo_table(j_1);
-    let _e18 = mx_albedo_table(j_1.wrapping_add(nodes_1));
-    let b_5 = wgsl_mix_f32_f32_f32(_e16, _e18, p.y);
-    wgsl_mix_f32_f32_f32(a_11, b_5, p.z)
+    let _e10 = mx_albedo_table(i_3);
+    let _e12 = mx_albedo_table(i_3.wrapping_add(nodes_1));
+    let a_11 = wgsl_mix_f32_f32_f32(_e10, _e12, p.fx);
+    let _e15 = mx_albedo_table(j_1);
+    let _e17 = mx_albedo_table(j_1.wrapping_add(nodes_1));
+    let b_5 = wgsl_mix_f32_f32_f32(_e15, _e17, p.fx);
+    wgsl_mix_f32_f32_f32(a_11, b_5, p.fy)
 }
 
 #[inline(always)]

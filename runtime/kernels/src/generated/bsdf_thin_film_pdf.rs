@@ -71,6 +71,21 @@ pub struct mx_polarized {
     pub s: Vec3,
 }
 
+#[allow(non_camel_case_types)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct mx_table_point {
+    pub i: i32,
+    pub fx: f32,
+    pub fy: f32,
+}
+
+#[allow(non_camel_case_types)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct mx_table_cell {
+    pub i: i32,
+    pub f: f32,
+}
+
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct MxInputs {
     pub wv: Vec3,
@@ -114,8 +129,6 @@ pub const MX_TABLE_ROUGHNESS_NODES: i32 = 32i32;
 #[allow(unused_imports)]
 pub use crate::generated::albedo_table_data::MX_ALBEDO_TABLE_DATA as mx_albedo_table_data;
 
-pub const MX_TABLE_FRESNEL_NODES: i32 = 16i32;
-
 pub const MX_TABLE_IOR_NODES: i32 = 32i32;
 
 pub const MX_TABLE_FILM_FRESNEL_NODES: i32 = 32i32;
@@ -125,6 +138,8 @@ pub const MX_CONTEXT_ALBEDO: i32 = 1i32;
 pub const MX_CONTEXT_SAMPLE: i32 = 2i32;
 
 pub const MX_CONTEXT_EVAL: i32 = 0i32;
+
+pub const MX_TABLE_FRESNEL_NODES: i32 = 16i32;
 
 #[inline(always)]
 pub fn mx_normalize_or(v: Vec3, fallback: Vec3) -> Vec3 {
@@ -323,11 +338,11 @@ pub fn mx_fast_cos_vec3_(x_2: Vec3) -> Vec3 {
 #[inline(always)]
 pub fn mx_fast_exp2_(x_3: f32) -> f32 {
     let y_5 = x_3.max(-126.0f32).min(127.0f32);
-    let e_6 = y_5.floor();
-    let f_2 = y_5 - e_6;
+    let e_5 = y_5.floor();
+    let f_2 = y_5 - e_5;
     let t_2 = f_2 * 0.6931472f32;
     let p_1 = 1.0f32 + t_2 * (1.0f32 + t_2 * (0.5f32 + t_2 * (0.16666667f32 + t_2 * (0.041666668f32 + t_2 * (0.008333334f32 + t_2 * (0.0013888889f32 + t_2 * 0.0001984127f32))))));
-    f32::from_bits(((e_6 as i32).wrapping_add(127i32) as u32).wrapping_shl(23u32)) * p_1
+    f32::from_bits(((e_5 as i32).wrapping_add(127i32) as u32).wrapping_shl(23u32)) * p_1
 }
 
 #[inline(always)]
@@ -394,45 +409,45 @@ pub fn mx_fresnel_airy_conductor(cos_theta_6: f32, n_1: Vec3, k_1: Vec3, thickne
 }
 
 #[inline(always)]
-pub fn mx_table_axis(t: f32, n_2: i32) -> Vec2 {
+pub fn mx_table_axis(t: f32, n_2: i32) -> mx_table_cell {
     let p_2 = t.max(0.0f32).min(1.0f32) * n_2.wrapping_sub(1i32) as f32;
-    let i_1 = p_2.floor().min(n_2.wrapping_sub(2i32) as f32);
-    Vec2::new(i_1, p_2 - i_1)
+    let i_1 = (p_2 as i32).min(n_2.wrapping_sub(2i32));
+    mx_table_cell { i: i_1, f: p_2 - i_1 as f32 }
 }
 
 #[inline(always)]
-pub fn mx_table_2d_index(x_5: f32, y_2: f32) -> Vec4 {
+pub fn mx_table_2d_index(x_5: f32, y_2: f32) -> mx_table_point {
     let px = mx_table_axis(x_5, MX_TABLE_VIEW_NODES);
     let py = mx_table_axis(y_2, MX_TABLE_ROUGHNESS_NODES);
-    Vec4::new((py.x as i32).wrapping_mul(MX_TABLE_VIEW_NODES).wrapping_add(px.x as i32) as f32, px.y, py.y, 0.0f32)
+    mx_table_point { i: py.i.wrapping_mul(MX_TABLE_VIEW_NODES).wrapping_add(px.i), fx: px.f, fy: py.f }
 }
 
 #[inline(always)]
 pub fn mx_albedo_table(i: i32) -> f32 {
-    mx_albedo_table_data[(i as u32).min(86015) as usize]
+    mx_albedo_table_data[(i as u32).min(118783) as usize]
 }
 
 #[inline(always)]
 pub fn mx_albedo_table_2d(offset: i32, x_6: f32, y_3: f32) -> f32 {
     let p_3 = mx_table_2d_index(x_6, y_3);
-    let i_2 = offset.wrapping_add(p_3.x as i32);
+    let i_2 = offset.wrapping_add(p_3.i);
     let j = i_2.wrapping_add(MX_TABLE_VIEW_NODES);
-    let _e9 = mx_albedo_table(i_2);
-    let _e12 = mx_albedo_table(i_2.wrapping_add(1i32));
-    let a_10 = wgsl_mix_f32_f32_f32(_e9, _e12, p_3.y);
-    let _e15 = mx_albedo_table(j);
-    let _e18 = mx_albedo_table(j.wrapping_add(1i32));
-    let b_4 = wgsl_mix_f32_f32_f32(_e15, _e18, p_3.y);
-    wgsl_mix_f32_f32_f32(a_10, b_4, p_3.z)
+    let _e8 = mx_albedo_table(i_2);
+    let _e11 = mx_albedo_table(i_2.wrapping_add(1i32));
+    let a_10 = wgsl_mix_f32_f32_f32(_e8, _e11, p_3.fx);
+    let _e14 = mx_albedo_table(j);
+    let _e17 = mx_albedo_table(j.wrapping_add(1i32));
+    let b_4 = wgsl_mix_f32_f32_f32(_e14, _e17, p_3.fx);
+    wgsl_mix_f32_f32_f32(a_10, b_4, p_3.fy)
 }
 
 #[inline(always)]
 pub fn mx_table_log_coordinate(v_3: f32) -> f32 {
     let bits = (1.0f32 + 100.0f32 * v_3.max(0.0f32).min(1.0f32)).to_bits();
-    let e_7 = ((bits.wrapping_shr(23u32) & 255u32) as i32).wrapping_sub(127i32) as f32;
+    let e_6 = ((bits.wrapping_shr(23u32) & 255u32) as i32).wrapping_sub(127i32) as f32;
     let t_3 = f32::from_bits(bits & 8388607u32 | 1065353216u32) - 1.0f32;
     let p_4 = 5.060328e-6f32 + t_3 * (1.4423956f32 + t_3 * (-0.71698755f32 + t_3 * (0.4538582f32 + t_3 * (-0.27235582f32 + t_3 * (0.11790686f32 + t_3 * -0.024825985f32)))));
-    (e_7 + p_4) * 0.15019049f32
+    (e_6 + p_4) * 0.15019049f32
 }
 
 #[inline(always)]
@@ -456,117 +471,85 @@ pub fn mx_fresnel_average(f_normal: Vec3, f90_: Vec3) -> Vec3 {
 }
 
 #[inline(always)]
-pub fn mx_ggx_moments_position(mu_2: f32, abar_2: f32, nodes: i32) -> Vec4 {
-    let _e3 = mx_table_log_coordinate(mu_2);
-    let _e4 = mx_table_log_coordinate(abar_2);
-    let p_5 = mx_table_2d_index(_e3, _e4);
-    Vec4::new(p_5.x * nodes as f32, p_5.y, p_5.z, 0.0f32)
-}
-
-#[inline(always)]
-pub fn mx_ggx_moment(offset_1: i32, nodes_1: i32, p: Vec4, m: i32) -> f32 {
-    let i_3 = offset_1.wrapping_add(p.x as i32).wrapping_add(m);
-    let j_1 = i_3.wrapping_add(MX_TABLE_VIEW_NODES.wrapping_mul(nodes_1));
-    let _e11 = mx_albedo_table(i_3);
-    let _e13 = mx_albedo_table(i_3.wrapping_add(nodes_1));
-    let a_11 = wgsl_mix_f32_f32_f32(_e11, _e13, p.y);
-    let _e16 = mx_albedo_table(j_1);
-    let _e18 = mx_albedo_table(j_1.wrapping_add(nodes_1));
-    let b_5 = wgsl_mix_f32_f32_f32(_e16, _e18, p.y);
-    wgsl_mix_f32_f32_f32(a_11, b_5, p.z)
-}
-
-#[inline(always)]
-pub fn mx_fresnel_node(m_1: i32) -> f32 {
-    let t_4 = m_1 as f32 * 0.06666667f32;
-    t_4 * t_4
-}
-
-#[inline(always)]
-#[allow(unused_assignments)]
-pub fn mx_albedo_ggx_dielectric(mu_3: f32, abar_3: f32, eta_2: f32) -> f32 {
-    let mut e: f32 = 0.0f32;
-    let mut m_2: i32 = 0i32;
+pub fn mx_albedo_ggx_dielectric(mu_2: f32, abar_2: f32, eta_2: f32) -> f32 {
     if eta_2 <= 0.0f32 {
-        let _e5 = mx_albedo_ggx_ess(mu_3, abar_3);
+        let _e5 = mx_albedo_ggx_ess(mu_2, abar_2);
         return _e5;
     }
-    if eta_2 < 1.0f32 {
-        let p_6 = mx_ggx_moments_position(mu_3, abar_3, MX_TABLE_FRESNEL_NODES);
-        loop {
-            let _e14 = m_2;
-            if _e14 < MX_TABLE_FRESNEL_NODES {
-            } else {
-                break;
-            }
-            {
-                let _e17 = e;
-                let _e20 = m_2;
-                let _e21 = mx_ggx_moment(1024i32, MX_TABLE_FRESNEL_NODES, p_6, _e20);
-                let _e22 = m_2;
-                let _e23 = mx_fresnel_node(_e22);
-                let _e24 = mx_fresnel_dielectric(_e23, eta_2);
-                e = _e17 + _e21 * _e24;
-            }
-            let _e28 = m_2;
-            m_2 = _e28.wrapping_add(1i32);
-        }
-        let _e30 = e;
-        return _e30;
-    }
-    let q_4 = (eta_2 - 1.0f32) / (eta_2 + 1.0f32);
-    let _e36 = mx_table_log_coordinate(mu_3);
-    let px_1 = mx_table_axis(_e36, MX_TABLE_VIEW_NODES);
-    let _e39 = mx_table_log_coordinate(abar_3);
-    let py_1 = mx_table_axis(_e39, MX_TABLE_ROUGHNESS_NODES);
+    let base = if eta_2 < 1.0f32 { 82944i32 } else { 50176i32 };
+    let q_4 = (eta_2 - 1.0f32).abs() / (eta_2 + 1.0f32);
+    let _e17 = mx_table_log_coordinate(mu_2);
+    let _e18 = mx_table_log_coordinate(abar_2);
+    let p_5 = mx_table_2d_index(_e17, _e18);
     let pz = mx_table_axis((2.0f32 * q_4).min(1.0f32).sqrt(), MX_TABLE_IOR_NODES);
-    let i_4 = (pz.x as i32).wrapping_mul(MX_TABLE_ROUGHNESS_NODES).wrapping_add(py_1.x as i32).wrapping_mul(MX_TABLE_VIEW_NODES).wrapping_add(px_1.x as i32);
     let k_9 = MX_TABLE_ROUGHNESS_NODES.wrapping_mul(MX_TABLE_VIEW_NODES);
-    let _e65 = mx_albedo_table(50176i32.wrapping_add(i_4));
-    let _e70 = mx_albedo_table(50176i32.wrapping_add(i_4).wrapping_add(1i32));
-    let a0_ = wgsl_mix_f32_f32_f32(_e65, _e70, px_1.y);
-    let _e76 = mx_albedo_table(50176i32.wrapping_add(i_4).wrapping_add(MX_TABLE_VIEW_NODES));
-    let _e82 = mx_albedo_table(50176i32.wrapping_add(i_4).wrapping_add(MX_TABLE_VIEW_NODES).wrapping_add(1i32));
-    let b0_ = wgsl_mix_f32_f32_f32(_e76, _e82, px_1.y);
-    let _e88 = mx_albedo_table(50176i32.wrapping_add(i_4).wrapping_add(k_9));
-    let _e94 = mx_albedo_table(50176i32.wrapping_add(i_4).wrapping_add(k_9).wrapping_add(1i32));
-    let a1_ = wgsl_mix_f32_f32_f32(_e88, _e94, px_1.y);
-    let _e101 = mx_albedo_table(50176i32.wrapping_add(i_4).wrapping_add(k_9).wrapping_add(MX_TABLE_VIEW_NODES));
-    let _e108 = mx_albedo_table(50176i32.wrapping_add(i_4).wrapping_add(k_9).wrapping_add(MX_TABLE_VIEW_NODES).wrapping_add(1i32));
-    let b1_ = wgsl_mix_f32_f32_f32(_e101, _e108, px_1.y);
-    wgsl_mix_f32_f32_f32(wgsl_mix_f32_f32_f32(a0_, b0_, py_1.y), wgsl_mix_f32_f32_f32(a1_, b1_, py_1.y), pz.y)
+    let i_3 = base.wrapping_add(pz.i.wrapping_mul(k_9)).wrapping_add(p_5.i);
+    let _e35 = mx_albedo_table(i_3);
+    let _e38 = mx_albedo_table(i_3.wrapping_add(1i32));
+    let a0_ = wgsl_mix_f32_f32_f32(_e35, _e38, p_5.fx);
+    let _e42 = mx_albedo_table(i_3.wrapping_add(MX_TABLE_VIEW_NODES));
+    let _e46 = mx_albedo_table(i_3.wrapping_add(MX_TABLE_VIEW_NODES).wrapping_add(1i32));
+    let b0_ = wgsl_mix_f32_f32_f32(_e42, _e46, p_5.fx);
+    let _e50 = mx_albedo_table(i_3.wrapping_add(k_9));
+    let _e54 = mx_albedo_table(i_3.wrapping_add(k_9).wrapping_add(1i32));
+    let a1_ = wgsl_mix_f32_f32_f32(_e50, _e54, p_5.fx);
+    let _e59 = mx_albedo_table(i_3.wrapping_add(k_9).wrapping_add(MX_TABLE_VIEW_NODES));
+    let _e64 = mx_albedo_table(i_3.wrapping_add(k_9).wrapping_add(MX_TABLE_VIEW_NODES).wrapping_add(1i32));
+    let b1_ = wgsl_mix_f32_f32_f32(_e59, _e64, p_5.fx);
+    wgsl_mix_f32_f32_f32(wgsl_mix_f32_f32_f32(a0_, b0_, p_5.fy), wgsl_mix_f32_f32_f32(a1_, b1_, p_5.fy), pz.f)
 }
 
 #[inline(always)]
-pub fn mx_film_fresnel_node(m_3: i32) -> f32 {
-    m_3 as f32 * 0.032258064f32
+pub fn mx_ggx_moments_position(mu_3: f32, abar_3: f32, nodes: i32) -> mx_table_point {
+    let _e3 = mx_table_log_coordinate(mu_3);
+    let _e4 = mx_table_log_coordinate(abar_3);
+    let p_6 = mx_table_2d_index(_e3, _e4);
+    mx_table_point { i: p_6.i.wrapping_mul(nodes), fx: p_6.fx, fy: p_6.fy }
+}
+
+#[inline(always)]
+pub fn mx_ggx_moment(offset_1: i32, nodes_1: i32, p: mx_table_point, m: i32) -> f32 {
+    let i_4 = offset_1.wrapping_add(p.i).wrapping_add(m);
+    let j_1 = i_4.wrapping_add(MX_TABLE_VIEW_NODES.wrapping_mul(nodes_1));
+    let _e10 = mx_albedo_table(i_4);
+    let _e12 = mx_albedo_table(i_4.wrapping_add(nodes_1));
+    let a_11 = wgsl_mix_f32_f32_f32(_e10, _e12, p.fx);
+    let _e15 = mx_albedo_table(j_1);
+    let _e17 = mx_albedo_table(j_1.wrapping_add(nodes_1));
+    let b_5 = wgsl_mix_f32_f32_f32(_e15, _e17, p.fx);
+    wgsl_mix_f32_f32_f32(a_11, b_5, p.fy)
+}
+
+#[inline(always)]
+pub fn mx_film_fresnel_node(m_1: i32) -> f32 {
+    m_1 as f32 * 0.032258064f32
 }
 
 #[inline(always)]
 #[allow(unused_assignments)]
 pub fn mx_albedo_ggx_airy_conductor(mu_4: f32, abar_4: f32, n_3: Vec3, k_2: Vec3, thickness_2: f32, film_ior_1: f32) -> Vec3 {
-    let mut e_1: Vec3 = Vec3::splat(0.0f32);
-    let mut m_4: i32 = 0i32;
+    let mut e: Vec3 = Vec3::splat(0.0f32);
+    let mut m_2: i32 = 0i32;
     let p_7 = mx_ggx_moments_position(mu_4, abar_4, MX_TABLE_FILM_FRESNEL_NODES);
     loop {
-        let _e13 = m_4;
+        let _e13 = m_2;
         if _e13 < MX_TABLE_FILM_FRESNEL_NODES {
         } else {
             break;
         }
         {
-            let _e16 = e_1;
-            let _e19 = m_4;
+            let _e16 = e;
+            let _e19 = m_2;
             let _e20 = mx_ggx_moment(17408i32, MX_TABLE_FILM_FRESNEL_NODES, p_7, _e19);
-            let _e21 = m_4;
+            let _e21 = m_2;
             let _e22 = mx_film_fresnel_node(_e21);
             let _e23 = mx_fresnel_airy_conductor(_e22, n_3, k_2, thickness_2, film_ior_1);
-            e_1 = _e16 + _e20 * _e23;
+            e = _e16 + _e20 * _e23;
         }
-        let _e27 = m_4;
-        m_4 = _e27.wrapping_add(1i32);
+        let _e27 = m_2;
+        m_2 = _e27.wrapping_add(1i32);
     }
-    let _e29 = e_1;
+    let _e29 = e;
     _e29
 }
 
@@ -590,25 +573,25 @@ pub fn mx_reflect_about(v_5: Vec3, h: Vec3) -> Vec3 {
 #[inline(always)]
 #[allow(unused_assignments)]
 pub fn mx_fast_log2_(x_7: f32) -> f32 {
-    let mut e_2: f32 = 0.0f32;
-    let mut m_5: f32 = 0.0f32;
+    let mut e_1: f32 = 0.0f32;
+    let mut m_3: f32 = 0.0f32;
     let bits_1 = x_7.max(1e-37f32).to_bits();
-    e_2 = ((bits_1.wrapping_shr(23u32) & 255u32) as i32).wrapping_sub(127i32) as f32;
-    m_5 = f32::from_bits(bits_1 & 8388607u32 | 1065353216u32);
-    let _e19 = m_5;
+    e_1 = ((bits_1.wrapping_shr(23u32) & 255u32) as i32).wrapping_sub(127i32) as f32;
+    m_3 = f32::from_bits(bits_1 & 8388607u32 | 1065353216u32);
+    let _e19 = m_3;
     let big = _e19 > 1.4142135f32;
-    let _e22 = m_5;
-    let _e23 = m_5;
-    m_5 = if big { 0.5f32 * _e23 } else { _e22 };
-    let _e27 = e_2;
-    let _e28 = e_2;
-    e_2 = if big { _e28 + 1.0f32 } else { _e27 };
-    let _e32 = m_5;
-    let _e35 = m_5;
+    let _e22 = m_3;
+    let _e23 = m_3;
+    m_3 = if big { 0.5f32 * _e23 } else { _e22 };
+    let _e27 = e_1;
+    let _e28 = e_1;
+    e_1 = if big { _e28 + 1.0f32 } else { _e27 };
+    let _e32 = m_3;
+    let _e35 = m_3;
     let s_4 = (_e32 - 1.0f32) / (_e35 + 1.0f32);
     let s2_3 = s_4 * s_4;
     let ln_m = 2.0f32 * s_4 * (1.0f32 + s2_3 * (0.33333334f32 + s2_3 * (0.2f32 + s2_3 * (0.14285715f32 + s2_3 * 0.11111111f32))));
-    let _e56 = e_2;
+    let _e56 = e_1;
     _e56 + ln_m * 1.442695f32
 }
 
@@ -634,8 +617,8 @@ pub fn mx_race_uniform(cl_2: mx_closure) -> f32 {
 pub fn mx_lobe_sampled(cl_3: mx_closure, throughput: Vec3, wl_1: Vec3, c: f32) -> BSDF {
     let _e4 = mx_race_uniform(cl_3);
     let _e5 = mx_fast_log2_(_e4);
-    let e_8 = -0.6931472f32 * _e5;
-    let key = if c > 1e-30f32 { e_8 / c } else { MX_LOBE_NEVER };
+    let e_7 = -0.6931472f32 * _e5;
+    let key = if c > 1e-30f32 { e_7 / c } else { MX_LOBE_NEVER };
     BSDF { response: Vec3::splat(0.0f32), throughput: throughput, lobe: Vec4::new(wl_1.x, wl_1.y, wl_1.z, key.min(MX_LOBE_NEVER)) }
 }
 
@@ -685,8 +668,8 @@ pub fn mx_ggx_d(h_2: Vec3, a_2: Vec2) -> f32 {
     let ia = 1.0f32 / (a_2.x * a_2.y);
     let hx = h_2.x * a_2.y * ia;
     let hy = h_2.y * a_2.x * ia;
-    let t_5 = hx * hx + hy * hy + h_2.z * h_2.z;
-    ia / (MX_PI * t_5 * t_5)
+    let t_4 = hx * hx + hy * hy + h_2.z * h_2.z;
+    ia / (MX_PI * t_4 * t_4)
 }
 
 #[inline(always)]
@@ -724,7 +707,7 @@ pub fn mx_dielectric_bsdf(cl_6: mx_closure, weight: f32, tint: Vec3, ior: f32, r
     }
     let s_5 = mx_ggx_setup_new(cl_6, roughness_2, retroreflective_1, normal_2, tangent_2);
     let eta_3 = ior.max(0.0f32);
-    let t_6 = tint.max(Vec3::splat(0.0f32));
+    let t_5 = tint.max(Vec3::splat(0.0f32));
     let film = thinfilm_thickness > 0.0f32;
     let n3_ = Vec3::splat(eta_3);
     let k3_ = Vec3::splat(0.0f32);
@@ -735,10 +718,10 @@ pub fn mx_dielectric_bsdf(cl_6: mx_closure, weight: f32, tint: Vec3, ior: f32, r
     let comp = mx_ggx_energy_compensation(s_5.mu, s_5.abar, _e37);
     let _e41 = mx_albedo_ggx_dielectric(s_5.mu, s_5.abar, eta_3);
     let _e45 = mx_albedo_ggx_airy_conductor(s_5.mu, s_5.abar, n3_, k3_, thinfilm_thickness, thinfilm_ior);
-    let e_9 = if film { _e45 } else { Vec3::splat(_e41) };
-    let albedo = comp * e_9;
+    let e_8 = if film { _e45 } else { Vec3::splat(_e41) };
+    let albedo = comp * e_8;
     let throughput_3 = Vec3::splat(1.0f32) - w_2 * albedo;
-    let tinted = w_2 * t_6 * albedo;
+    let tinted = w_2 * t_5 * albedo;
     if cl_6.context == MX_CONTEXT_ALBEDO {
         let _e57 = mx_bsdf_empty();
         return BSDF { response: tinted, throughput: throughput_3, lobe: _e57.lobe };
@@ -755,7 +738,7 @@ pub fn mx_dielectric_bsdf(cl_6: mx_closure, weight: f32, tint: Vec3, ior: f32, r
     let _e72 = mx_fresnel_airy_conductor(vh_2, n3_, k3_, thinfilm_thickness, thinfilm_ior);
     let f_3 = if film { _e72 } else { Vec3::splat(_e70) };
     let _e76 = mx_ggx_reflection(s_5.v, l_3, h_6, s_5.a);
-    let response_1 = w_2 * _e76 * f_3 * comp * t_6;
+    let response_1 = w_2 * _e76 * f_3 * comp * t_5;
     if cl_6.context == MX_CONTEXT_EVAL {
         let _e84 = mx_bsdf_empty();
         return BSDF { response: response_1, throughput: throughput_3, lobe: _e84.lobe };
@@ -799,30 +782,36 @@ pub fn mx_conductor_fresnel(vh: f32, n_6: Vec3, k_5: Vec3, thickness_3: f32, fil
 }
 
 #[inline(always)]
+pub fn mx_fresnel_node(m_4: i32) -> f32 {
+    let t_6 = m_4 as f32 * 0.06666667f32;
+    t_6 * t_6
+}
+
+#[inline(always)]
 #[allow(unused_assignments)]
 pub fn mx_albedo_ggx_conductor(mu_5: f32, abar_5: f32, n_7: Vec3, k_6: Vec3) -> Vec3 {
-    let mut e_3: Vec3 = Vec3::splat(0.0f32);
-    let mut m_6: i32 = 0i32;
+    let mut e_2: Vec3 = Vec3::splat(0.0f32);
+    let mut m_5: i32 = 0i32;
     let p_8 = mx_ggx_moments_position(mu_5, abar_5, MX_TABLE_FRESNEL_NODES);
     loop {
-        let _e11 = m_6;
+        let _e11 = m_5;
         if _e11 < MX_TABLE_FRESNEL_NODES {
         } else {
             break;
         }
         {
-            let _e14 = e_3;
-            let _e17 = m_6;
+            let _e14 = e_2;
+            let _e17 = m_5;
             let _e18 = mx_ggx_moment(1024i32, MX_TABLE_FRESNEL_NODES, p_8, _e17);
-            let _e19 = m_6;
+            let _e19 = m_5;
             let _e20 = mx_fresnel_node(_e19);
             let _e21 = mx_fresnel_conductor(_e20, n_7, k_6);
-            e_3 = _e14 + _e18 * _e21;
+            e_2 = _e14 + _e18 * _e21;
         }
-        let _e25 = m_6;
-        m_6 = _e25.wrapping_add(1i32);
+        let _e25 = m_5;
+        m_5 = _e25.wrapping_add(1i32);
     }
-    let _e27 = e_3;
+    let _e27 = e_2;
     _e27
 }
 
@@ -849,8 +838,8 @@ pub fn mx_conductor_bsdf(cl_7: mx_closure, weight_1: f32, ior_1: Vec3, extinctio
     }
     let _e57 = mx_albedo_ggx_conductor(s_6.mu, s_6.abar, n_9, k_10);
     let _e60 = mx_albedo_ggx_airy_conductor(s_6.mu, s_6.abar, n_9, k_10, thinfilm_thickness_1, thinfilm_ior_1);
-    let e_10 = if film_1 { _e60 } else { _e57 };
-    let albedo_1 = w_3 * comp_1 * e_10;
+    let e_9 = if film_1 { _e60 } else { _e57 };
+    let albedo_1 = w_3 * comp_1 * e_9;
     if cl_7.context == MX_CONTEXT_ALBEDO {
         let _e67 = mx_bsdf_empty();
         return BSDF { response: albedo_1, throughput: opaque, lobe: _e67.lobe };
@@ -908,9 +897,9 @@ pub fn mx_fresnel_schlick_f82_(cos_theta_8: f32, r0_: Vec3, r82_: Vec3, r90_: Ve
     let q_5 = exponent.max(0.0f32);
     let _e20 = mx_pow_unit(1.0f32 - 0.14285715f32, q_5);
     let a_13 = wgsl_mix_vec3_vec3_f32(r0_, r90_, _e20) * (Vec3::splat(1.0f32) - r82_) * factor;
-    let m_9 = 1.0f32 - x_12;
-    let m2_ = m_9 * m_9;
-    let _e30 = mx_pow_unit(m_9, q_5);
+    let m_8 = 1.0f32 - x_12;
+    let m2_ = m_8 * m_8;
+    let _e30 = mx_pow_unit(m_8, q_5);
     wgsl_mix_vec3_vec3_f32(r0_, r90_, _e30) - a_13 * x_12 * (m2_ * m2_ * m2_)
 }
 
@@ -929,56 +918,56 @@ pub fn mx_fresnel_airy_schlick(cos_theta_9: f32, r0_1: Vec3, r82_1: Vec3, r90_1:
 #[inline(always)]
 #[allow(unused_assignments)]
 pub fn mx_albedo_ggx_schlick(mu_6: f32, abar_6: f32, r0_2: Vec3, r82_2: Vec3, r90_2: Vec3, exponent_2: f32) -> Vec3 {
-    let mut e_4: Vec3 = Vec3::splat(0.0f32);
-    let mut m_7: i32 = 0i32;
+    let mut e_3: Vec3 = Vec3::splat(0.0f32);
+    let mut m_6: i32 = 0i32;
     let p_9 = mx_ggx_moments_position(mu_6, abar_6, MX_TABLE_FRESNEL_NODES);
     loop {
-        let _e13 = m_7;
+        let _e13 = m_6;
         if _e13 < MX_TABLE_FRESNEL_NODES {
         } else {
             break;
         }
         {
-            let _e16 = e_4;
-            let _e19 = m_7;
+            let _e16 = e_3;
+            let _e19 = m_6;
             let _e20 = mx_ggx_moment(1024i32, MX_TABLE_FRESNEL_NODES, p_9, _e19);
-            let _e21 = m_7;
+            let _e21 = m_6;
             let _e22 = mx_fresnel_node(_e21);
             let _e23 = mx_fresnel_schlick_f82_(_e22, r0_2, r82_2, r90_2, exponent_2);
-            e_4 = _e16 + _e20 * _e23;
+            e_3 = _e16 + _e20 * _e23;
         }
-        let _e27 = m_7;
-        m_7 = _e27.wrapping_add(1i32);
+        let _e27 = m_6;
+        m_6 = _e27.wrapping_add(1i32);
     }
-    let _e29 = e_4;
+    let _e29 = e_3;
     _e29
 }
 
 #[inline(always)]
 #[allow(unused_assignments)]
 pub fn mx_albedo_ggx_airy_schlick(mu_7: f32, abar_7: f32, r0_3: Vec3, r82_3: Vec3, r90_3: Vec3, exponent_3: f32, thickness_5: f32, film_ior_4: f32) -> Vec3 {
-    let mut e_5: Vec3 = Vec3::splat(0.0f32);
-    let mut m_8: i32 = 0i32;
+    let mut e_4: Vec3 = Vec3::splat(0.0f32);
+    let mut m_7: i32 = 0i32;
     let p_10 = mx_ggx_moments_position(mu_7, abar_7, MX_TABLE_FILM_FRESNEL_NODES);
     loop {
-        let _e15 = m_8;
+        let _e15 = m_7;
         if _e15 < MX_TABLE_FILM_FRESNEL_NODES {
         } else {
             break;
         }
         {
-            let _e18 = e_5;
-            let _e21 = m_8;
+            let _e18 = e_4;
+            let _e21 = m_7;
             let _e22 = mx_ggx_moment(17408i32, MX_TABLE_FILM_FRESNEL_NODES, p_10, _e21);
-            let _e23 = m_8;
+            let _e23 = m_7;
             let _e24 = mx_film_fresnel_node(_e23);
             let _e25 = mx_fresnel_airy_schlick(_e24, r0_3, r82_3, r90_3, exponent_3, thickness_5, film_ior_4);
-            e_5 = _e18 + _e22 * _e25;
+            e_4 = _e18 + _e22 * _e25;
         }
-        let _e29 = m_8;
-        m_8 = _e29.wrapping_add(1i32);
+        let _e29 = m_7;
+        m_7 = _e29.wrapping_add(1i32);
     }
-    let _e31 = e_5;
+    let _e31 = e_4;
     _e31
 }
 
@@ -1003,8 +992,8 @@ pub fn mx_generalized_schlick_bsdf(cl_10: mx_closure, weight_2: f32, color0_: Ve
     let comp_2 = mx_ggx_energy_compensation(s_7.mu, s_7.abar, favg_1);
     let _e46 = mx_albedo_ggx_schlick(s_7.mu, s_7.abar, r0_4, r82_4, r90_4, q_6);
     let _e49 = mx_albedo_ggx_airy_schlick(s_7.mu, s_7.abar, r0_4, r82_4, r90_4, q_6, thinfilm_thickness_2, thinfilm_ior_2);
-    let e_11 = if film_2 { _e49 } else { _e46 };
-    let albedo_2 = w_4 * comp_2 * e_11;
+    let e_10 = if film_2 { _e49 } else { _e46 };
+    let albedo_2 = w_4 * comp_2 * e_10;
     let throughput_4 = Vec3::splat(1.0f32 - (albedo_2.x + albedo_2.y + albedo_2.z) * 0.33333334f32);
     if cl_10.context == MX_CONTEXT_ALBEDO {
         let _e66 = mx_bsdf_empty();

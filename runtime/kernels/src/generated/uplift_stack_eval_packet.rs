@@ -97,6 +97,37 @@ impl<S: Simd> mx_frame<S> {
 
 #[derive(Clone, Copy, Debug)]
 #[allow(non_camel_case_types)]
+pub struct mx_table_point<S: Simd> {
+    pub i: S::I,
+    pub fx: S::F,
+    pub fy: S::F,
+}
+
+impl<S: Simd> mx_table_point<S> {
+    #[inline(always)]
+    #[allow(unused_parens)]
+    pub fn select(m: S::M, on: Self, off: Self) -> Self {
+        mx_table_point { i: m.select_i(on.i, off.i), fx: m.select(on.fx, off.fx), fy: m.select(on.fy, off.fy) }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+#[allow(non_camel_case_types)]
+pub struct mx_table_cell<S: Simd> {
+    pub i: S::I,
+    pub f: S::F,
+}
+
+impl<S: Simd> mx_table_cell<S> {
+    #[inline(always)]
+    #[allow(unused_parens)]
+    pub fn select(m: S::M, on: Self, off: Self) -> Self {
+        mx_table_cell { i: m.select_i(on.i, off.i), f: m.select(on.f, off.f) }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+#[allow(non_camel_case_types)]
 pub struct mx_ggx_setup<S: Simd> {
     pub frame: mx_frame<S>,
     pub v: [S::F; 3],
@@ -439,42 +470,39 @@ pub fn mx_sheen_zeltner_albedo<S: Simd>(s: S, x_3: S::F, y_1: S::F) -> S::F {
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_table_axis<S: Simd>(s: S, t: S::F, n: S::I) -> [S::F; 2] {
+pub fn mx_table_axis<S: Simd>(s: S, t: S::F, n: S::I) -> mx_table_cell<S> {
     let _e4 = t.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e6 = (n - s.splat_i(1i32));
     let _e7 = _e6.to_f32();
     let _e8 = (_e4 * _e7);
-    let _e9 = { let x = _e8; x.floor() };
+    let _e9 = _e8.to_i32();
     let _e11 = (n - s.splat_i(2i32));
-    let _e12 = _e11.to_f32();
-    let _e13 = { let (x, y) = (_e9, _e12); x.min(y) };
+    let _e12 = _e9.min(_e11);
+    let _e13 = _e12.to_f32();
     let _e14 = (_e8 - _e13);
-    let _e15 = [_e13, _e14];
+    let _e15 = mx_table_cell { i: _e12, f: _e14 };
     return _e15;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_table_2d_index<S: Simd>(s: S, x_4: S::F, y_2: S::F) -> [S::F; 4] {
+pub fn mx_table_2d_index<S: Simd>(s: S, x_4: S::F, y_2: S::F) -> mx_table_point<S> {
     let _e3 = mx_table_axis(s, x_4, s.splat_i(32i32));
     let _e5 = mx_table_axis(s, y_2, s.splat_i(32i32));
-    let _e6 = _e5[0];
-    let _e7 = _e6.to_i32();
-    let _e9 = (_e7 * s.splat_i(32i32));
-    let _e10 = _e3[0];
-    let _e11 = _e10.to_i32();
-    let _e12 = (_e9 + _e11);
-    let _e13 = _e12.to_f32();
-    let _e14 = _e3[1];
-    let _e15 = _e5[1];
-    let _e17 = [_e13, _e14, _e15, s.splat(0.0f32)];
-    return _e17;
+    let _e6 = _e5.i;
+    let _e8 = (_e6 * s.splat_i(32i32));
+    let _e9 = _e3.i;
+    let _e10 = (_e8 + _e9);
+    let _e11 = _e3.f;
+    let _e12 = _e5.f;
+    let _e13 = mx_table_point { i: _e10, fx: _e11, fy: _e12 };
+    return _e13;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_albedo_table<S: Simd>(s: S, i: S::I) -> S::F {
-    let _e2 = s.gather(&mx_albedo_table_data, i.to_u32_bits().min(s.splat_u(86015)).to_i32_bits());
+    let _e2 = s.gather(&mx_albedo_table_data, i.to_u32_bits().min(s.splat_u(118783)).to_i32_bits());
     return _e2;
 }
 
@@ -482,23 +510,22 @@ pub fn mx_albedo_table<S: Simd>(s: S, i: S::I) -> S::F {
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_albedo_table_2d<S: Simd>(s: S, offset: S::I, x_5: S::F, y_3: S::F) -> S::F {
     let _e3 = mx_table_2d_index(s, x_5, y_3);
-    let _e4 = _e3[0];
-    let _e5 = _e4.to_i32();
-    let _e6 = (offset + _e5);
-    let _e8 = (_e6 + s.splat_i(32i32));
-    let _e9 = mx_albedo_table(s, _e6);
-    let _e11 = (_e6 + s.splat_i(1i32));
-    let _e12 = mx_albedo_table(s, _e11);
-    let _e13 = _e3[1];
-    let _e14 = { let t = _e13; _e9 * (s.splat(1.0) - t) + _e12 * t };
-    let _e15 = mx_albedo_table(s, _e8);
-    let _e17 = (_e8 + s.splat_i(1i32));
-    let _e18 = mx_albedo_table(s, _e17);
-    let _e19 = _e3[1];
-    let _e20 = { let t = _e19; _e15 * (s.splat(1.0) - t) + _e18 * t };
-    let _e21 = _e3[2];
-    let _e22 = { let t = _e21; _e14 * (s.splat(1.0) - t) + _e20 * t };
-    return _e22;
+    let _e4 = _e3.i;
+    let _e5 = (offset + _e4);
+    let _e7 = (_e5 + s.splat_i(32i32));
+    let _e8 = mx_albedo_table(s, _e5);
+    let _e10 = (_e5 + s.splat_i(1i32));
+    let _e11 = mx_albedo_table(s, _e10);
+    let _e12 = _e3.fx;
+    let _e13 = { let t = _e12; _e8 * (s.splat(1.0) - t) + _e11 * t };
+    let _e14 = mx_albedo_table(s, _e7);
+    let _e16 = (_e7 + s.splat_i(1i32));
+    let _e17 = mx_albedo_table(s, _e16);
+    let _e18 = _e3.fx;
+    let _e19 = { let t = _e18; _e14 * (s.splat(1.0) - t) + _e17 * t };
+    let _e20 = _e3.fy;
+    let _e21 = { let t = _e20; _e13 * (s.splat(1.0) - t) + _e19 * t };
+    return _e21;
 }
 
 #[inline(always)]
@@ -540,7 +567,7 @@ pub fn mx_albedo_sheen_conty_kulla<S: Simd>(s: S, mu: S::F, roughness: S::F) -> 
     let _e3 = mx_table_log_coordinate(s, mu);
     let _e6 = roughness.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e7 = { let x = _e6; x.sqrt() };
-    let _e8 = mx_albedo_table_2d(s, s.splat_i(82944i32), _e3, _e7);
+    let _e8 = mx_albedo_table_2d(s, s.splat_i(115712i32), _e3, _e7);
     return _e8;
 }
 
@@ -1509,175 +1536,114 @@ pub fn mx_fresnel_average<S: Simd>(s: S, f_normal: [S::F; 3], f90_: [S::F; 3]) -
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_moments_position<S: Simd>(s: S, mu_3: S::F, abar_2: S::F, nodes: S::I) -> [S::F; 4] {
-    let _e3 = mx_table_log_coordinate(s, mu_3);
-    let _e4 = mx_table_log_coordinate(s, abar_2);
-    let _e5 = mx_table_2d_index(s, _e3, _e4);
-    let _e6 = _e5[0];
-    let _e7 = nodes.to_f32();
-    let _e8 = (_e6 * _e7);
-    let _e9 = _e5[1];
-    let _e10 = _e5[2];
-    let _e12 = [_e8, _e9, _e10, s.splat(0.0f32)];
-    return _e12;
-}
-
-#[inline(always)]
-#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_moment<S: Simd>(s: S, offset_1: S::I, nodes_1: S::I, p: [S::F; 4], m_1: S::I) -> S::F {
-    let _e4 = p[0];
-    let _e5 = _e4.to_i32();
-    let _e6 = (offset_1 + _e5);
-    let _e7 = (_e6 + m_1);
-    let _e9 = (s.splat_i(32i32) * nodes_1);
-    let _e10 = (_e7 + _e9);
-    let _e11 = mx_albedo_table(s, _e7);
-    let _e12 = (_e7 + nodes_1);
-    let _e13 = mx_albedo_table(s, _e12);
-    let _e14 = p[1];
-    let _e15 = { let t = _e14; _e11 * (s.splat(1.0) - t) + _e13 * t };
-    let _e16 = mx_albedo_table(s, _e10);
-    let _e17 = (_e10 + nodes_1);
-    let _e18 = mx_albedo_table(s, _e17);
-    let _e19 = p[1];
-    let _e20 = { let t = _e19; _e16 * (s.splat(1.0) - t) + _e18 * t };
-    let _e21 = p[2];
-    let _e22 = { let t = _e21; _e15 * (s.splat(1.0) - t) + _e20 * t };
-    return _e22;
-}
-
-#[inline(always)]
-#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_node<S: Simd>(s: S, m_2: S::I) -> S::F {
-    let _e1 = m_2.to_f32();
-    let _e3 = (_e1 * s.splat(0.06666667f32));
-    let _e4 = (_e3 * _e3);
-    return _e4;
-}
-
-#[inline(always)]
-#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_albedo_ggx_dielectric<S: Simd>(s: S, mu_4: S::F, abar_3: S::F, eta_2: S::F) -> S::F {
-    let mut e_2: S::F = s.splat(0.0f32);
-    let mut m_3: S::I = s.splat_i(0i32);
+pub fn mx_albedo_ggx_dielectric<S: Simd>(s: S, mu_3: S::F, abar_2: S::F, eta_2: S::F) -> S::F {
     let mut _ret: S::F = s.splat(0.0);
     let mut _done = s.first_lanes(0);
     let _e4 = eta_2.le(s.splat(0.0f32));
     let _m1 = _e4;
     if _m1.any() {
-        let _e5 = mx_albedo_ggx_ess(s, mu_4, abar_3);
+        let _e5 = mx_albedo_ggx_ess(s, mu_3, abar_2);
         _ret = (_m1 & !_done).select(_e5, _ret);
         _done = _done | _m1;
     }
     if _done.all() { return _ret; }
     let _e7 = eta_2.lt(s.splat(1.0f32));
-    let _m2 = _e7;
-    if _m2.any() {
-        let _e9 = mx_ggx_moments_position(s, mu_4, abar_3, s.splat_i(16i32));
-        let mut _lm1 = _m2;
-        let mut _brk1 = s.first_lanes(0);
-        loop {
-            let mut _cont1 = s.first_lanes(0);
-            let _e14 = m_3;
-            let _e16 = _e14.lt(s.splat_i(16i32));
-            let _m3 = _lm1 & !_e16;
-            if _m3.any() {
-                _brk1 = _brk1 | _m3;
-                let _m4 = s.first_lanes(0);
-            }
-            let _m5 = _lm1 & !_brk1 & !_cont1 & !_done;
-            let _e17 = e_2;
-            let _e20 = m_3;
-            let _e21 = mx_ggx_moment(s, s.splat_i(1024i32), s.splat_i(16i32), _e9, _e20);
-            let _e22 = m_3;
-            let _e23 = mx_fresnel_node(s, _e22);
-            let _e24 = mx_fresnel_dielectric(s, _e23, eta_2);
-            let _e25 = (_e21 * _e24);
-            let _e26 = (_e17 + _e25);
-            e_2 = _m5.select(_e26, e_2);
-            let _m6 = _lm1 & !_brk1 & !_done;
-            let _e28 = m_3;
-            let _e29 = (_e28 + s.splat_i(1i32));
-            m_3 = _m6.select_i(_e29, m_3);
-            _lm1 = _lm1 & !_brk1 & !_done;
-            if !_lm1.any() { break; }
-        }
-        let _e30 = e_2;
-        _ret = (_m2 & !_done).select(_e30, _ret);
-        _done = _done | _m2;
-    }
-    if _done.all() { return _ret; }
-    let _e32 = (eta_2 - s.splat(1.0f32));
-    let _e34 = (eta_2 + s.splat(1.0f32));
-    let _e35 = (_e32 / _e34);
-    let _e36 = mx_table_log_coordinate(s, mu_4);
-    let _e38 = mx_table_axis(s, _e36, s.splat_i(32i32));
-    let _e39 = mx_table_log_coordinate(s, abar_3);
-    let _e41 = mx_table_axis(s, _e39, s.splat_i(32i32));
-    let _e43 = (s.splat(2.0f32) * _e35);
-    let _e45 = { let (x, y) = (_e43, s.splat(1.0f32)); x.min(y) };
-    let _e46 = { let x = _e45; x.sqrt() };
-    let _e48 = mx_table_axis(s, _e46, s.splat_i(32i32));
-    let _e50 = _e48[0];
-    let _e51 = _e50.to_i32();
-    let _e53 = (_e51 * s.splat_i(32i32));
-    let _e54 = _e41[0];
-    let _e55 = _e54.to_i32();
-    let _e56 = (_e53 + _e55);
-    let _e57 = (_e56 * s.splat_i(32i32));
-    let _e58 = _e38[0];
-    let _e59 = _e58.to_i32();
-    let _e60 = (_e57 + _e59);
-    let _e62 = (s.splat_i(32i32) * s.splat_i(32i32));
-    let _e64 = (s.splat_i(50176i32) + _e60);
-    let _e65 = mx_albedo_table(s, _e64);
-    let _e67 = (s.splat_i(50176i32) + _e60);
-    let _e69 = (_e67 + s.splat_i(1i32));
-    let _e70 = mx_albedo_table(s, _e69);
-    let _e71 = _e38[1];
-    let _e72 = { let t = _e71; _e65 * (s.splat(1.0) - t) + _e70 * t };
-    let _e74 = (s.splat_i(50176i32) + _e60);
-    let _e75 = (_e74 + s.splat_i(32i32));
-    let _e76 = mx_albedo_table(s, _e75);
-    let _e78 = (s.splat_i(50176i32) + _e60);
-    let _e79 = (_e78 + s.splat_i(32i32));
-    let _e81 = (_e79 + s.splat_i(1i32));
-    let _e82 = mx_albedo_table(s, _e81);
-    let _e83 = _e38[1];
-    let _e84 = { let t = _e83; _e76 * (s.splat(1.0) - t) + _e82 * t };
-    let _e86 = (s.splat_i(50176i32) + _e60);
-    let _e87 = (_e86 + _e62);
-    let _e88 = mx_albedo_table(s, _e87);
-    let _e90 = (s.splat_i(50176i32) + _e60);
-    let _e91 = (_e90 + _e62);
-    let _e93 = (_e91 + s.splat_i(1i32));
-    let _e94 = mx_albedo_table(s, _e93);
-    let _e95 = _e38[1];
-    let _e96 = { let t = _e95; _e88 * (s.splat(1.0) - t) + _e94 * t };
-    let _e98 = (s.splat_i(50176i32) + _e60);
-    let _e99 = (_e98 + _e62);
-    let _e100 = (_e99 + s.splat_i(32i32));
-    let _e101 = mx_albedo_table(s, _e100);
-    let _e103 = (s.splat_i(50176i32) + _e60);
-    let _e104 = (_e103 + _e62);
-    let _e105 = (_e104 + s.splat_i(32i32));
-    let _e107 = (_e105 + s.splat_i(1i32));
-    let _e108 = mx_albedo_table(s, _e107);
-    let _e109 = _e38[1];
-    let _e110 = { let t = _e109; _e101 * (s.splat(1.0) - t) + _e108 * t };
-    let _e111 = _e41[1];
-    let _e112 = { let t = _e111; _e72 * (s.splat(1.0) - t) + _e84 * t };
-    let _e113 = _e41[1];
-    let _e114 = { let t = _e113; _e96 * (s.splat(1.0) - t) + _e110 * t };
-    let _e115 = _e48[1];
-    let _e116 = { let t = _e115; _e112 * (s.splat(1.0) - t) + _e114 * t };
-    return (!_done).select(_e116, _ret);
+    let _e10 = _e7.select_i(s.splat_i(82944i32), s.splat_i(50176i32));
+    let _e12 = (eta_2 - s.splat(1.0f32));
+    let _e13 = { let x = _e12; x.abs() };
+    let _e15 = (eta_2 + s.splat(1.0f32));
+    let _e16 = (_e13 / _e15);
+    let _e17 = mx_table_log_coordinate(s, mu_3);
+    let _e18 = mx_table_log_coordinate(s, abar_2);
+    let _e19 = mx_table_2d_index(s, _e17, _e18);
+    let _e21 = (s.splat(2.0f32) * _e16);
+    let _e23 = { let (x, y) = (_e21, s.splat(1.0f32)); x.min(y) };
+    let _e24 = { let x = _e23; x.sqrt() };
+    let _e26 = mx_table_axis(s, _e24, s.splat_i(32i32));
+    let _e29 = (s.splat_i(32i32) * s.splat_i(32i32));
+    let _e30 = _e26.i;
+    let _e31 = (_e30 * _e29);
+    let _e32 = (_e10 + _e31);
+    let _e33 = _e19.i;
+    let _e34 = (_e32 + _e33);
+    let _e35 = mx_albedo_table(s, _e34);
+    let _e37 = (_e34 + s.splat_i(1i32));
+    let _e38 = mx_albedo_table(s, _e37);
+    let _e39 = _e19.fx;
+    let _e40 = { let t = _e39; _e35 * (s.splat(1.0) - t) + _e38 * t };
+    let _e41 = (_e34 + s.splat_i(32i32));
+    let _e42 = mx_albedo_table(s, _e41);
+    let _e43 = (_e34 + s.splat_i(32i32));
+    let _e45 = (_e43 + s.splat_i(1i32));
+    let _e46 = mx_albedo_table(s, _e45);
+    let _e47 = _e19.fx;
+    let _e48 = { let t = _e47; _e42 * (s.splat(1.0) - t) + _e46 * t };
+    let _e49 = (_e34 + _e29);
+    let _e50 = mx_albedo_table(s, _e49);
+    let _e51 = (_e34 + _e29);
+    let _e53 = (_e51 + s.splat_i(1i32));
+    let _e54 = mx_albedo_table(s, _e53);
+    let _e55 = _e19.fx;
+    let _e56 = { let t = _e55; _e50 * (s.splat(1.0) - t) + _e54 * t };
+    let _e57 = (_e34 + _e29);
+    let _e58 = (_e57 + s.splat_i(32i32));
+    let _e59 = mx_albedo_table(s, _e58);
+    let _e60 = (_e34 + _e29);
+    let _e61 = (_e60 + s.splat_i(32i32));
+    let _e63 = (_e61 + s.splat_i(1i32));
+    let _e64 = mx_albedo_table(s, _e63);
+    let _e65 = _e19.fx;
+    let _e66 = { let t = _e65; _e59 * (s.splat(1.0) - t) + _e64 * t };
+    let _e67 = _e19.fy;
+    let _e68 = { let t = _e67; _e40 * (s.splat(1.0) - t) + _e48 * t };
+    let _e69 = _e19.fy;
+    let _e70 = { let t = _e69; _e56 * (s.splat(1.0) - t) + _e66 * t };
+    let _e71 = _e26.f;
+    let _e72 = { let t = _e71; _e68 * (s.splat(1.0) - t) + _e70 * t };
+    return (!_done).select(_e72, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_film_fresnel_node<S: Simd>(s: S, m_4: S::I) -> S::F {
-    let _e1 = m_4.to_f32();
+pub fn mx_ggx_moments_position<S: Simd>(s: S, mu_4: S::F, abar_3: S::F, nodes: S::I) -> mx_table_point<S> {
+    let _e3 = mx_table_log_coordinate(s, mu_4);
+    let _e4 = mx_table_log_coordinate(s, abar_3);
+    let _e5 = mx_table_2d_index(s, _e3, _e4);
+    let _e6 = _e5.i;
+    let _e7 = (_e6 * nodes);
+    let _e8 = _e5.fx;
+    let _e9 = _e5.fy;
+    let _e10 = mx_table_point { i: _e7, fx: _e8, fy: _e9 };
+    return _e10;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_ggx_moment<S: Simd>(s: S, offset_1: S::I, nodes_1: S::I, p: mx_table_point<S>, m_1: S::I) -> S::F {
+    let _e4 = p.i;
+    let _e5 = (offset_1 + _e4);
+    let _e6 = (_e5 + m_1);
+    let _e8 = (s.splat_i(32i32) * nodes_1);
+    let _e9 = (_e6 + _e8);
+    let _e10 = mx_albedo_table(s, _e6);
+    let _e11 = (_e6 + nodes_1);
+    let _e12 = mx_albedo_table(s, _e11);
+    let _e13 = p.fx;
+    let _e14 = { let t = _e13; _e10 * (s.splat(1.0) - t) + _e12 * t };
+    let _e15 = mx_albedo_table(s, _e9);
+    let _e16 = (_e9 + nodes_1);
+    let _e17 = mx_albedo_table(s, _e16);
+    let _e18 = p.fx;
+    let _e19 = { let t = _e18; _e15 * (s.splat(1.0) - t) + _e17 * t };
+    let _e20 = p.fy;
+    let _e21 = { let t = _e20; _e14 * (s.splat(1.0) - t) + _e19 * t };
+    return _e21;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_film_fresnel_node<S: Simd>(s: S, m_2: S::I) -> S::F {
+    let _e1 = m_2.to_f32();
     let _e3 = (_e1 * s.splat(0.032258064f32));
     return _e3;
 }
@@ -1685,15 +1651,15 @@ pub fn mx_film_fresnel_node<S: Simd>(s: S, m_4: S::I) -> S::F {
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_albedo_ggx_airy_conductor<S: Simd>(s: S, mu_5: S::F, abar_4: S::F, n_3: [S::F; 3], k_2: [S::F; 3], thickness_2: S::F, film_ior_1: S::F) -> [S::F; 3] {
-    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
-    let mut m_5: S::I = s.splat_i(0i32);
+    let mut e_2: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut m_3: S::I = s.splat_i(0i32);
     let _e7 = mx_ggx_moments_position(s, mu_5, abar_4, s.splat_i(32i32));
     let _e9 = [s.splat(0.0f32); 3];
     let mut _lm1 = s.first_lanes(usize::MAX);
     let mut _brk1 = s.first_lanes(0);
     loop {
         let mut _cont1 = s.first_lanes(0);
-        let _e13 = m_5;
+        let _e13 = m_3;
         let _e15 = _e13.lt(s.splat_i(32i32));
         let _m1 = _lm1 & !_e15;
         if _m1.any() {
@@ -1701,23 +1667,23 @@ pub fn mx_albedo_ggx_airy_conductor<S: Simd>(s: S, mu_5: S::F, abar_4: S::F, n_3
             let _m2 = s.first_lanes(0);
         }
         let _m3 = _lm1 & !_brk1 & !_cont1;
-        let _e16 = e_3;
-        let _e19 = m_5;
+        let _e16 = e_2;
+        let _e19 = m_3;
         let _e20 = mx_ggx_moment(s, s.splat_i(17408i32), s.splat_i(32i32), _e7, _e19);
-        let _e21 = m_5;
+        let _e21 = m_3;
         let _e22 = mx_film_fresnel_node(s, _e21);
         let _e23 = mx_fresnel_airy_conductor(s, _e22, n_3, k_2, thickness_2, film_ior_1);
         let _e24 = uplift_simd::vector::mul::<S, 3>([_e20; 3], _e23);
         let _e25 = uplift_simd::vector::add::<S, 3>(_e16, _e24);
-        e_3 = uplift_simd::vector::select_all::<S, 3>(_m3, _e25, e_3);
+        e_2 = uplift_simd::vector::select_all::<S, 3>(_m3, _e25, e_2);
         let _m4 = _lm1 & !_brk1;
-        let _e27 = m_5;
+        let _e27 = m_3;
         let _e28 = (_e27 + s.splat_i(1i32));
-        m_5 = _m4.select_i(_e28, m_5);
+        m_3 = _m4.select_i(_e28, m_3);
         _lm1 = _lm1 & !_brk1;
         if !_lm1.any() { break; }
     }
-    let _e29 = e_3;
+    let _e29 = e_2;
     return _e29;
 }
 
@@ -2082,16 +2048,25 @@ pub fn mx_conductor_fresnel<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S::F;
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_node<S: Simd>(s: S, m_4: S::I) -> S::F {
+    let _e1 = m_4.to_f32();
+    let _e3 = (_e1 * s.splat(0.06666667f32));
+    let _e4 = (_e3 * _e3);
+    return _e4;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_albedo_ggx_conductor<S: Simd>(s: S, mu_6: S::F, abar_5: S::F, n_7: [S::F; 3], k_6: [S::F; 3]) -> [S::F; 3] {
-    let mut e_4: [S::F; 3] = [s.splat(0.0f32); 3];
-    let mut m_6: S::I = s.splat_i(0i32);
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut m_5: S::I = s.splat_i(0i32);
     let _e5 = mx_ggx_moments_position(s, mu_6, abar_5, s.splat_i(16i32));
     let _e7 = [s.splat(0.0f32); 3];
     let mut _lm1 = s.first_lanes(usize::MAX);
     let mut _brk1 = s.first_lanes(0);
     loop {
         let mut _cont1 = s.first_lanes(0);
-        let _e11 = m_6;
+        let _e11 = m_5;
         let _e13 = _e11.lt(s.splat_i(16i32));
         let _m1 = _lm1 & !_e13;
         if _m1.any() {
@@ -2099,23 +2074,23 @@ pub fn mx_albedo_ggx_conductor<S: Simd>(s: S, mu_6: S::F, abar_5: S::F, n_7: [S:
             let _m2 = s.first_lanes(0);
         }
         let _m3 = _lm1 & !_brk1 & !_cont1;
-        let _e14 = e_4;
-        let _e17 = m_6;
+        let _e14 = e_3;
+        let _e17 = m_5;
         let _e18 = mx_ggx_moment(s, s.splat_i(1024i32), s.splat_i(16i32), _e5, _e17);
-        let _e19 = m_6;
+        let _e19 = m_5;
         let _e20 = mx_fresnel_node(s, _e19);
         let _e21 = mx_fresnel_conductor(s, _e20, n_7, k_6);
         let _e22 = uplift_simd::vector::mul::<S, 3>([_e18; 3], _e21);
         let _e23 = uplift_simd::vector::add::<S, 3>(_e14, _e22);
-        e_4 = uplift_simd::vector::select_all::<S, 3>(_m3, _e23, e_4);
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m3, _e23, e_3);
         let _m4 = _lm1 & !_brk1;
-        let _e25 = m_6;
+        let _e25 = m_5;
         let _e26 = (_e25 + s.splat_i(1i32));
-        m_6 = _m4.select_i(_e26, m_6);
+        m_5 = _m4.select_i(_e26, m_5);
         _lm1 = _lm1 & !_brk1;
         if !_lm1.any() { break; }
     }
-    let _e27 = e_4;
+    let _e27 = e_3;
     return _e27;
 }
 
@@ -2217,10 +2192,10 @@ pub fn mx_conductor_bsdf<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F, ior
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_mix_amount<S: Simd>(s: S, m_7: S::F) -> S::F {
-    let _e1 = { let x = m_7; x.abs() };
+pub fn mx_mix_amount<S: Simd>(s: S, m_6: S::F) -> S::F {
+    let _e1 = { let x = m_6; x.abs() };
     let _e3 = _e1.le(s.splat(1e30f32));
-    let _e5 = _e3.select(m_7, s.splat(0.0f32));
+    let _e5 = _e3.select(m_6, s.splat(0.0f32));
     return _e5;
 }
 
