@@ -4,7 +4,7 @@
 use crate::graph_builder::{document_outputs, GraphBuilder, OutputRef};
 use crate::ir::Graph;
 use crate::kernel::{ClosureContext, PatternKernel};
-use crate::lower::lower;
+use crate::lower::{lower, LowerOptions};
 use crate::node_library::NodeLibrary;
 use mtlx::{has_errors, Diagnostic, Document, Library};
 use std::path::{Path, PathBuf};
@@ -18,6 +18,8 @@ pub struct Compiler {
     /// where a MaterialX install keeps `resources/`). `None`: files may lie anywhere
     /// (`--allow-any-path`).
     pub file_roots: Option<Vec<PathBuf>>,
+    /// How lowering builds naga modules (library functions imported pre-parsed by default).
+    pub lower_options: LowerOptions,
 }
 
 /// What to compile: every numeric output, or the outputs named (`graph/output` or `output`).
@@ -43,12 +45,12 @@ impl Compiler {
         let mut roots: Vec<PathBuf> = extra.iter().cloned().chain(mtlx::library::search_path_from_env()).collect();
         let parents: Vec<PathBuf> = roots.iter().filter(|r| r.file_name().is_some_and(|n| n == "libraries")).filter_map(|r| r.parent().map(Path::to_path_buf)).collect();
         roots.extend(parents);
-        Compiler { library: NodeLibrary::new(Library::load(extra)), file_roots: Some(roots) }
+        Compiler { library: NodeLibrary::new(Library::load(extra)), file_roots: Some(roots), lower_options: LowerOptions::default() }
     }
 
     /// Only the library embedded in the crate (tests, benchmarks).
     pub fn builtin() -> Compiler {
-        Compiler { library: NodeLibrary::new(Library::builtin()), file_roots: Some(Vec::new()) }
+        Compiler { library: NodeLibrary::new(Library::builtin()), file_roots: Some(Vec::new()), lower_options: LowerOptions::default() }
     }
 
     /// Lets documents name files anywhere (`--allow-any-path`), not only in their own folder
@@ -145,7 +147,7 @@ impl Compiler {
         if has_errors(&diagnostics) {
             return Compilation { kernel: None, graph: Some(graph), diagnostics, skipped_closures };
         }
-        match lower(&self.library, graph.clone(), source, context) {
+        match lower(&self.library, graph.clone(), source, context, self.lower_options) {
             Ok(k) => Compilation { kernel: Some(k), graph: Some(graph), diagnostics, skipped_closures },
             Err(e) => {
                 let pos = graph.outputs.first().map(|o| o.pos.clone()).unwrap_or_else(|| mtlx::SourcePos::synthetic(source));

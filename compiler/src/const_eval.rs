@@ -107,6 +107,16 @@ impl ConstEvaluator {
         Ok(ConstEvaluator { module, functions })
     }
 
+    /// The library parsed as one module (lowering imports its functions: naga_import.rs).
+    pub fn module(&self) -> &Module {
+        &self.module
+    }
+
+    /// The library function named `name`.
+    pub fn function(&self, name: &str) -> Option<Handle<Function>> {
+        self.functions.get(name).copied()
+    }
+
     /// The value `function(args…)` returns, or `None` when it cannot be folded (unknown
     /// function, arguments not of the parameter types, unsupported construct, step budget
     /// exceeded, NaN/Inf anywhere in the result).
@@ -587,7 +597,35 @@ enum Flow {
 struct Frame {
     args: Vec<V>,
     base: usize,
-    cache: Vec<Option<V>>,
+    cache: ExprCache,
+}
+
+/// The values of a frame's expressions computed so far: dense for a function's expressions,
+/// sparse for the module's global expressions (the library's run to ~10⁵ — the albedo tables'
+/// literals — of which a constant's initializer reads a handful: a dense cache allocated and
+/// dropped per constant met cost a tenth of compile time).
+enum ExprCache {
+    Dense(Vec<Option<V>>),
+    Sparse(HashMap<usize, V>),
+}
+
+impl ExprCache {
+    /// The cached value of expression `i`: `Err(())` when `i` lies outside a dense cache.
+    fn get(&self, i: usize) -> Result<Option<&V>, ()> {
+        match self {
+            ExprCache::Dense(v) => v.get(i).map(Option::as_ref).ok_or(()),
+            ExprCache::Sparse(m) => Ok(m.get(&i)),
+        }
+    }
+
+    fn set(&mut self, i: usize, value: V) {
+        match self {
+            ExprCache::Dense(v) => v[i] = Some(value),
+            ExprCache::Sparse(m) => {
+                m.insert(i, value);
+            }
+        }
+    }
 }
 
 /// The state of one `eval`: the memory stack (locals of all active calls, so pointers may
@@ -610,7 +648,7 @@ impl<'a> Run<'a> {
         if self.depth >= MAX_DEPTH || args.len() != f.arguments.len() {
             return None;
         }
-        let mut fr = Frame { args, base: self.mem.len(), cache: vec![None; f.expressions.len()] };
+        let mut fr = Frame { args, base: self.mem.len(), cache: ExprCache::Dense(vec![None; f.expressions.len()]) };
         for (_, lv) in f.local_variables.iter() {
             let v = match lv.init {
                 Some(h) => self.expr(&f.expressions, &mut fr, h)?,
@@ -633,7 +671,7 @@ impl<'a> Run<'a> {
                 S::Emit(range) => {
                     for h in range.clone() {
                         let v = self.compute(&f.expressions, fr, h)?;
-                        fr.cache[h.index()] = Some(v);
+                        fr.cache.set(h.index(), v);
                     }
                     Flow::Next
                 }
@@ -688,7 +726,7 @@ impl<'a> Run<'a> {
                     let args = arguments.iter().map(|&a| self.expr(&f.expressions, fr, a)).collect::<Option<Vec<_>>>()?;
                     let r = self.call(*function, args)?;
                     if let Some(h) = result {
-                        fr.cache[h.index()] = Some(r?);
+                        fr.cache.set(h.index(), r?);
                     }
                     Flow::Next
                 }
@@ -719,11 +757,11 @@ impl<'a> Run<'a> {
     /// An expression's value: the one its last `Emit` computed, else computed now (constant
     /// expressions, arguments and local variable pointers are never emitted).
     fn expr(&mut self, ex: &'a Exprs, fr: &mut Frame, h: Handle<naga::Expression>) -> Option<V> {
-        if let Some(v) = fr.cache.get(h.index())? {
+        if let Some(v) = fr.cache.get(h.index()).ok()? {
             return Some(v.clone());
         }
         let v = self.compute(ex, fr, h)?;
-        fr.cache[h.index()] = Some(v.clone());
+        fr.cache.set(h.index(), v.clone());
         Some(v)
     }
 
@@ -745,7 +783,7 @@ impl<'a> Run<'a> {
             E::Constant(c) => match self.consts.get(c) {
                 Some(v) => v.clone(),
                 None => {
-                    let mut global = Frame { args: Vec::new(), base: 0, cache: vec![None; m.global_expressions.len()] };
+                    let mut global = Frame { args: Vec::new(), base: 0, cache: ExprCache::Sparse(HashMap::new()) };
                     let v = self.expr(&m.global_expressions, &mut global, m.constants[*c].init)?;
                     self.consts.insert(*c, v.clone());
                     v

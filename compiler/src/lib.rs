@@ -18,6 +18,7 @@ pub mod graph_builder;
 pub mod ir;
 pub mod kernel;
 pub mod lower;
+pub mod naga_import;
 pub mod node_library;
 pub mod variance;
 pub mod wgsl_items;

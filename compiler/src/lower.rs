@@ -4,7 +4,10 @@
 
 use crate::ir::{GeomProp, Graph, InterfaceInput, ValueKind};
 use crate::kernel::*;
+use crate::const_eval::ConstEvaluator;
+use crate::naga_import;
 use crate::node_library::{NodeLibrary, TABLE_ACCESSOR, TABLE_DATA};
+use crate::wgsl_items::ItemKind;
 use crate::wgsl_types::{constant_expr, wgsl_type};
 use askama::Template;
 use mtlx::DataType;
@@ -97,7 +100,7 @@ fn store_stmts(ty: &DataType, value: &str, offset: usize) -> Vec<String> {
 /// Lowers `graph` to a validated naga module and WGSL text. `source` names the document.
 /// With a closure `context`, the graph's one output must be BSDF-typed; the kernel then reads
 /// the context's directions first and writes the context's outputs.
-pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<ClosureContext>) -> Result<PatternKernel, LowerError> {
+pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<ClosureContext>, options: LowerOptions) -> Result<PatternKernel, LowerError> {
     let mut used = HashSet::new();
     // Interface inputs and outputs.
     let mut inputs = Vec::new();
@@ -288,6 +291,35 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
         .filter(|i| i.name != TABLE_DATA)
         .map(|i| if i.name == TABLE_ACCESSOR { GPU_TABLE_ACCESSOR } else { i.text.as_str() })
         .collect();
+    // The same items with every library function as a stub whose body is imported from the
+    // library parsed once (naga_import.rs), unless the library did not parse as one module.
+    let library_module = lib.evaluator.as_ref().filter(|_| options.import_library);
+    let stub_texts: Vec<Option<String>> = closure_items
+        .iter()
+        .map(|i| match (&library_module, i.kind, &i.signature) {
+            (Some(_), ItemKind::Function, Some(sig)) => naga_import::stub(&i.text, sig.result.as_deref()),
+            (Some(_), ItemKind::Const, _) => naga_import::const_stub(&i.text),
+            _ => None,
+        })
+        .collect();
+    let stubbed = |gpu: bool| -> Stubbed {
+        let mut s = Stubbed::default();
+        for (i, stub) in closure_items.iter().zip(&stub_texts) {
+            match (gpu, i.name.as_str(), stub) {
+                (true, TABLE_DATA, _) => {}
+                (true, TABLE_ACCESSOR, _) => s.texts.push(GPU_TABLE_ACCESSOR),
+                (_, _, Some(stub)) => {
+                    s.texts.push(stub.as_str());
+                    match i.kind {
+                        ItemKind::Function => s.functions.push(i.name.as_str()),
+                        _ => s.constants.push(i.name.as_str()),
+                    }
+                }
+                _ => s.texts.push(i.text.as_str()),
+            }
+        }
+        s
+    };
     if !lib.wgsl.items.contains_key("mx_geometry") {
         return Err(LowerError("the library defines no `mx_geometry` struct (stdlib/wgsl/geometric.wgsl)".into()));
     }
@@ -333,14 +365,12 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
         output_stride,
         workgroup_size: WORKGROUP_SIZE,
     };
-    let text = template.render().map_err(|e| LowerError(format!("template: {e}")))?;
-    let (module, info) = to_naga(&text)?;
+    let (module, info) = kernel_module(&mut template, library_module, stubbed(true), options)?;
     let (cpu_module, albedo_tables) = if uses_tables {
         template.items = cpu_items;
         template.albedo_table_binding = None;
-        let cpu_text = template.render().map_err(|e| LowerError(format!("template: {e}")))?;
         let data = lib.albedo_table_data.clone().ok_or_else(|| LowerError(format!("the library's `{TABLE_DATA}` is not a constant f32 array")))?;
-        (Some(to_naga(&cpu_text)?), Some(data))
+        (Some(kernel_module(&mut template, library_module, stubbed(false), options)?), Some(data))
     } else {
         (None, None)
     };
@@ -375,6 +405,60 @@ const CONTEXT_PDF: i32 = 3;
 
 fn naga_version() -> &'static str {
     "30.0.1"
+}
+
+/// How [`lower`] builds the naga module.
+#[derive(Clone, Copy, Debug)]
+pub struct LowerOptions {
+    /// Import the library's functions pre-parsed (naga_import.rs) instead of parsing their
+    /// text in every kernel. The modules are the same either way (tested); off, lowering
+    /// takes the reference path.
+    pub import_library: bool,
+    /// When the import refuses (a construct naga_import.rs does not re-point), parse the full
+    /// text instead; off, that is an error naming the construct (tests use it to show that
+    /// the import path is the one taken).
+    pub fall_back_to_text: bool,
+}
+
+impl Default for LowerOptions {
+    fn default() -> Self {
+        LowerOptions { import_library: true, fall_back_to_text: true }
+    }
+}
+
+/// A kernel's library items with stubs in place of library functions and array constants
+/// (naga_import.rs), and the names of the stubbed items.
+#[derive(Default)]
+struct Stubbed<'a> {
+    texts: Vec<&'a str>,
+    functions: Vec<&'a str>,
+    constants: Vec<&'a str>,
+}
+
+/// The kernel's naga module from the template: with the library's functions and array
+/// constants as stubs, their bodies and values imported, when `library` is given, else — or
+/// when the import refuses — from the template's items as they are (`template.items` on entry:
+/// the full text).
+fn kernel_module<'a>(template: &mut PatternKernelTemplate<'a>, library: Option<&ConstEvaluator>, stubbed: Stubbed<'a>, options: LowerOptions) -> Result<(naga::Module, naga::valid::ModuleInfo), LowerError> {
+    let render = |t: &PatternKernelTemplate| t.render().map_err(|e| LowerError(format!("template: {e}")));
+    if let Some(lib) = library {
+        let full = std::mem::replace(&mut template.items, stubbed.texts);
+        let text = render(template)?;
+        template.items = full;
+        let imported = naga::front::wgsl::parse_str(&text).map_err(|e| e.emit_to_string(&text)).and_then(|mut module| {
+            naga_import::import_bodies(lib.module(), |n| lib.function(n), &mut module, &stubbed.functions, &stubbed.constants)?;
+            naga::compact::compact(&mut module, naga::compact::KeepUnused::No);
+            let mut validator = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default());
+            let info = validator.validate(&module).map_err(|e| format!("validation: {e}"))?;
+            Ok((module, info))
+        });
+        match imported {
+            Ok(m) => return Ok(m),
+            Err(e) if !options.fall_back_to_text => return Err(LowerError(format!("importing the library functions: {e}"))),
+            Err(_) => {}
+        }
+    }
+    to_naga(&render(template)?)
 }
 
 /// Parses, validates, compacts and re-validates WGSL text.

@@ -148,7 +148,7 @@ fn msl_resources(module: &naga::Module) -> naga::back::msl::EntryPointResources 
 
 pub fn run(args: CompileArgs) -> Result<(), String> {
     if args.bench {
-        return crate::cli::compile_bench::run(&args.files, &args.library);
+        return crate::cli::compile_bench::run(&args.files, &args.library, args.context.map(|c| c.context()));
     }
     let compiler = super::compiler(&args.library, args.allow_any_path)?;
     let selection = if args.output.is_empty() { OutputSelection::AllNumeric } else { OutputSelection::Named(args.output.clone()) };
