@@ -148,7 +148,7 @@ pub struct GraphBuilder<'a> {
     visiting_set: HashSet<(usize, ElementId)>,
     /// Nodedefs whose nodegraphs are being inlined (for recursion).
     inlining: Vec<String>,
-    consing: HashMap<String, H>,
+    consing: HashMap<(ConsKey, DataType), H>,
     kernel_inputs: HashMap<(usize, String), H>,
     pub diagnostics: Vec<Diagnostic>,
     /// Folders besides the document's own where the files it names may lie (`Compiler::file_roots`);
@@ -262,7 +262,7 @@ impl<'a> GraphBuilder<'a> {
     // ---- values -----------------------------------------------------------------------
 
     fn add(&mut self, kind: ValueKind, ty: DataType, origin: String, pos: SourcePos) -> H {
-        let key = format!("{kind:?}|{ty}");
+        let key = (ConsKey::of(&kind), ty.clone());
         if let Some(&h) = self.consing.get(&key) {
             return h;
         }
@@ -807,4 +807,35 @@ pub fn resolve_file(name: &str, doc_file: &Path) -> Option<PathBuf> {
     }
     let stripped = name.strip_prefix("resources/")?;
     dir.ancestors().map(|a| a.join(stripped)).find(|c| c.is_file())
+}
+
+/// What makes two IR values one for hash-consing (with their type): the kind, floats compared
+/// by their bits (so 0.0 and −0.0 stay apart).
+#[derive(PartialEq, Eq, Hash)]
+enum ConsKey {
+    Boolean(bool),
+    Integer(i32),
+    Floats(Vec<u32>),
+    String(String),
+    Geometry(GeomProp),
+    Input(usize),
+    Texture(usize),
+    Call { function: String, args: Vec<H>, geometry: bool, closure: bool },
+    Field { base: H, field: String },
+}
+
+impl ConsKey {
+    fn of(kind: &ValueKind) -> ConsKey {
+        match kind {
+            ValueKind::Constant(Literal::Boolean(b)) => ConsKey::Boolean(*b),
+            ValueKind::Constant(Literal::Integer(i)) => ConsKey::Integer(*i),
+            ValueKind::Constant(Literal::Floats(f)) => ConsKey::Floats(f.iter().map(|x| x.to_bits()).collect()),
+            ValueKind::Constant(Literal::String(s)) => ConsKey::String(s.clone()),
+            ValueKind::Geometry(g) => ConsKey::Geometry(*g),
+            ValueKind::Input(i) => ConsKey::Input(*i),
+            ValueKind::Texture(t) => ConsKey::Texture(*t),
+            ValueKind::Call { function, args, geometry, closure } => ConsKey::Call { function: function.clone(), args: args.clone(), geometry: *geometry, closure: *closure },
+            ValueKind::Field { base, field } => ConsKey::Field { base: *base, field: field.clone() },
+        }
+    }
 }
