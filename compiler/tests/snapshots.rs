@@ -272,11 +272,15 @@ fn wgsl_semantics_snapshots() {
 }
 
 /// The shipped closure kernels that also ship in packet form (`<graph>_<context>`): those where
-/// it is faster than the scalar kernel. Measured (engines bench, `--random-params`, Xeon
-/// AVX-512, 1 thread, packet / scalar): `uplift_stack` eval 1.18×, albedo 0.97×, sample 0.76×
-/// (lanes choose different lobes, and a packet samples every lobe some lane chose), pdf 0.86×;
-/// the conductor's eval 1.23×. Each packet kernel costs build time (two SIMD levels).
-const PACKET_KERNELS: &[&str] = &["uplift_stack_eval", "bsdf_conductor_eval"];
+/// it is faster than the scalar kernel. Measured (engines bench, Xeon AVX-512, packet /
+/// scalar): the conductor's eval 1.34× (1 thread), 1.20× (2 threads). `uplift_stack` eval was
+/// 1.18× until the dielectric albedo below IOR 1 became a table lookup (albedo tables format
+/// 3): that removed from the scalar kernel a 16-step moment loop its vectorised form ran on
+/// every lane, and the packet form now runs at 0.58× of the scalar one (one material per
+/// batch, 2 threads 0.61×) and 0.50× (random parameters), so it no longer ships;
+/// albedo 0.97×, sample 0.76× (lanes choose different lobes, and a packet samples every lobe
+/// some lane chose), pdf 0.86× never did. Each packet kernel costs build time (two SIMD levels).
+const PACKET_KERNELS: &[&str] = &["bsdf_conductor_eval"];
 
 /// The kernels the runtime ships, `runtime/kernels/src/generated/`, are snapshots too: the
 /// compiler's Rust for every graph in `runtime/kernels/graphs/`, `examples/marble.mtlx`, the

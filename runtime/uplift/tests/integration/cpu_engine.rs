@@ -171,7 +171,7 @@ fn packet_kernels_agree_with_the_scalar_kernels() {
     let level = uplift_simd::Level::current();
     let compiler = Compiler::builtin();
     let packet: Vec<_> = BUILTIN_KERNELS.iter().enumerate().filter(|(_, k)| k.is_packet()).collect();
-    assert!(packet.len() >= 2, "{} packet kernels", packet.len());
+    assert!(!packet.is_empty(), "no packet kernels");
     if level == uplift_simd::Level::Scalar {
         eprintln!("NOT TESTED on this machine: no AVX2 or AVX-512, the packet kernels defer to the scalar ones");
     }
