@@ -447,9 +447,7 @@ fn kernel_module<'a>(template: &mut PatternKernelTemplate<'a>, library: Option<&
         template.items = full;
         let imported = naga::front::wgsl::parse_str(&text).map_err(|e| e.emit_to_string(&text)).and_then(|mut module| {
             naga_import::import_bodies(lib.module(), |n| lib.function(n), &mut module, &stubbed.functions, &stubbed.constants)?;
-            naga::compact::compact(&mut module, naga::compact::KeepUnused::No);
-            let mut validator = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default());
-            let info = validator.validate(&module).map_err(|e| format!("validation: {e}"))?;
+            let info = compact_and_validate(&mut module).map_err(|e| format!("validation: {e}"))?;
             Ok((module, info))
         });
         match imported {
@@ -464,12 +462,13 @@ fn kernel_module<'a>(template: &mut PatternKernelTemplate<'a>, library: Option<&
 /// Parses, validates, compacts and re-validates WGSL text.
 pub fn to_naga(text: &str) -> Result<(naga::Module, naga::valid::ModuleInfo), LowerError> {
     let mut module = naga::front::wgsl::parse_str(text).map_err(|e| LowerError(format!("naga rejected the assembled kernel:\n{}", e.emit_to_string(text))))?;
-    // Compaction (dropping what the entry point does not reach) needs no prior validation;
-    // the one validation runs on what is emitted (spans still point into `text`).
-    naga::compact::compact(&mut module, naga::compact::KeepUnused::No);
-    let mut validator = naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default());
-    let info = validator
-        .validate(&module)
-        .map_err(|e| LowerError(format!("naga validation failed:\n{}", e.emit_to_string(text))))?;
+    let info = compact_and_validate(&mut module).map_err(|e| LowerError(format!("naga validation failed:\n{}", e.emit_to_string(text))))?;
     Ok((module, info))
+}
+
+/// Compaction (dropping what the entry point does not reach) needs no prior validation; the one
+/// validation runs on what is emitted.
+fn compact_and_validate(module: &mut naga::Module) -> Result<naga::valid::ModuleInfo, Box<naga::WithSpan<naga::valid::ValidationError>>> {
+    naga::compact::compact(module, naga::compact::KeepUnused::No);
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default()).validate(module).map_err(Box::new)
 }

@@ -387,12 +387,13 @@ impl Tables {
 
     /// The generated WGSL file: header, grid constants, one `const` array per table.
     pub fn to_wgsl(&self) -> String {
-        let mut arrays = Vec::new();
-        arrays.push(("mx_table_ggx_ess", &self.ggx_ess));
-        arrays.push(("mx_table_ggx_moments", &self.ggx_moments));
-        arrays.push(("mx_table_ggx_film_moments", &self.ggx_film_moments));
-        arrays.push(("mx_table_ggx_dielectric", &self.ggx_dielectric));
-        arrays.push(("mx_table_ggx_dielectric_inside", &self.ggx_dielectric_inside));
+        let mut arrays = vec![
+            ("mx_table_ggx_ess", &self.ggx_ess),
+            ("mx_table_ggx_moments", &self.ggx_moments),
+            ("mx_table_ggx_film_moments", &self.ggx_film_moments),
+            ("mx_table_ggx_dielectric", &self.ggx_dielectric),
+            ("mx_table_ggx_dielectric_inside", &self.ggx_dielectric_inside),
+        ];
         let names: Vec<String> = self.diffuse.iter().map(|(t, _)| format!("mx_table_{}", t.name())).collect();
         for ((_, v), n) in self.diffuse.iter().zip(&names) {
             arrays.push((n.as_str(), v));
