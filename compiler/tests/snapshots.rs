@@ -345,16 +345,18 @@ fn shipped_kernels_are_current() {
     for k in &kernels {
         let stem = &k.stem;
         let _ = writeln!(table, "#[allow(clippy::all, dead_code, unused_imports)]\npub mod {stem};");
-        // A packet kernel's scalar form is one `static`, shared by its fallback and `scalar`:
-        // every `cpu_batch_fn!` compiles the whole kernel once per CPU level.
+        // Every scalar form is one named `static` (its functions' symbols name the kernel, which
+        // runtime/uplift/benches/disasm/kernel_disasm.py reads), shared by a packet kernel's
+        // fallback and `scalar`: every `cpu_batch_fn!` compiles the whole kernel once per level.
+        let scalar = format!("{}_SCALAR", stem.to_uppercase());
+        let _ = writeln!(table, "static {scalar}: BatchFn = cpu_batch_fn!({stem});");
         let batch = match &k.packet {
             Some(packet) => {
-                let scalar = format!("{}_SCALAR", stem.to_uppercase());
-                let _ = writeln!(table, "#[allow(clippy::all, dead_code, unused_imports)]\npub mod {stem}_packet;\nstatic {scalar}: BatchFn = cpu_batch_fn!({stem});");
+                let _ = writeln!(table, "#[allow(clippy::all, dead_code, unused_imports)]\npub mod {stem}_packet;");
                 files.push((format!("{stem}_packet.rs"), packet.clone()));
                 format!("packet_batch_fn!({stem}_packet, {scalar}), scalar: Some({scalar})")
             }
-            None => format!("cpu_batch_fn!({stem}), scalar: None"),
+            None => format!("{scalar}, scalar: None"),
         };
         let context = k.context.map(|c| c.name());
         let _ = writeln!(

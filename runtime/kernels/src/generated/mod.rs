@@ -10,116 +10,151 @@ use crate::KernelShape;
 pub mod albedo_table_data;
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod triplanar_mask;
+static TRIPLANAR_MASK_SCALAR: BatchFn = cpu_batch_fn!(triplanar_mask);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod marble;
+static MARBLE_SCALAR: BatchFn = cpu_batch_fn!(marble);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod type0_haze;
+static TYPE0_HAZE_SCALAR: BatchFn = cpu_batch_fn!(type0_haze);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod type1_dust;
+static TYPE1_DUST_SCALAR: BatchFn = cpu_batch_fn!(type1_dust);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod type2_clearcoat;
+static TYPE2_CLEARCOAT_SCALAR: BatchFn = cpu_batch_fn!(type2_clearcoat);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod type3_dust_clearcoat;
+static TYPE3_DUST_CLEARCOAT_SCALAR: BatchFn = cpu_batch_fn!(type3_dust_clearcoat);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod type4_fuzz_scatter;
+static TYPE4_FUZZ_SCATTER_SCALAR: BatchFn = cpu_batch_fn!(type4_fuzz_scatter);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod type5_fuzz_clearcoat_scatter;
+static TYPE5_FUZZ_CLEARCOAT_SCATTER_SCALAR: BatchFn = cpu_batch_fn!(type5_fuzz_clearcoat_scatter);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_conductor_eval;
-#[allow(clippy::all, dead_code, unused_imports)]
-pub mod bsdf_conductor_eval_packet;
 static BSDF_CONDUCTOR_EVAL_SCALAR: BatchFn = cpu_batch_fn!(bsdf_conductor_eval);
 #[allow(clippy::all, dead_code, unused_imports)]
+pub mod bsdf_conductor_eval_packet;
+#[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_conductor_albedo;
+static BSDF_CONDUCTOR_ALBEDO_SCALAR: BatchFn = cpu_batch_fn!(bsdf_conductor_albedo);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_conductor_sample;
+static BSDF_CONDUCTOR_SAMPLE_SCALAR: BatchFn = cpu_batch_fn!(bsdf_conductor_sample);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_conductor_pdf;
+static BSDF_CONDUCTOR_PDF_SCALAR: BatchFn = cpu_batch_fn!(bsdf_conductor_pdf);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_hair_eval;
+static BSDF_HAIR_EVAL_SCALAR: BatchFn = cpu_batch_fn!(bsdf_hair_eval);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_hair_albedo;
+static BSDF_HAIR_ALBEDO_SCALAR: BatchFn = cpu_batch_fn!(bsdf_hair_albedo);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_hair_sample;
+static BSDF_HAIR_SAMPLE_SCALAR: BatchFn = cpu_batch_fn!(bsdf_hair_sample);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_hair_pdf;
+static BSDF_HAIR_PDF_SCALAR: BatchFn = cpu_batch_fn!(bsdf_hair_pdf);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_opaque_lobes_eval;
+static BSDF_OPAQUE_LOBES_EVAL_SCALAR: BatchFn = cpu_batch_fn!(bsdf_opaque_lobes_eval);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_opaque_lobes_albedo;
+static BSDF_OPAQUE_LOBES_ALBEDO_SCALAR: BatchFn = cpu_batch_fn!(bsdf_opaque_lobes_albedo);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_opaque_lobes_sample;
+static BSDF_OPAQUE_LOBES_SAMPLE_SCALAR: BatchFn = cpu_batch_fn!(bsdf_opaque_lobes_sample);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_opaque_lobes_pdf;
+static BSDF_OPAQUE_LOBES_PDF_SCALAR: BatchFn = cpu_batch_fn!(bsdf_opaque_lobes_pdf);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_stack_eval;
+static BSDF_STACK_EVAL_SCALAR: BatchFn = cpu_batch_fn!(bsdf_stack_eval);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_stack_albedo;
+static BSDF_STACK_ALBEDO_SCALAR: BatchFn = cpu_batch_fn!(bsdf_stack_albedo);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_stack_sample;
+static BSDF_STACK_SAMPLE_SCALAR: BatchFn = cpu_batch_fn!(bsdf_stack_sample);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_stack_pdf;
+static BSDF_STACK_PDF_SCALAR: BatchFn = cpu_batch_fn!(bsdf_stack_pdf);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_thin_film_eval;
+static BSDF_THIN_FILM_EVAL_SCALAR: BatchFn = cpu_batch_fn!(bsdf_thin_film_eval);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_thin_film_albedo;
+static BSDF_THIN_FILM_ALBEDO_SCALAR: BatchFn = cpu_batch_fn!(bsdf_thin_film_albedo);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_thin_film_sample;
+static BSDF_THIN_FILM_SAMPLE_SCALAR: BatchFn = cpu_batch_fn!(bsdf_thin_film_sample);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_thin_film_pdf;
+static BSDF_THIN_FILM_PDF_SCALAR: BatchFn = cpu_batch_fn!(bsdf_thin_film_pdf);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_transparent_lobes_eval;
+static BSDF_TRANSPARENT_LOBES_EVAL_SCALAR: BatchFn = cpu_batch_fn!(bsdf_transparent_lobes_eval);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_transparent_lobes_albedo;
+static BSDF_TRANSPARENT_LOBES_ALBEDO_SCALAR: BatchFn = cpu_batch_fn!(bsdf_transparent_lobes_albedo);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_transparent_lobes_sample;
+static BSDF_TRANSPARENT_LOBES_SAMPLE_SCALAR: BatchFn = cpu_batch_fn!(bsdf_transparent_lobes_sample);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_transparent_lobes_pdf;
+static BSDF_TRANSPARENT_LOBES_PDF_SCALAR: BatchFn = cpu_batch_fn!(bsdf_transparent_lobes_pdf);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod uplift_stack_eval;
+static UPLIFT_STACK_EVAL_SCALAR: BatchFn = cpu_batch_fn!(uplift_stack_eval);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod uplift_stack_albedo;
+static UPLIFT_STACK_ALBEDO_SCALAR: BatchFn = cpu_batch_fn!(uplift_stack_albedo);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod uplift_stack_sample;
+static UPLIFT_STACK_SAMPLE_SCALAR: BatchFn = cpu_batch_fn!(uplift_stack_sample);
 #[allow(clippy::all, dead_code, unused_imports)]
 pub mod uplift_stack_pdf;
+static UPLIFT_STACK_PDF_SCALAR: BatchFn = cpu_batch_fn!(uplift_stack_pdf);
 
 /// Every shipped kernel.
 pub static BUILTIN_KERNELS: &[BuiltinKernel] = &[
-    BuiltinKernel { name: "triplanar_mask", source: "runtime/kernels/graphs/triplanar_mask.mtlx", context: None, fingerprint: 0x18af4ce6da209a6, shape: KernelShape { input_columns: triplanar_mask::INPUT_COLUMNS, output_columns: triplanar_mask::OUTPUT_COLUMNS, texture_count: triplanar_mask::TEXTURE_COUNT }, batch: cpu_batch_fn!(triplanar_mask), scalar: None },
-    BuiltinKernel { name: "marble", source: "examples/marble.mtlx", context: None, fingerprint: 0x86563119f023ca63, shape: KernelShape { input_columns: marble::INPUT_COLUMNS, output_columns: marble::OUTPUT_COLUMNS, texture_count: marble::TEXTURE_COUNT }, batch: cpu_batch_fn!(marble), scalar: None },
-    BuiltinKernel { name: "type0_haze", source: "mtlx/rules/type0_haze.mtlx", context: None, fingerprint: 0x26e2d45cf9446ad4, shape: KernelShape { input_columns: type0_haze::INPUT_COLUMNS, output_columns: type0_haze::OUTPUT_COLUMNS, texture_count: type0_haze::TEXTURE_COUNT }, batch: cpu_batch_fn!(type0_haze), scalar: None },
-    BuiltinKernel { name: "type1_dust", source: "mtlx/rules/type1_dust.mtlx", context: None, fingerprint: 0x77d65946f5d2b867, shape: KernelShape { input_columns: type1_dust::INPUT_COLUMNS, output_columns: type1_dust::OUTPUT_COLUMNS, texture_count: type1_dust::TEXTURE_COUNT }, batch: cpu_batch_fn!(type1_dust), scalar: None },
-    BuiltinKernel { name: "type2_clearcoat", source: "mtlx/rules/type2_clearcoat.mtlx", context: None, fingerprint: 0x66e824f5990486b3, shape: KernelShape { input_columns: type2_clearcoat::INPUT_COLUMNS, output_columns: type2_clearcoat::OUTPUT_COLUMNS, texture_count: type2_clearcoat::TEXTURE_COUNT }, batch: cpu_batch_fn!(type2_clearcoat), scalar: None },
-    BuiltinKernel { name: "type3_dust_clearcoat", source: "mtlx/rules/type3_dust_clearcoat.mtlx", context: None, fingerprint: 0xcbaff79e3fe83d5a, shape: KernelShape { input_columns: type3_dust_clearcoat::INPUT_COLUMNS, output_columns: type3_dust_clearcoat::OUTPUT_COLUMNS, texture_count: type3_dust_clearcoat::TEXTURE_COUNT }, batch: cpu_batch_fn!(type3_dust_clearcoat), scalar: None },
-    BuiltinKernel { name: "type4_fuzz_scatter", source: "mtlx/rules/type4_fuzz_scatter.mtlx", context: None, fingerprint: 0xf74de13e4523af08, shape: KernelShape { input_columns: type4_fuzz_scatter::INPUT_COLUMNS, output_columns: type4_fuzz_scatter::OUTPUT_COLUMNS, texture_count: type4_fuzz_scatter::TEXTURE_COUNT }, batch: cpu_batch_fn!(type4_fuzz_scatter), scalar: None },
-    BuiltinKernel { name: "type5_fuzz_clearcoat_scatter", source: "mtlx/rules/type5_fuzz_clearcoat_scatter.mtlx", context: None, fingerprint: 0x2d054c0173dd3be2, shape: KernelShape { input_columns: type5_fuzz_clearcoat_scatter::INPUT_COLUMNS, output_columns: type5_fuzz_clearcoat_scatter::OUTPUT_COLUMNS, texture_count: type5_fuzz_clearcoat_scatter::TEXTURE_COUNT }, batch: cpu_batch_fn!(type5_fuzz_clearcoat_scatter), scalar: None },
+    BuiltinKernel { name: "triplanar_mask", source: "runtime/kernels/graphs/triplanar_mask.mtlx", context: None, fingerprint: 0x18af4ce6da209a6, shape: KernelShape { input_columns: triplanar_mask::INPUT_COLUMNS, output_columns: triplanar_mask::OUTPUT_COLUMNS, texture_count: triplanar_mask::TEXTURE_COUNT }, batch: TRIPLANAR_MASK_SCALAR, scalar: None },
+    BuiltinKernel { name: "marble", source: "examples/marble.mtlx", context: None, fingerprint: 0x86563119f023ca63, shape: KernelShape { input_columns: marble::INPUT_COLUMNS, output_columns: marble::OUTPUT_COLUMNS, texture_count: marble::TEXTURE_COUNT }, batch: MARBLE_SCALAR, scalar: None },
+    BuiltinKernel { name: "type0_haze", source: "mtlx/rules/type0_haze.mtlx", context: None, fingerprint: 0x26e2d45cf9446ad4, shape: KernelShape { input_columns: type0_haze::INPUT_COLUMNS, output_columns: type0_haze::OUTPUT_COLUMNS, texture_count: type0_haze::TEXTURE_COUNT }, batch: TYPE0_HAZE_SCALAR, scalar: None },
+    BuiltinKernel { name: "type1_dust", source: "mtlx/rules/type1_dust.mtlx", context: None, fingerprint: 0x77d65946f5d2b867, shape: KernelShape { input_columns: type1_dust::INPUT_COLUMNS, output_columns: type1_dust::OUTPUT_COLUMNS, texture_count: type1_dust::TEXTURE_COUNT }, batch: TYPE1_DUST_SCALAR, scalar: None },
+    BuiltinKernel { name: "type2_clearcoat", source: "mtlx/rules/type2_clearcoat.mtlx", context: None, fingerprint: 0x66e824f5990486b3, shape: KernelShape { input_columns: type2_clearcoat::INPUT_COLUMNS, output_columns: type2_clearcoat::OUTPUT_COLUMNS, texture_count: type2_clearcoat::TEXTURE_COUNT }, batch: TYPE2_CLEARCOAT_SCALAR, scalar: None },
+    BuiltinKernel { name: "type3_dust_clearcoat", source: "mtlx/rules/type3_dust_clearcoat.mtlx", context: None, fingerprint: 0xcbaff79e3fe83d5a, shape: KernelShape { input_columns: type3_dust_clearcoat::INPUT_COLUMNS, output_columns: type3_dust_clearcoat::OUTPUT_COLUMNS, texture_count: type3_dust_clearcoat::TEXTURE_COUNT }, batch: TYPE3_DUST_CLEARCOAT_SCALAR, scalar: None },
+    BuiltinKernel { name: "type4_fuzz_scatter", source: "mtlx/rules/type4_fuzz_scatter.mtlx", context: None, fingerprint: 0xf74de13e4523af08, shape: KernelShape { input_columns: type4_fuzz_scatter::INPUT_COLUMNS, output_columns: type4_fuzz_scatter::OUTPUT_COLUMNS, texture_count: type4_fuzz_scatter::TEXTURE_COUNT }, batch: TYPE4_FUZZ_SCATTER_SCALAR, scalar: None },
+    BuiltinKernel { name: "type5_fuzz_clearcoat_scatter", source: "mtlx/rules/type5_fuzz_clearcoat_scatter.mtlx", context: None, fingerprint: 0x2d054c0173dd3be2, shape: KernelShape { input_columns: type5_fuzz_clearcoat_scatter::INPUT_COLUMNS, output_columns: type5_fuzz_clearcoat_scatter::OUTPUT_COLUMNS, texture_count: type5_fuzz_clearcoat_scatter::TEXTURE_COUNT }, batch: TYPE5_FUZZ_CLEARCOAT_SCATTER_SCALAR, scalar: None },
     BuiltinKernel { name: "bsdf_conductor_eval", source: "runtime/kernels/graphs/bsdf/bsdf_conductor.mtlx", context: Some("eval"), fingerprint: 0x90fb384863db993b, shape: KernelShape { input_columns: bsdf_conductor_eval::INPUT_COLUMNS, output_columns: bsdf_conductor_eval::OUTPUT_COLUMNS, texture_count: bsdf_conductor_eval::TEXTURE_COUNT }, batch: packet_batch_fn!(bsdf_conductor_eval_packet, BSDF_CONDUCTOR_EVAL_SCALAR), scalar: Some(BSDF_CONDUCTOR_EVAL_SCALAR) },
-    BuiltinKernel { name: "bsdf_conductor_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_conductor.mtlx", context: Some("albedo"), fingerprint: 0x8c619d7594b6652b, shape: KernelShape { input_columns: bsdf_conductor_albedo::INPUT_COLUMNS, output_columns: bsdf_conductor_albedo::OUTPUT_COLUMNS, texture_count: bsdf_conductor_albedo::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_conductor_albedo), scalar: None },
-    BuiltinKernel { name: "bsdf_conductor_sample", source: "runtime/kernels/graphs/bsdf/bsdf_conductor.mtlx", context: Some("sample"), fingerprint: 0xaecc63496ea1f1d4, shape: KernelShape { input_columns: bsdf_conductor_sample::INPUT_COLUMNS, output_columns: bsdf_conductor_sample::OUTPUT_COLUMNS, texture_count: bsdf_conductor_sample::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_conductor_sample), scalar: None },
-    BuiltinKernel { name: "bsdf_conductor_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_conductor.mtlx", context: Some("pdf"), fingerprint: 0x36de787d5ae264a4, shape: KernelShape { input_columns: bsdf_conductor_pdf::INPUT_COLUMNS, output_columns: bsdf_conductor_pdf::OUTPUT_COLUMNS, texture_count: bsdf_conductor_pdf::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_conductor_pdf), scalar: None },
-    BuiltinKernel { name: "bsdf_hair_eval", source: "runtime/kernels/graphs/bsdf/bsdf_hair.mtlx", context: Some("eval"), fingerprint: 0x23ee7a0f59b56aec, shape: KernelShape { input_columns: bsdf_hair_eval::INPUT_COLUMNS, output_columns: bsdf_hair_eval::OUTPUT_COLUMNS, texture_count: bsdf_hair_eval::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_hair_eval), scalar: None },
-    BuiltinKernel { name: "bsdf_hair_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_hair.mtlx", context: Some("albedo"), fingerprint: 0xa2243a9819ad67d, shape: KernelShape { input_columns: bsdf_hair_albedo::INPUT_COLUMNS, output_columns: bsdf_hair_albedo::OUTPUT_COLUMNS, texture_count: bsdf_hair_albedo::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_hair_albedo), scalar: None },
-    BuiltinKernel { name: "bsdf_hair_sample", source: "runtime/kernels/graphs/bsdf/bsdf_hair.mtlx", context: Some("sample"), fingerprint: 0xe32de942791f5e9f, shape: KernelShape { input_columns: bsdf_hair_sample::INPUT_COLUMNS, output_columns: bsdf_hair_sample::OUTPUT_COLUMNS, texture_count: bsdf_hair_sample::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_hair_sample), scalar: None },
-    BuiltinKernel { name: "bsdf_hair_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_hair.mtlx", context: Some("pdf"), fingerprint: 0x9cdfc9b362fb8eb4, shape: KernelShape { input_columns: bsdf_hair_pdf::INPUT_COLUMNS, output_columns: bsdf_hair_pdf::OUTPUT_COLUMNS, texture_count: bsdf_hair_pdf::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_hair_pdf), scalar: None },
-    BuiltinKernel { name: "bsdf_opaque_lobes_eval", source: "runtime/kernels/graphs/bsdf/bsdf_opaque_lobes.mtlx", context: Some("eval"), fingerprint: 0x57eab662426b4a3c, shape: KernelShape { input_columns: bsdf_opaque_lobes_eval::INPUT_COLUMNS, output_columns: bsdf_opaque_lobes_eval::OUTPUT_COLUMNS, texture_count: bsdf_opaque_lobes_eval::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_opaque_lobes_eval), scalar: None },
-    BuiltinKernel { name: "bsdf_opaque_lobes_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_opaque_lobes.mtlx", context: Some("albedo"), fingerprint: 0x98c5e20adb7a06fd, shape: KernelShape { input_columns: bsdf_opaque_lobes_albedo::INPUT_COLUMNS, output_columns: bsdf_opaque_lobes_albedo::OUTPUT_COLUMNS, texture_count: bsdf_opaque_lobes_albedo::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_opaque_lobes_albedo), scalar: None },
-    BuiltinKernel { name: "bsdf_opaque_lobes_sample", source: "runtime/kernels/graphs/bsdf/bsdf_opaque_lobes.mtlx", context: Some("sample"), fingerprint: 0xc1ba80b6dfc09ec1, shape: KernelShape { input_columns: bsdf_opaque_lobes_sample::INPUT_COLUMNS, output_columns: bsdf_opaque_lobes_sample::OUTPUT_COLUMNS, texture_count: bsdf_opaque_lobes_sample::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_opaque_lobes_sample), scalar: None },
-    BuiltinKernel { name: "bsdf_opaque_lobes_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_opaque_lobes.mtlx", context: Some("pdf"), fingerprint: 0x2a3296ab7c5a48d9, shape: KernelShape { input_columns: bsdf_opaque_lobes_pdf::INPUT_COLUMNS, output_columns: bsdf_opaque_lobes_pdf::OUTPUT_COLUMNS, texture_count: bsdf_opaque_lobes_pdf::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_opaque_lobes_pdf), scalar: None },
-    BuiltinKernel { name: "bsdf_stack_eval", source: "runtime/kernels/graphs/bsdf/bsdf_stack.mtlx", context: Some("eval"), fingerprint: 0xeef00c39d3a7f731, shape: KernelShape { input_columns: bsdf_stack_eval::INPUT_COLUMNS, output_columns: bsdf_stack_eval::OUTPUT_COLUMNS, texture_count: bsdf_stack_eval::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_stack_eval), scalar: None },
-    BuiltinKernel { name: "bsdf_stack_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_stack.mtlx", context: Some("albedo"), fingerprint: 0xe6af30e160957bd3, shape: KernelShape { input_columns: bsdf_stack_albedo::INPUT_COLUMNS, output_columns: bsdf_stack_albedo::OUTPUT_COLUMNS, texture_count: bsdf_stack_albedo::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_stack_albedo), scalar: None },
-    BuiltinKernel { name: "bsdf_stack_sample", source: "runtime/kernels/graphs/bsdf/bsdf_stack.mtlx", context: Some("sample"), fingerprint: 0x689c30fad624d339, shape: KernelShape { input_columns: bsdf_stack_sample::INPUT_COLUMNS, output_columns: bsdf_stack_sample::OUTPUT_COLUMNS, texture_count: bsdf_stack_sample::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_stack_sample), scalar: None },
-    BuiltinKernel { name: "bsdf_stack_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_stack.mtlx", context: Some("pdf"), fingerprint: 0xf4dcb25677017ccd, shape: KernelShape { input_columns: bsdf_stack_pdf::INPUT_COLUMNS, output_columns: bsdf_stack_pdf::OUTPUT_COLUMNS, texture_count: bsdf_stack_pdf::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_stack_pdf), scalar: None },
-    BuiltinKernel { name: "bsdf_thin_film_eval", source: "runtime/kernels/graphs/bsdf/bsdf_thin_film.mtlx", context: Some("eval"), fingerprint: 0xf970b66980320fa0, shape: KernelShape { input_columns: bsdf_thin_film_eval::INPUT_COLUMNS, output_columns: bsdf_thin_film_eval::OUTPUT_COLUMNS, texture_count: bsdf_thin_film_eval::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_thin_film_eval), scalar: None },
-    BuiltinKernel { name: "bsdf_thin_film_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_thin_film.mtlx", context: Some("albedo"), fingerprint: 0x621d71bc0bac22c1, shape: KernelShape { input_columns: bsdf_thin_film_albedo::INPUT_COLUMNS, output_columns: bsdf_thin_film_albedo::OUTPUT_COLUMNS, texture_count: bsdf_thin_film_albedo::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_thin_film_albedo), scalar: None },
-    BuiltinKernel { name: "bsdf_thin_film_sample", source: "runtime/kernels/graphs/bsdf/bsdf_thin_film.mtlx", context: Some("sample"), fingerprint: 0x251328fce9e59a46, shape: KernelShape { input_columns: bsdf_thin_film_sample::INPUT_COLUMNS, output_columns: bsdf_thin_film_sample::OUTPUT_COLUMNS, texture_count: bsdf_thin_film_sample::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_thin_film_sample), scalar: None },
-    BuiltinKernel { name: "bsdf_thin_film_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_thin_film.mtlx", context: Some("pdf"), fingerprint: 0x52b73f1cc8562970, shape: KernelShape { input_columns: bsdf_thin_film_pdf::INPUT_COLUMNS, output_columns: bsdf_thin_film_pdf::OUTPUT_COLUMNS, texture_count: bsdf_thin_film_pdf::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_thin_film_pdf), scalar: None },
-    BuiltinKernel { name: "bsdf_transparent_lobes_eval", source: "runtime/kernels/graphs/bsdf/bsdf_transparent_lobes.mtlx", context: Some("eval"), fingerprint: 0x4ebeafed068d140b, shape: KernelShape { input_columns: bsdf_transparent_lobes_eval::INPUT_COLUMNS, output_columns: bsdf_transparent_lobes_eval::OUTPUT_COLUMNS, texture_count: bsdf_transparent_lobes_eval::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_transparent_lobes_eval), scalar: None },
-    BuiltinKernel { name: "bsdf_transparent_lobes_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_transparent_lobes.mtlx", context: Some("albedo"), fingerprint: 0xf1562db718160401, shape: KernelShape { input_columns: bsdf_transparent_lobes_albedo::INPUT_COLUMNS, output_columns: bsdf_transparent_lobes_albedo::OUTPUT_COLUMNS, texture_count: bsdf_transparent_lobes_albedo::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_transparent_lobes_albedo), scalar: None },
-    BuiltinKernel { name: "bsdf_transparent_lobes_sample", source: "runtime/kernels/graphs/bsdf/bsdf_transparent_lobes.mtlx", context: Some("sample"), fingerprint: 0x397ae6f8bbdd19f6, shape: KernelShape { input_columns: bsdf_transparent_lobes_sample::INPUT_COLUMNS, output_columns: bsdf_transparent_lobes_sample::OUTPUT_COLUMNS, texture_count: bsdf_transparent_lobes_sample::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_transparent_lobes_sample), scalar: None },
-    BuiltinKernel { name: "bsdf_transparent_lobes_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_transparent_lobes.mtlx", context: Some("pdf"), fingerprint: 0x2ab3a313210205b4, shape: KernelShape { input_columns: bsdf_transparent_lobes_pdf::INPUT_COLUMNS, output_columns: bsdf_transparent_lobes_pdf::OUTPUT_COLUMNS, texture_count: bsdf_transparent_lobes_pdf::TEXTURE_COUNT }, batch: cpu_batch_fn!(bsdf_transparent_lobes_pdf), scalar: None },
-    BuiltinKernel { name: "uplift_stack_eval", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("eval"), fingerprint: 0xe3181aa344c14fae, shape: KernelShape { input_columns: uplift_stack_eval::INPUT_COLUMNS, output_columns: uplift_stack_eval::OUTPUT_COLUMNS, texture_count: uplift_stack_eval::TEXTURE_COUNT }, batch: cpu_batch_fn!(uplift_stack_eval), scalar: None },
-    BuiltinKernel { name: "uplift_stack_albedo", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("albedo"), fingerprint: 0x72ed30888eca0ee3, shape: KernelShape { input_columns: uplift_stack_albedo::INPUT_COLUMNS, output_columns: uplift_stack_albedo::OUTPUT_COLUMNS, texture_count: uplift_stack_albedo::TEXTURE_COUNT }, batch: cpu_batch_fn!(uplift_stack_albedo), scalar: None },
-    BuiltinKernel { name: "uplift_stack_sample", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("sample"), fingerprint: 0x5af11452ed7e00dc, shape: KernelShape { input_columns: uplift_stack_sample::INPUT_COLUMNS, output_columns: uplift_stack_sample::OUTPUT_COLUMNS, texture_count: uplift_stack_sample::TEXTURE_COUNT }, batch: cpu_batch_fn!(uplift_stack_sample), scalar: None },
-    BuiltinKernel { name: "uplift_stack_pdf", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("pdf"), fingerprint: 0x5410fabe6fc36cac, shape: KernelShape { input_columns: uplift_stack_pdf::INPUT_COLUMNS, output_columns: uplift_stack_pdf::OUTPUT_COLUMNS, texture_count: uplift_stack_pdf::TEXTURE_COUNT }, batch: cpu_batch_fn!(uplift_stack_pdf), scalar: None },
+    BuiltinKernel { name: "bsdf_conductor_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_conductor.mtlx", context: Some("albedo"), fingerprint: 0x8c619d7594b6652b, shape: KernelShape { input_columns: bsdf_conductor_albedo::INPUT_COLUMNS, output_columns: bsdf_conductor_albedo::OUTPUT_COLUMNS, texture_count: bsdf_conductor_albedo::TEXTURE_COUNT }, batch: BSDF_CONDUCTOR_ALBEDO_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_conductor_sample", source: "runtime/kernels/graphs/bsdf/bsdf_conductor.mtlx", context: Some("sample"), fingerprint: 0xaecc63496ea1f1d4, shape: KernelShape { input_columns: bsdf_conductor_sample::INPUT_COLUMNS, output_columns: bsdf_conductor_sample::OUTPUT_COLUMNS, texture_count: bsdf_conductor_sample::TEXTURE_COUNT }, batch: BSDF_CONDUCTOR_SAMPLE_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_conductor_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_conductor.mtlx", context: Some("pdf"), fingerprint: 0x36de787d5ae264a4, shape: KernelShape { input_columns: bsdf_conductor_pdf::INPUT_COLUMNS, output_columns: bsdf_conductor_pdf::OUTPUT_COLUMNS, texture_count: bsdf_conductor_pdf::TEXTURE_COUNT }, batch: BSDF_CONDUCTOR_PDF_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_hair_eval", source: "runtime/kernels/graphs/bsdf/bsdf_hair.mtlx", context: Some("eval"), fingerprint: 0x23ee7a0f59b56aec, shape: KernelShape { input_columns: bsdf_hair_eval::INPUT_COLUMNS, output_columns: bsdf_hair_eval::OUTPUT_COLUMNS, texture_count: bsdf_hair_eval::TEXTURE_COUNT }, batch: BSDF_HAIR_EVAL_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_hair_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_hair.mtlx", context: Some("albedo"), fingerprint: 0xa2243a9819ad67d, shape: KernelShape { input_columns: bsdf_hair_albedo::INPUT_COLUMNS, output_columns: bsdf_hair_albedo::OUTPUT_COLUMNS, texture_count: bsdf_hair_albedo::TEXTURE_COUNT }, batch: BSDF_HAIR_ALBEDO_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_hair_sample", source: "runtime/kernels/graphs/bsdf/bsdf_hair.mtlx", context: Some("sample"), fingerprint: 0xe32de942791f5e9f, shape: KernelShape { input_columns: bsdf_hair_sample::INPUT_COLUMNS, output_columns: bsdf_hair_sample::OUTPUT_COLUMNS, texture_count: bsdf_hair_sample::TEXTURE_COUNT }, batch: BSDF_HAIR_SAMPLE_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_hair_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_hair.mtlx", context: Some("pdf"), fingerprint: 0x9cdfc9b362fb8eb4, shape: KernelShape { input_columns: bsdf_hair_pdf::INPUT_COLUMNS, output_columns: bsdf_hair_pdf::OUTPUT_COLUMNS, texture_count: bsdf_hair_pdf::TEXTURE_COUNT }, batch: BSDF_HAIR_PDF_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_opaque_lobes_eval", source: "runtime/kernels/graphs/bsdf/bsdf_opaque_lobes.mtlx", context: Some("eval"), fingerprint: 0x57eab662426b4a3c, shape: KernelShape { input_columns: bsdf_opaque_lobes_eval::INPUT_COLUMNS, output_columns: bsdf_opaque_lobes_eval::OUTPUT_COLUMNS, texture_count: bsdf_opaque_lobes_eval::TEXTURE_COUNT }, batch: BSDF_OPAQUE_LOBES_EVAL_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_opaque_lobes_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_opaque_lobes.mtlx", context: Some("albedo"), fingerprint: 0x98c5e20adb7a06fd, shape: KernelShape { input_columns: bsdf_opaque_lobes_albedo::INPUT_COLUMNS, output_columns: bsdf_opaque_lobes_albedo::OUTPUT_COLUMNS, texture_count: bsdf_opaque_lobes_albedo::TEXTURE_COUNT }, batch: BSDF_OPAQUE_LOBES_ALBEDO_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_opaque_lobes_sample", source: "runtime/kernels/graphs/bsdf/bsdf_opaque_lobes.mtlx", context: Some("sample"), fingerprint: 0xc1ba80b6dfc09ec1, shape: KernelShape { input_columns: bsdf_opaque_lobes_sample::INPUT_COLUMNS, output_columns: bsdf_opaque_lobes_sample::OUTPUT_COLUMNS, texture_count: bsdf_opaque_lobes_sample::TEXTURE_COUNT }, batch: BSDF_OPAQUE_LOBES_SAMPLE_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_opaque_lobes_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_opaque_lobes.mtlx", context: Some("pdf"), fingerprint: 0x2a3296ab7c5a48d9, shape: KernelShape { input_columns: bsdf_opaque_lobes_pdf::INPUT_COLUMNS, output_columns: bsdf_opaque_lobes_pdf::OUTPUT_COLUMNS, texture_count: bsdf_opaque_lobes_pdf::TEXTURE_COUNT }, batch: BSDF_OPAQUE_LOBES_PDF_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_stack_eval", source: "runtime/kernels/graphs/bsdf/bsdf_stack.mtlx", context: Some("eval"), fingerprint: 0xeef00c39d3a7f731, shape: KernelShape { input_columns: bsdf_stack_eval::INPUT_COLUMNS, output_columns: bsdf_stack_eval::OUTPUT_COLUMNS, texture_count: bsdf_stack_eval::TEXTURE_COUNT }, batch: BSDF_STACK_EVAL_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_stack_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_stack.mtlx", context: Some("albedo"), fingerprint: 0xe6af30e160957bd3, shape: KernelShape { input_columns: bsdf_stack_albedo::INPUT_COLUMNS, output_columns: bsdf_stack_albedo::OUTPUT_COLUMNS, texture_count: bsdf_stack_albedo::TEXTURE_COUNT }, batch: BSDF_STACK_ALBEDO_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_stack_sample", source: "runtime/kernels/graphs/bsdf/bsdf_stack.mtlx", context: Some("sample"), fingerprint: 0x689c30fad624d339, shape: KernelShape { input_columns: bsdf_stack_sample::INPUT_COLUMNS, output_columns: bsdf_stack_sample::OUTPUT_COLUMNS, texture_count: bsdf_stack_sample::TEXTURE_COUNT }, batch: BSDF_STACK_SAMPLE_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_stack_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_stack.mtlx", context: Some("pdf"), fingerprint: 0xf4dcb25677017ccd, shape: KernelShape { input_columns: bsdf_stack_pdf::INPUT_COLUMNS, output_columns: bsdf_stack_pdf::OUTPUT_COLUMNS, texture_count: bsdf_stack_pdf::TEXTURE_COUNT }, batch: BSDF_STACK_PDF_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_thin_film_eval", source: "runtime/kernels/graphs/bsdf/bsdf_thin_film.mtlx", context: Some("eval"), fingerprint: 0xf970b66980320fa0, shape: KernelShape { input_columns: bsdf_thin_film_eval::INPUT_COLUMNS, output_columns: bsdf_thin_film_eval::OUTPUT_COLUMNS, texture_count: bsdf_thin_film_eval::TEXTURE_COUNT }, batch: BSDF_THIN_FILM_EVAL_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_thin_film_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_thin_film.mtlx", context: Some("albedo"), fingerprint: 0x621d71bc0bac22c1, shape: KernelShape { input_columns: bsdf_thin_film_albedo::INPUT_COLUMNS, output_columns: bsdf_thin_film_albedo::OUTPUT_COLUMNS, texture_count: bsdf_thin_film_albedo::TEXTURE_COUNT }, batch: BSDF_THIN_FILM_ALBEDO_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_thin_film_sample", source: "runtime/kernels/graphs/bsdf/bsdf_thin_film.mtlx", context: Some("sample"), fingerprint: 0x251328fce9e59a46, shape: KernelShape { input_columns: bsdf_thin_film_sample::INPUT_COLUMNS, output_columns: bsdf_thin_film_sample::OUTPUT_COLUMNS, texture_count: bsdf_thin_film_sample::TEXTURE_COUNT }, batch: BSDF_THIN_FILM_SAMPLE_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_thin_film_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_thin_film.mtlx", context: Some("pdf"), fingerprint: 0x52b73f1cc8562970, shape: KernelShape { input_columns: bsdf_thin_film_pdf::INPUT_COLUMNS, output_columns: bsdf_thin_film_pdf::OUTPUT_COLUMNS, texture_count: bsdf_thin_film_pdf::TEXTURE_COUNT }, batch: BSDF_THIN_FILM_PDF_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_transparent_lobes_eval", source: "runtime/kernels/graphs/bsdf/bsdf_transparent_lobes.mtlx", context: Some("eval"), fingerprint: 0x4ebeafed068d140b, shape: KernelShape { input_columns: bsdf_transparent_lobes_eval::INPUT_COLUMNS, output_columns: bsdf_transparent_lobes_eval::OUTPUT_COLUMNS, texture_count: bsdf_transparent_lobes_eval::TEXTURE_COUNT }, batch: BSDF_TRANSPARENT_LOBES_EVAL_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_transparent_lobes_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_transparent_lobes.mtlx", context: Some("albedo"), fingerprint: 0xf1562db718160401, shape: KernelShape { input_columns: bsdf_transparent_lobes_albedo::INPUT_COLUMNS, output_columns: bsdf_transparent_lobes_albedo::OUTPUT_COLUMNS, texture_count: bsdf_transparent_lobes_albedo::TEXTURE_COUNT }, batch: BSDF_TRANSPARENT_LOBES_ALBEDO_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_transparent_lobes_sample", source: "runtime/kernels/graphs/bsdf/bsdf_transparent_lobes.mtlx", context: Some("sample"), fingerprint: 0x397ae6f8bbdd19f6, shape: KernelShape { input_columns: bsdf_transparent_lobes_sample::INPUT_COLUMNS, output_columns: bsdf_transparent_lobes_sample::OUTPUT_COLUMNS, texture_count: bsdf_transparent_lobes_sample::TEXTURE_COUNT }, batch: BSDF_TRANSPARENT_LOBES_SAMPLE_SCALAR, scalar: None },
+    BuiltinKernel { name: "bsdf_transparent_lobes_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_transparent_lobes.mtlx", context: Some("pdf"), fingerprint: 0x2ab3a313210205b4, shape: KernelShape { input_columns: bsdf_transparent_lobes_pdf::INPUT_COLUMNS, output_columns: bsdf_transparent_lobes_pdf::OUTPUT_COLUMNS, texture_count: bsdf_transparent_lobes_pdf::TEXTURE_COUNT }, batch: BSDF_TRANSPARENT_LOBES_PDF_SCALAR, scalar: None },
+    BuiltinKernel { name: "uplift_stack_eval", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("eval"), fingerprint: 0xe3181aa344c14fae, shape: KernelShape { input_columns: uplift_stack_eval::INPUT_COLUMNS, output_columns: uplift_stack_eval::OUTPUT_COLUMNS, texture_count: uplift_stack_eval::TEXTURE_COUNT }, batch: UPLIFT_STACK_EVAL_SCALAR, scalar: None },
+    BuiltinKernel { name: "uplift_stack_albedo", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("albedo"), fingerprint: 0x72ed30888eca0ee3, shape: KernelShape { input_columns: uplift_stack_albedo::INPUT_COLUMNS, output_columns: uplift_stack_albedo::OUTPUT_COLUMNS, texture_count: uplift_stack_albedo::TEXTURE_COUNT }, batch: UPLIFT_STACK_ALBEDO_SCALAR, scalar: None },
+    BuiltinKernel { name: "uplift_stack_sample", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("sample"), fingerprint: 0x5af11452ed7e00dc, shape: KernelShape { input_columns: uplift_stack_sample::INPUT_COLUMNS, output_columns: uplift_stack_sample::OUTPUT_COLUMNS, texture_count: uplift_stack_sample::TEXTURE_COUNT }, batch: UPLIFT_STACK_SAMPLE_SCALAR, scalar: None },
+    BuiltinKernel { name: "uplift_stack_pdf", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("pdf"), fingerprint: 0x5410fabe6fc36cac, shape: KernelShape { input_columns: uplift_stack_pdf::INPUT_COLUMNS, output_columns: uplift_stack_pdf::OUTPUT_COLUMNS, texture_count: uplift_stack_pdf::TEXTURE_COUNT }, batch: UPLIFT_STACK_PDF_SCALAR, scalar: None },
 ];

@@ -14,7 +14,7 @@ remainder and fallbacks, so the table gives the width most of its float arithmet
 Static counts are what one pass over the code holds, not what a run executes: branches skipped
 for a whole packet (guarded calls, masked ifs no lane takes) are counted too.
 
-Usage: python3 runtime/uplift/benches/disasm/kernel_disasm.py [--no-build] KERNEL...
+Usage: python3 runtime/uplift/benches/disasm/kernel_disasm.py [--no-build | --binary PATH] KERNEL...
        (KERNEL: a shipped kernel module, e.g. bsdf_conductor_eval uplift_stack_eval)
 """
 import os
@@ -64,9 +64,9 @@ def functions():
 
 
 def level_of(name):
-    if "Avx512" in name:
+    if "Avx512" in name or "avx512::entry" in name:
         return "AVX-512 packet", 16
-    if "Avx2" in name:
+    if "Avx2" in name or "avx2::entry" in name:
         return "AVX2 packet", 8
     m = re.search(r"batch_(\w+?)_version", name)
     if m:
@@ -125,8 +125,15 @@ def count(kernel, funcs):
 
 
 def main():
-    args = [a for a in sys.argv[1:] if not a.startswith("--")]
-    if "--no-build" not in sys.argv:
+    global BINARY
+    argv = sys.argv[1:]
+    if "--binary" in argv:
+        # Another build of the example (an older commit's, say), disassembled as it is.
+        i = argv.index("--binary")
+        BINARY = os.path.abspath(argv[i + 1])
+        argv = argv[:i] + ["--no-build"] + argv[i + 2:]
+    args = [a for a in argv if not a.startswith("--")]
+    if "--no-build" not in argv:
         build()
     if not args:
         args = ["bsdf_conductor_eval", "uplift_stack_eval"]
