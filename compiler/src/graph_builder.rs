@@ -11,6 +11,7 @@ use crate::ir::{GeomProp, Graph, GraphOutput, InterfaceInput, TextureBinding, Va
 use crate::node_library::{match_nodedef, Definitions, NodeLibrary, NodeQuery};
 use mtlx::schema::{NodeDef, PortDef};
 use mtlx::{DataType, Diagnostic, Document, ElementId, SourcePos, Value as Literal};
+use std::borrow::Cow;
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -515,17 +516,18 @@ impl<'a> GraphBuilder<'a> {
 
     // ---- nodes ---------------------------------------------------------------------------
 
-    fn find_nodedef(&mut self, e: &mtlx::Element, ty: &DataType, authored: &[(String, DataType)]) -> Result<NodeDef, String> {
-        if let Some(name) = e.attr("nodedef") {
-            return self
-                .local
-                .nodedef(name)
-                .or_else(|| self.lib.defs.nodedef(name))
-                .cloned()
-                .ok_or_else(|| format!("missing nodedef `{name}`"));
-        }
-        let q = NodeQuery { category: &e.category, ty, version: e.attr("version"), inputs: authored };
-        match_nodedef(&[&self.local, &self.lib.defs], &q).cloned()
+    /// The nodedef of node `e`: borrowed from the library (no copy per node), or a copy of the
+    /// document's own.
+    fn find_nodedef(&self, e: &mtlx::Element, ty: &DataType, authored: &[(String, DataType)]) -> Result<Cow<'a, NodeDef>, String> {
+        let lib: &'a NodeLibrary = self.lib;
+        let found = match e.attr("nodedef") {
+            Some(name) => self.local.nodedef(name).or_else(|| lib.defs.nodedef(name)).ok_or_else(|| format!("missing nodedef `{name}`"))?,
+            None => match_nodedef(&[&self.local, &lib.defs], &NodeQuery { category: &e.category, ty, version: e.attr("version"), inputs: authored })?,
+        };
+        Ok(match lib.defs.nodedef(&found.name) {
+            Some(l) if std::ptr::eq(l, found) => Cow::Borrowed(l),
+            _ => Cow::Owned(found.clone()),
+        })
     }
 
     fn build_node(&mut self, s: usize, node: ElementId) -> Result<NodeResult, Fail> {
@@ -607,13 +609,13 @@ impl<'a> GraphBuilder<'a> {
             return Err(self.error(&pos, format!("node `{}` produces {}, a closure/shader type that a pattern kernel cannot evaluate", e.name(), nd.node_type())));
         }
         // Bind every nodedef input: authored connection/value, or default.
-        let mut bound: Vec<(PortDef, H)> = Vec::new();
+        let mut bound: Vec<(&PortDef, H)> = Vec::new();
         for p in &nd.inputs {
             let h = match inputs.iter().find(|&&i| doc.get(i).name() == p.name) {
                 Some(&i) => self.resolve_connection(s, i, Some(&p.ty))?,
                 None => self.port_default(p, &origin)?,
             };
-            bound.push((p.clone(), h));
+            bound.push((p, h));
         }
         // String and filename nodes (`dot`, `constant` of a filename) pass their
         // `defaultinput` through at compile time.
@@ -641,7 +643,7 @@ impl<'a> GraphBuilder<'a> {
     }
 
     /// Inlines the nodegraph `g` implementing `nd` for a node of scope `s` whose inputs are `bound`.
-    fn inline_graph(&mut self, s: usize, nd: &NodeDef, is_local: bool, g: crate::node_library::GraphRef, bound: &[(PortDef, H)], origin: &str) -> Result<NodeResult, Fail> {
+    fn inline_graph(&mut self, s: usize, nd: &NodeDef, is_local: bool, g: crate::node_library::GraphRef, bound: &[(&PortDef, H)], origin: &str) -> Result<NodeResult, Fail> {
         {
             let gdoc = if is_local { self.local.documents[g.doc].clone() } else { self.lib.defs.documents[g.doc].clone() };
             let map: HashMap<String, H> = bound.iter().map(|(p, h)| (p.name.clone(), *h)).collect();
@@ -681,21 +683,22 @@ impl<'a> GraphBuilder<'a> {
     }
 
     /// A call of the nodedef's WGSL function.
-    fn call(&mut self, nd: &NodeDef, bound: Vec<(PortDef, H)>, origin: &str, pos: &SourcePos) -> Result<NodeResult, Fail> {
+    fn call(&mut self, nd: &NodeDef, bound: Vec<(&PortDef, H)>, origin: &str, pos: &SourcePos) -> Result<NodeResult, Fail> {
         let fname = NodeLibrary::function_name(&nd.name);
         if let Err(m) = self.lib.signature_fits(nd) {
             return Err(self.error(pos, m));
         }
-        let sig = self.lib.wgsl.items[&fname].signature.clone().unwrap();
+        let lib: &'a NodeLibrary = self.lib;
+        let sig = lib.wgsl.items[&fname].signature.as_ref().unwrap();
         let geometry = sig.params.first().is_some_and(|(_, t)| t == "mx_geometry");
         let closure = sig.params.get(usize::from(geometry)).is_some_and(|(_, t)| t == "mx_closure");
         let mut args = Vec::new();
         let mut missing_file = None;
         for (p, h) in &bound {
-            let v = self.graph.values[*h].clone();
             match (&p.ty, &p.enum_values) {
                 (DataType::String, None) => continue,
                 (DataType::String, Some(options)) => {
+                    let v = self.graph.values[*h].clone();
                     let ValueKind::Constant(Literal::String(text)) = &v.kind else {
                         return Err(self.error(pos, format!("input `{}` must be a constant string", p.name)));
                     };
@@ -704,7 +707,7 @@ impl<'a> GraphBuilder<'a> {
                     };
                     args.push(self.add(ValueKind::Constant(Literal::Integer(index as i32)), DataType::Integer, format!("{origin}.{}", p.name), v.pos.clone()));
                 }
-                (DataType::Filename, _) => match v.kind {
+                (DataType::Filename, _) => match self.graph.values[*h].kind {
                     ValueKind::Texture(_) => args.push(*h),
                     _ => missing_file = Some(p.name.clone()),
                 },
