@@ -35,7 +35,7 @@
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use uplift_engines::batch::{Geometry, PatternBatch};
+use uplift_engines::batch::{Columns, Geometry, PatternBatch};
 use uplift_engines::cpu_engine::driver::evals_per_second as rate;
 use uplift_engines::cpu_engine::external::{self, RunnerOptions};
 use uplift_engines::cpu_engine::{CpuEngine, CpuKernel};
@@ -233,13 +233,16 @@ fn main() {
         println!("parameters: {}{}", set.join(" "), if o.random_params { " (then every uplift_stack parameter random per row)" } else { "" });
     }
     let prepared = all.prepare(&kernel).unwrap();
+    // Outputs go into one reused buffer, as Mitsuba's (Dr.Jit's caching allocator hands back
+    // memory without clearing it): what is timed is evaluation, not allocation.
+    let mut out = Columns::zeros(0, 0);
     let (cpu1, cpu_all) = match &prepared {
         CpuKernel::Builtin(_) => {
             let cpu1 = rate(o.points, o.seconds, || {
-                one.run_prepared(&prepared, &b).unwrap();
+                one.run_prepared_into(&prepared, &b, &mut out).unwrap();
             });
             let cpu_all = rate(o.points, o.seconds, || {
-                all.run_prepared(&prepared, &b).unwrap();
+                all.run_prepared_into(&prepared, &b, &mut out).unwrap();
             });
             let form = match &prepared {
                 CpuKernel::Builtin(k) if k.is_packet() && uplift_simd::Level::current() != uplift_simd::Level::Scalar => format!("packet kernel, {}", uplift_simd::Level::current().name()),
@@ -252,10 +255,10 @@ fn main() {
                 if let Some(scalar) = k.scalar {
                     let scalar = CpuKernel::Builtin(Box::leak(Box::new(uplift_kernels::shipped::BuiltinKernel { batch: scalar, scalar: None, ..**k })));
                     let s1 = rate(o.points, o.seconds, || {
-                        one.run_prepared(&scalar, &b).unwrap();
+                        one.run_prepared_into(&scalar, &b, &mut out).unwrap();
                     });
                     let s_all = rate(o.points, o.seconds, || {
-                        all.run_prepared(&scalar, &b).unwrap();
+                        all.run_prepared_into(&scalar, &b, &mut out).unwrap();
                     });
                     println!("cpu  in-process   1 thread : {}  (scalar kernel; packet {:.2}×)", mega(s1), cpu1 / s1);
                     println!("cpu  in-process {threads:2} threads: {}  (scalar kernel; packet {:.2}×)", mega(s_all), cpu_all / s_all);

@@ -95,19 +95,34 @@ impl CpuEngine {
 
     /// Evaluates a prepared kernel for every point of `batch` (checked against its shape).
     pub fn run_prepared(&self, kernel: &CpuKernel, batch: &PatternBatch) -> Result<Columns, String> {
+        let mut out = Columns::zeros(0, 0);
+        self.run_prepared_into(kernel, batch, &mut out)?;
+        Ok(out)
+    }
+
+    /// [`CpuEngine::run_prepared`] into `out`, reusing its memory when it already has the
+    /// output's shape (a caller evaluating batch after batch then allocates and zeroes no
+    /// output: for a 10⁶-point conductor batch that was an eighth of the time). Every value
+    /// of `out` is overwritten.
+    pub fn run_prepared_into(&self, kernel: &CpuKernel, batch: &PatternBatch, out: &mut Columns) -> Result<(), String> {
         let n = batch.check_shape(kernel.shape())?;
         match kernel {
             CpuKernel::Builtin(k) => {
                 let textures = TextureSet(batch.textures.iter().map(|t| TextureImage { width: t.width, height: t.height, rgba: &t.rgba }).collect());
                 let s = &k.shape;
-                let mut out = Columns::zeros(n, s.output_columns);
+                if out.n() != n || out.width() != s.output_columns {
+                    *out = Columns::zeros(n, s.output_columns);
+                }
                 // Uniform columns (`Columns::mark_uniform`) go in as their one value.
                 let geometry: Vec<&[f32]> = (0..GEOMETRY_STRIDE).map(|c| batch.geometry.column_or_uniform(c)).collect();
                 let inputs: Vec<&[f32]> = (0..s.input_columns).map(|c| batch.inputs.column_or_uniform(c)).collect();
                 self.pool.install(|| driver::run_column_blocks(k.batch, k.is_packet(), n, &geometry, &inputs, out.data_mut(), s.output_columns, &textures));
-                Ok(out)
+                Ok(())
             }
-            CpuKernel::External(k) => external::run(k, batch, self.threads),
+            CpuKernel::External(k) => {
+                *out = external::run(k, batch, self.threads)?;
+                Ok(())
+            }
         }
     }
 }
