@@ -25,7 +25,9 @@
 //! per row inside its range (stack_params.rs; weights at least 5 % of their range, so no lobe
 //! is dead). Directions: `wv` and `wl` uniform on the upper hemisphere. Closure kernels: the
 //! frame and every parameter not drawn per row are uniform columns (`Columns::mark_uniform`),
-//! as Mitsuba's benchmark has one material and one frame.
+//! as Mitsuba's benchmark has one material and one frame. In-process runs write into one
+//! output buffer reused from batch to batch (`CpuEngine::run_prepared_into`), as Dr.Jit's
+//! caching allocator hands Mitsuba's outputs back without clearing them.
 //!
 //! **Anchor.** `--mitsuba roughconductor|principled` also measures Mitsuba 3.9.1's BSDF `eval`
 //! (`llvm_ad_rgb`, all threads) on the same direction distribution in the same run
