@@ -33,6 +33,9 @@ fn generated_targets_equal_the_stack_kernels() {
     let again = g.batch(3, 4000).unwrap();
     assert_eq!(b.target, again.target, "a batch is a function of (seed, index)");
     assert_eq!(b.params, again.params);
+    // Rows are drawn in parallel: on one thread they are the same.
+    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| g.batch(3, 4000).unwrap());
+    assert!(one.params == b.params && one.wv == b.wv && one.wl == b.wl && one.target == b.target && one.class == b.class, "a batch depends on the thread count");
     assert_ne!(b.params, g.batch(4, 4000).unwrap().params);
     // Class proportions: 1/5 each (binomial sd ≈ 0.0063 at 4000 rows).
     for c in DataClass::ALL {
