@@ -919,6 +919,9 @@ impl FunctionWriter<'_> {
     fn binary(&mut self, op: Bo, left: Handle<naga::Expression>, right: Handle<naga::Expression>) -> R<String> {
         let (l, r) = (self.expr(left)?, self.expr(right)?);
         let (lt, rt) = (self.ty(left)?, self.ty(right)?);
+        if let Some(fused) = self.contracted(op, left, right, &l, &r)? {
+            return Ok(fused);
+        }
         let vector_op = match op {
             Bo::Add => Some("add"),
             Bo::Subtract => Some("sub"),
@@ -966,6 +969,29 @@ impl FunctionWriter<'_> {
             Bo::ShiftLeft => format!("{l}.shl({r})"),
             Bo::ShiftRight => format!("{l}.shr({r})"),
             other => return Err(unsupported(format!("{other:?} on {kind:?}"))),
+        })
+    }
+
+    /// A float scalar `a·b ± c` or `c ± a·b` as one fused multiply-add (`F32s::mul_add`:
+    /// one rounding where the scalar writer rounds twice, within the agreement tests' 1e-4).
+    /// `None` for anything else. The product stays bound to its own name for other uses.
+    fn contracted(&mut self, op: Bo, left: Handle<naga::Expression>, right: Handle<naga::Expression>, l: &str, r: &str) -> R<Option<String>> {
+        let float = Ty::Scalar(ScalarKind::Float);
+        if !matches!(op, Bo::Add | Bo::Subtract) || self.ty(left)? != float || self.ty(right)? != float {
+            return Ok(None);
+        }
+        let product = |w: &mut Self, h: Handle<naga::Expression>| -> R<Option<(String, String)>> {
+            match w.f.expressions[h] {
+                E::Binary { op: Bo::Multiply, left: a, right: b } if w.ty(a)? == float && w.ty(b)? == float => Ok(Some((w.expr(a)?, w.expr(b)?))),
+                _ => Ok(None),
+            }
+        };
+        Ok(match (op, product(self, left)?, product(self, right)?) {
+            (Bo::Add, Some((a, b)), _) => Some(format!("{a}.mul_add({b}, {r})")),
+            (Bo::Add, None, Some((a, b))) => Some(format!("{a}.mul_add({b}, {l})")),
+            (Bo::Subtract, Some((a, b)), _) => Some(format!("{a}.mul_add({b}, -{r})")),
+            (Bo::Subtract, None, Some((a, b))) => Some(format!("(-{a}).mul_add({b}, {l})")),
+            _ => None,
         })
     }
 
@@ -1043,7 +1069,7 @@ impl FunctionWriter<'_> {
             },
             Mf::Mix => match t {
                 Ty::Vec(n) => format!("uplift_simd::vector::mix::<S, {n}>(s, {a}, {}, {})", widen(arg1, b()?, self)?, widen(arg2, c()?, self)?),
-                _ => format!("{{ let t = {}; {a} * (s.splat(1.0) - t) + {} * t }}", c()?, b()?),
+                _ => format!("{{ let t = {}; {}.mul_add(t, {a} * (s.splat(1.0) - t)) }}", c()?, b()?),
             },
             Mf::Dot => match t {
                 Ty::Vec(n) => format!("uplift_simd::vector::dot::<S, {n}>({a}, {})", b()?),

@@ -57,12 +57,13 @@ pub fn neg<S: Simd, const N: usize>(a: [S::F; N]) -> [S::F; N] {
     map::<S, N>(a, |x| -x)
 }
 
-/// Σ aᵢbᵢ in component order, unfused (as the scalar writer's `dot`).
+/// Σ aᵢbᵢ in component order, each further term by a fused multiply-add (`F32s::mul_add`,
+/// unfused on the emulated levels, as the scalar writer's `dot`).
 #[inline(always)]
 pub fn dot<S: Simd, const N: usize>(a: [S::F; N], b: [S::F; N]) -> S::F {
     let mut acc = a[0] * b[0];
     for c in 1..N {
-        acc = acc + a[c] * b[c];
+        acc = a[c].mul_add(b[c], acc);
     }
     acc
 }
@@ -83,11 +84,11 @@ pub fn cross<S: Simd>(a: [S::F; 3], b: [S::F; 3]) -> [S::F; 3] {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
-/// WGSL `mix(a, b, t) = a·(1 − t) + b·t`, lane-wise.
+/// WGSL `mix(a, b, t) = a·(1 − t) + b·t`, lane-wise, the second product fused.
 #[inline(always)]
 pub fn mix<S: Simd, const N: usize>(s: S, a: [S::F; N], b: [S::F; N], t: [S::F; N]) -> [S::F; N] {
     let one = s.splat(1.0);
-    std::array::from_fn(|c| a[c] * (one - t[c]) + b[c] * t[c])
+    std::array::from_fn(|c| b[c].mul_add(t[c], a[c] * (one - t[c])))
 }
 
 /// Component-wise `select(off, on, m)` with one mask per component.

@@ -237,7 +237,7 @@ pub fn find<S: Simd>(s: S, x_1: S::F) -> S::F {
         let _m3 = _lm1 & !_brk1 & !_cont1 & !_done;
         let _e7 = v_2;
         let _e9 = (_e7 * s.splat(0.5f32));
-        let _e11 = (_e9 + s.splat(1.0f32));
+        let _e11 = _e7.mul_add(s.splat(0.5f32), s.splat(1.0f32));
         v_2 = _m3.select(_e11, v_2);
         let _e12 = v_2;
         let _e14 = _e12.lt(s.splat(2.1f32));
@@ -413,7 +413,7 @@ pub fn dear<S: Simd>(s: S, x_3: S::F) -> S::F {
         let _e9 = (_e7 * s.splat(0.5f32));
         let _e10 = a_3;
         let _e11 = { let x = _e10; x.map(f32::sin) };
-        let _e12 = (_e9 + _e11);
+        let _e12 = _e7.mul_add(s.splat(0.5f32), _e11);
         a_3 = _m3.select(_e12, a_3);
         let _m4 = _lm1 & !_brk1;
         let _e14 = i_3;

@@ -6,11 +6,11 @@ use uplift_simd::{F32s, I32s, M32s, Simd, U32s};
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn poly<S: Simd>(s: S, x: S::F) -> S::F {
     let _e2 = (x * s.splat(0.5f32));
-    let _e4 = (_e2 + s.splat(1.0f32));
+    let _e4 = x.mul_add(s.splat(0.5f32), s.splat(1.0f32));
     let _e5 = (_e4 * x);
-    let _e7 = (_e5 - s.splat(2.0f32));
+    let _e7 = _e4.mul_add(x, -s.splat(2.0f32));
     let _e8 = (x * x);
-    let _e10 = (_e8 + s.splat(1.0f32));
+    let _e10 = x.mul_add(x, s.splat(1.0f32));
     let _e11 = (_e7 / _e10);
     return _e11;
 }
@@ -57,7 +57,7 @@ pub fn hashes<S: Simd>(s: S, x_1: S::U, y: S::I) -> S::F {
     let _e14 = (_e12 * s.splat(5.9604645e-8f32));
     let _e16 = y.rem(s.splat_i(7i32));
     let _e17 = _e16.to_f32();
-    let _e18 = (_e14 + _e17);
+    let _e18 = _e12.mul_add(s.splat(5.9604645e-8f32), _e17);
     let _e19 = y.to_f32();
     let _e21 = (_e19 * s.splat(0.3f32));
     let _e22 = { let x = _e21; x.floor() };

@@ -16,7 +16,7 @@ pub fn lookup<S: Simd>(s: S, x: S::F) -> S::F {
     let _e12 = _e9.max(s.splat_i(0i32)).min(s.splat_i(7i32));
     let _e13 = s.gather(&TABLE, _e12.to_u32_bits().min(s.splat_u(7)).to_i32_bits());
     let _e15 = (_e13 * s.splat(0.5f32));
-    let _e16 = (_e6 + _e15);
+    let _e16 = _e13.mul_add(s.splat(0.5f32), _e6);
     let _e18 = { let x = x; x.abs() };
     let _e20 = (_e18 * s.splat(2.0f32));
     let _e21 = _e20.to_u32();

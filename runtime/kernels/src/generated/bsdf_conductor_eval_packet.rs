@@ -250,7 +250,7 @@ pub fn mx_frame_new<S: Simd>(s: S, normal: [S::F; 3], tangent: [S::F; 3], wv_1: 
     let _e29 = _e12[0];
     let _e30 = (_e28 * _e29);
     let _e31 = (_e30 * _e22);
-    let _e33 = (s.splat(1.0f32) + _e31);
+    let _e33 = _e30.mul_add(_e22, s.splat(1.0f32));
     let _e34 = (_e18 * _e26);
     let _e35 = -_e18;
     let _e36 = _e12[0];
@@ -345,7 +345,7 @@ pub fn mx_fresnel_conductor_normal<S: Simd>(s: S, n: [S::F; 3], k: [S::F; 3]) ->
 pub fn mx_thin_film_cos<S: Simd>(s: S, cos_theta: S::F, eta2_: S::F) -> S::F {
     let _e4 = cos_theta.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e5 = (_e4 * _e4);
-    let _e7 = (s.splat(1.0f32) - _e5);
+    let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
     let _e8 = (eta2_ * eta2_);
     let _e9 = (_e7 / _e8);
     let _e11 = (s.splat(1.0f32) - _e9);
@@ -359,7 +359,7 @@ pub fn mx_thin_film_cos<S: Simd>(s: S, cos_theta: S::F, eta2_: S::F) -> S::F {
 pub fn mx_fresnel_conductor_polarized<S: Simd>(s: S, cos_theta_1: S::F, n_1: [S::F; 3], k_1: [S::F; 3]) -> mx_polarized<S> {
     let _e5 = cos_theta_1.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e6 = (_e5 * _e5);
-    let _e8 = (s.splat(1.0f32) - _e6);
+    let _e8 = (-_e5).mul_add(_e5, s.splat(1.0f32));
     let _e9 = uplift_simd::vector::mul::<S, 3>(n_1, n_1);
     let _e10 = uplift_simd::vector::mul::<S, 3>(k_1, k_1);
     let _e11 = uplift_simd::vector::sub::<S, 3>(_e9, _e10);
@@ -412,19 +412,19 @@ pub fn mx_fast_atan2_<S: Simd>(s: S, y: S::F, x: S::F) -> S::F {
     let _e10 = _e8.select(s.splat(0.0f32), _e6);
     let _e11 = (_e10 * _e10);
     let _e13 = (_e11 * s.splat(-0.0040547103f32));
-    let _e15 = (s.splat(0.021863455f32) + _e13);
+    let _e15 = _e11.mul_add(s.splat(-0.0040547103f32), s.splat(0.021863455f32));
     let _e16 = (_e11 * _e15);
-    let _e18 = (s.splat(-0.055913012f32) + _e16);
+    let _e18 = _e11.mul_add(_e15, s.splat(-0.055913012f32));
     let _e19 = (_e11 * _e18);
-    let _e21 = (s.splat(0.09642245f32) + _e19);
+    let _e21 = _e11.mul_add(_e18, s.splat(0.09642245f32));
     let _e22 = (_e11 * _e21);
-    let _e24 = (s.splat(-0.13908647f32) + _e22);
+    let _e24 = _e11.mul_add(_e21, s.splat(-0.13908647f32));
     let _e25 = (_e11 * _e24);
-    let _e27 = (s.splat(0.19946569f32) + _e25);
+    let _e27 = _e11.mul_add(_e24, s.splat(0.19946569f32));
     let _e28 = (_e11 * _e27);
-    let _e30 = (s.splat(-0.33329862f32) + _e28);
+    let _e30 = _e11.mul_add(_e27, s.splat(-0.33329862f32));
     let _e31 = (_e11 * _e30);
-    let _e33 = (s.splat(0.99999934f32) + _e31);
+    let _e33 = _e11.mul_add(_e30, s.splat(0.99999934f32));
     let _e34 = (_e10 * _e33);
     r = _e34;
     let _e36 = r;
@@ -470,7 +470,7 @@ pub fn mx_fresnel_conductor_phase_polarized<S: Simd>(s: S, cos_theta_2: S::F, et
     let _e6 = uplift_simd::vector::zip::<S, 3>(eta2_1, _e5, |x, y| x.max(y));
     let _e7 = uplift_simd::vector::div::<S, 3>(kappa2_, _e6);
     let _e8 = (cos_theta_2 * cos_theta_2);
-    let _e10 = (s.splat(1.0f32) - _e8);
+    let _e10 = (-cos_theta_2).mul_add(cos_theta_2, s.splat(1.0f32));
     let _e11 = uplift_simd::vector::mul::<S, 3>(_e6, _e6);
     let _e13 = [s.splat(1.0f32); 3];
     let _e14 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
@@ -546,25 +546,25 @@ pub fn mx_fresnel_conductor_phase_polarized<S: Simd>(s: S, cos_theta_2: S::F, et
 pub fn mx_fresnel_dielectric_polarized<S: Simd>(s: S, cos_theta_3: S::F, eta: S::F) -> [S::F; 2] {
     let _e4 = cos_theta_3.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e5 = (_e4 * _e4);
-    let _e7 = (s.splat(1.0f32) - _e5);
+    let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
     let _e8 = (eta * eta);
-    let _e9 = (_e8 - _e7);
+    let _e9 = eta.mul_add(eta, -_e7);
     let _e11 = { let (x, y) = (_e9, s.splat(0.0f32)); x.max(y) };
-    let _e12 = (_e11 + _e5);
+    let _e12 = _e4.mul_add(_e4, _e11);
     let _e13 = { let x = _e11; x.sqrt() };
     let _e15 = (s.splat(2.0f32) * _e13);
     let _e16 = (_e15 * _e4);
-    let _e17 = (_e12 - _e16);
-    let _e18 = (_e12 + _e16);
+    let _e17 = (-_e15).mul_add(_e4, _e12);
+    let _e18 = _e15.mul_add(_e4, _e12);
     let _e20 = { let (x, y) = (_e18, s.splat(1e-30f32)); x.max(y) };
     let _e21 = (_e17 / _e20);
     let _e22 = (_e5 * _e11);
     let _e23 = (_e7 * _e7);
-    let _e24 = (_e22 + _e23);
+    let _e24 = _e5.mul_add(_e11, _e23);
     let _e25 = (_e16 * _e7);
-    let _e26 = (_e24 - _e25);
+    let _e26 = (-_e16).mul_add(_e7, _e24);
     let _e27 = (_e21 * _e26);
-    let _e28 = (_e24 + _e25);
+    let _e28 = _e16.mul_add(_e7, _e24);
     let _e30 = { let (x, y) = (_e28, s.splat(1e-30f32)); x.max(y) };
     let _e31 = (_e27 / _e30);
     let _e32 = [_e31, _e21];
@@ -577,27 +577,27 @@ pub fn mx_fast_cos_sin<S: Simd>(s: S, phi: S::F) -> [S::F; 2] {
     let _e2 = (phi * s.splat(0.63661975f32));
     let _e3 = { let x = _e2; x.round() };
     let _e5 = (_e3 * s.splat(1.5703125f32));
-    let _e6 = (phi - _e5);
+    let _e6 = (-_e3).mul_add(s.splat(1.5703125f32), phi);
     let _e8 = (_e3 * s.splat(0.0004838268f32));
-    let _e9 = (_e6 - _e8);
+    let _e9 = (-_e3).mul_add(s.splat(0.0004838268f32), _e6);
     let _e10 = (_e9 * _e9);
     let _e12 = (_e10 * s.splat(2.7557319e-6f32));
-    let _e14 = (s.splat(-0.0001984127f32) + _e12);
+    let _e14 = _e10.mul_add(s.splat(2.7557319e-6f32), s.splat(-0.0001984127f32));
     let _e15 = (_e10 * _e14);
-    let _e17 = (s.splat(0.008333334f32) + _e15);
+    let _e17 = _e10.mul_add(_e14, s.splat(0.008333334f32));
     let _e18 = (_e10 * _e17);
-    let _e20 = (s.splat(-0.16666667f32) + _e18);
+    let _e20 = _e10.mul_add(_e17, s.splat(-0.16666667f32));
     let _e21 = (_e10 * _e20);
-    let _e23 = (s.splat(1.0f32) + _e21);
+    let _e23 = _e10.mul_add(_e20, s.splat(1.0f32));
     let _e24 = (_e9 * _e23);
     let _e26 = (_e10 * s.splat(2.4801588e-5f32));
-    let _e28 = (s.splat(-0.0013888889f32) + _e26);
+    let _e28 = _e10.mul_add(s.splat(2.4801588e-5f32), s.splat(-0.0013888889f32));
     let _e29 = (_e10 * _e28);
-    let _e31 = (s.splat(0.041666668f32) + _e29);
+    let _e31 = _e10.mul_add(_e28, s.splat(0.041666668f32));
     let _e32 = (_e10 * _e31);
-    let _e34 = (s.splat(-0.5f32) + _e32);
+    let _e34 = _e10.mul_add(_e31, s.splat(-0.5f32));
     let _e35 = (_e10 * _e34);
-    let _e37 = (s.splat(1.0f32) + _e35);
+    let _e37 = _e10.mul_add(_e34, s.splat(1.0f32));
     let _e38 = _e3.to_i32();
     let _e40 = (_e38 & s.splat_i(3i32));
     let _e41 = [_e37, _e24];
@@ -641,19 +641,19 @@ pub fn mx_fast_exp2_<S: Simd>(s: S, x_3: S::F) -> S::F {
     let _e5 = (_e3 - _e4);
     let _e7 = (_e5 * s.splat(0.6931472f32));
     let _e9 = (_e7 * s.splat(0.0001984127f32));
-    let _e11 = (s.splat(0.0013888889f32) + _e9);
+    let _e11 = _e7.mul_add(s.splat(0.0001984127f32), s.splat(0.0013888889f32));
     let _e12 = (_e7 * _e11);
-    let _e14 = (s.splat(0.008333334f32) + _e12);
+    let _e14 = _e7.mul_add(_e11, s.splat(0.008333334f32));
     let _e15 = (_e7 * _e14);
-    let _e17 = (s.splat(0.041666668f32) + _e15);
+    let _e17 = _e7.mul_add(_e14, s.splat(0.041666668f32));
     let _e18 = (_e7 * _e17);
-    let _e20 = (s.splat(0.16666667f32) + _e18);
+    let _e20 = _e7.mul_add(_e17, s.splat(0.16666667f32));
     let _e21 = (_e7 * _e20);
-    let _e23 = (s.splat(0.5f32) + _e21);
+    let _e23 = _e7.mul_add(_e20, s.splat(0.5f32));
     let _e24 = (_e7 * _e23);
-    let _e26 = (s.splat(1.0f32) + _e24);
+    let _e26 = _e7.mul_add(_e23, s.splat(1.0f32));
     let _e27 = (_e7 * _e26);
-    let _e29 = (s.splat(1.0f32) + _e27);
+    let _e29 = _e7.mul_add(_e26, s.splat(1.0f32));
     let _e30 = _e4.to_i32();
     let _e32 = (_e30 + s.splat_i(127i32));
     let _e33 = _e32.to_u32_bits();
@@ -703,14 +703,14 @@ pub fn mx_eval_sensitivity<S: Simd>(s: S, opd: S::F, shift: [S::F; 3]) -> [S::F;
     let _e39 = xyz[0];
     let _e42 = (s.splat(2239900.0f32) * _e3);
     let _e43 = shift[0];
-    let _e44 = (_e42 + _e43);
+    let _e44 = s.splat(2239900.0f32).mul_add(_e3, _e43);
     let _e45 = mx_fast_cos_sin(s, _e44);
     let _e46 = _e45[0];
     let _e47 = (s.splat(1.644083e-8f32) * _e46);
     let _e49 = (s.splat(4528200000.0f32) * _e17);
     let _e50 = mx_fast_exp(s, _e49);
     let _e51 = (_e47 * _e50);
-    let _e52 = (_e39 + _e51);
+    let _e52 = _e47.mul_add(_e50, _e39);
     xyz[0] = _e52;
     let _e53 = xyz;
     let _e55 = [s.splat(1.0685e-7f32); 3];
@@ -758,7 +758,7 @@ pub fn mx_airy_polarization<S: Simd>(s: S, r12_: S::F, r23_: [S::F; 3], phi_1: [
 pub fn mx_airy_reflectance<S: Simd>(s: S, cos_theta_4: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>) -> [S::F; 3] {
     let _e6 = mx_fresnel_dielectric_polarized(s, cos_theta_4, eta2_2);
     let _e7 = (eta2_2 * eta2_2);
-    let _e9 = (s.splat(1.0f32) + _e7);
+    let _e9 = eta2_2.mul_add(eta2_2, s.splat(1.0f32));
     let _e10 = { let x = _e9; x.sqrt() };
     let _e12 = (s.splat(1.0f32) / _e10);
     let _e14 = cos_theta_4.lt(_e12);
@@ -825,7 +825,7 @@ pub fn mx_table_axis<S: Simd>(s: S, t: S::F, n_3: S::I) -> mx_table_cell<S> {
     let _e11 = (n_3 - s.splat_i(2i32));
     let _e12 = _e9.min(_e11);
     let _e13 = _e12.to_f32();
-    let _e14 = (_e8 - _e13);
+    let _e14 = _e4.mul_add(_e7, -_e13);
     let _e15 = mx_table_cell { i: _e12, f: _e14 };
     return _e15;
 }
@@ -863,14 +863,14 @@ pub fn mx_albedo_table_2d<S: Simd>(s: S, offset: S::I, x_6: S::F, y_3: S::F) -> 
     let _e10 = (_e5 + s.splat_i(1i32));
     let _e11 = mx_albedo_table(s, _e10);
     let _e12 = _e3.fx;
-    let _e13 = { let t = _e12; _e8 * (s.splat(1.0) - t) + _e11 * t };
+    let _e13 = { let t = _e12; _e11.mul_add(t, _e8 * (s.splat(1.0) - t)) };
     let _e14 = mx_albedo_table(s, _e7);
     let _e16 = (_e7 + s.splat_i(1i32));
     let _e17 = mx_albedo_table(s, _e16);
     let _e18 = _e3.fx;
-    let _e19 = { let t = _e18; _e14 * (s.splat(1.0) - t) + _e17 * t };
+    let _e19 = { let t = _e18; _e17.mul_add(t, _e14 * (s.splat(1.0) - t)) };
     let _e20 = _e3.fy;
-    let _e21 = { let t = _e20; _e13 * (s.splat(1.0) - t) + _e19 * t };
+    let _e21 = { let t = _e20; _e19.mul_add(t, _e13 * (s.splat(1.0) - t)) };
     return _e21;
 }
 
@@ -879,7 +879,7 @@ pub fn mx_albedo_table_2d<S: Simd>(s: S, offset: S::I, x_6: S::F, y_3: S::F) -> 
 pub fn mx_table_log_coordinate<S: Simd>(s: S, v_3: S::F) -> S::F {
     let _e3 = v_3.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e5 = (s.splat(100.0f32) * _e3);
-    let _e7 = (s.splat(1.0f32) + _e5);
+    let _e7 = s.splat(100.0f32).mul_add(_e3, s.splat(1.0f32));
     let _e8 = _e7.to_bits();
     let _e10 = _e8.shr(s.splat_u(23u32));
     let _e12 = (_e10 & s.splat_u(255u32));
@@ -891,17 +891,17 @@ pub fn mx_table_log_coordinate<S: Simd>(s: S, v_3: S::F) -> S::F {
     let _e21 = _e20.to_f32_bits();
     let _e23 = (_e21 - s.splat(1.0f32));
     let _e25 = (_e23 * s.splat(-0.024825985f32));
-    let _e27 = (s.splat(0.11790686f32) + _e25);
+    let _e27 = _e23.mul_add(s.splat(-0.024825985f32), s.splat(0.11790686f32));
     let _e28 = (_e23 * _e27);
-    let _e30 = (s.splat(-0.27235582f32) + _e28);
+    let _e30 = _e23.mul_add(_e27, s.splat(-0.27235582f32));
     let _e31 = (_e23 * _e30);
-    let _e33 = (s.splat(0.4538582f32) + _e31);
+    let _e33 = _e23.mul_add(_e30, s.splat(0.4538582f32));
     let _e34 = (_e23 * _e33);
-    let _e36 = (s.splat(-0.71698755f32) + _e34);
+    let _e36 = _e23.mul_add(_e33, s.splat(-0.71698755f32));
     let _e37 = (_e23 * _e36);
-    let _e39 = (s.splat(1.4423956f32) + _e37);
+    let _e39 = _e23.mul_add(_e36, s.splat(1.4423956f32));
     let _e40 = (_e23 * _e39);
-    let _e42 = (s.splat(5.060328e-6f32) + _e40);
+    let _e42 = _e23.mul_add(_e39, s.splat(5.060328e-6f32));
     let _e43 = (_e16 + _e42);
     let _e45 = (_e43 * s.splat(0.15019049f32));
     return _e45;
@@ -961,7 +961,7 @@ pub fn mx_half_vector<S: Simd>(s: S, v_4: [S::F; 3], l: [S::F; 3]) -> [S::F; 3] 
 pub fn mx_fresnel_conductor<S: Simd>(s: S, cos_theta_6: S::F, n_4: [S::F; 3], k_3: [S::F; 3]) -> [S::F; 3] {
     let _e5 = cos_theta_6.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e6 = (_e5 * _e5);
-    let _e8 = (s.splat(1.0f32) - _e6);
+    let _e8 = (-_e5).mul_add(_e5, s.splat(1.0f32));
     let _e9 = uplift_simd::vector::mul::<S, 3>(n_4, n_4);
     let _e10 = uplift_simd::vector::mul::<S, 3>(k_3, k_3);
     let _e11 = uplift_simd::vector::sub::<S, 3>(_e9, _e10);
@@ -1025,7 +1025,7 @@ pub fn mx_ggx_smith_s<S: Simd>(s: S, w_1: [S::F; 3], a: [S::F; 2]) -> S::F {
     let _e10 = (_e8 * _e9);
     let _e11 = w_1[0];
     let _e12 = (_e10 * _e11);
-    let _e13 = (_e5 + _e12);
+    let _e13 = _e4.mul_add(_e4, _e12);
     let _e14 = a[1];
     let _e15 = a[1];
     let _e16 = (_e14 * _e15);
@@ -1033,7 +1033,7 @@ pub fn mx_ggx_smith_s<S: Simd>(s: S, w_1: [S::F; 3], a: [S::F; 2]) -> S::F {
     let _e18 = (_e16 * _e17);
     let _e19 = w_1[1];
     let _e20 = (_e18 * _e19);
-    let _e21 = (_e13 + _e20);
+    let _e21 = _e18.mul_add(_e19, _e13);
     let _e22 = { let x = _e21; x.sqrt() };
     return _e22;
 }
@@ -1055,11 +1055,11 @@ pub fn mx_ggx_d<S: Simd>(s: S, h: [S::F; 3], a_1: [S::F; 2]) -> S::F {
     let _e14 = (_e13 * _e6);
     let _e15 = (_e10 * _e10);
     let _e16 = (_e14 * _e14);
-    let _e17 = (_e15 + _e16);
+    let _e17 = _e10.mul_add(_e10, _e16);
     let _e18 = h[2];
     let _e19 = h[2];
     let _e20 = (_e18 * _e19);
-    let _e21 = (_e17 + _e20);
+    let _e21 = _e18.mul_add(_e19, _e17);
     let _e23 = (s.splat(3.1415927f32) * _e21);
     let _e24 = (_e23 * _e21);
     let _e25 = (_e6 / _e24);
@@ -1077,7 +1077,7 @@ pub fn mx_ggx_reflection<S: Simd>(s: S, v_5: [S::F; 3], l_1: [S::F; 3], h_1: [S:
     let _e11 = (_e9 * _e10);
     let _e12 = if (!(l_1[2].le(s.splat(0.0f32)))).any() { mx_ggx_smith_s(s, l_1, a_2) } else { s.splat(0.0) };
     let _e13 = (_e6 * _e12);
-    let _e14 = (_e11 + _e13);
+    let _e14 = _e9.mul_add(_e10, _e13);
     let _e16 = (s.splat(2.0f32) * _e14);
     let _e17 = if (!(l_1[2].le(s.splat(0.0f32)))).any() { mx_ggx_d(s, h_1, a_2) } else { s.splat(0.0) };
     let _e18 = (_e17 * _e9);
@@ -1124,14 +1124,14 @@ pub fn mx_ggx_moment<S: Simd>(s: S, offset_1: S::I, nodes_1: S::I, p: mx_table_p
     let _e11 = (_e6 + nodes_1);
     let _e12 = mx_albedo_table(s, _e11);
     let _e13 = p.fx;
-    let _e14 = { let t = _e13; _e10 * (s.splat(1.0) - t) + _e12 * t };
+    let _e14 = { let t = _e13; _e12.mul_add(t, _e10 * (s.splat(1.0) - t)) };
     let _e15 = mx_albedo_table(s, _e9);
     let _e16 = (_e9 + nodes_1);
     let _e17 = mx_albedo_table(s, _e16);
     let _e18 = p.fx;
-    let _e19 = { let t = _e18; _e15 * (s.splat(1.0) - t) + _e17 * t };
+    let _e19 = { let t = _e18; _e17.mul_add(t, _e15 * (s.splat(1.0) - t)) };
     let _e20 = p.fy;
-    let _e21 = { let t = _e20; _e14 * (s.splat(1.0) - t) + _e19 * t };
+    let _e21 = { let t = _e20; _e19.mul_add(t, _e14 * (s.splat(1.0) - t)) };
     return _e21;
 }
 
@@ -1253,9 +1253,9 @@ pub fn mx_ggx_sample_vndf<S: Simd>(s: S, v_6: [S::F; 3], a_3: [S::F; 2], u_1: [S
     let _e27 = (s.splat(1.0f32) + _e25);
     let _e28 = (_e24 * _e27);
     let _e29 = _e17[2];
-    let _e30 = (_e28 - _e29);
+    let _e30 = _e24.mul_add(_e27, -_e29);
     let _e31 = (_e30 * _e30);
-    let _e33 = (s.splat(1.0f32) - _e31);
+    let _e33 = (-_e30).mul_add(_e30, s.splat(1.0f32));
     let _e36 = _e33.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e37 = { let x = _e36; x.sqrt() };
     let _e38 = _e21[0];
@@ -1325,17 +1325,17 @@ pub fn mx_fast_log2_<S: Simd>(s: S, x_7: S::F) -> S::F {
     let _e39 = (_e38 * _e38);
     let _e41 = (s.splat(2.0f32) * _e38);
     let _e43 = (_e39 * s.splat(0.11111111f32));
-    let _e45 = (s.splat(0.14285715f32) + _e43);
+    let _e45 = _e39.mul_add(s.splat(0.11111111f32), s.splat(0.14285715f32));
     let _e46 = (_e39 * _e45);
-    let _e48 = (s.splat(0.2f32) + _e46);
+    let _e48 = _e39.mul_add(_e45, s.splat(0.2f32));
     let _e49 = (_e39 * _e48);
-    let _e51 = (s.splat(0.33333334f32) + _e49);
+    let _e51 = _e39.mul_add(_e48, s.splat(0.33333334f32));
     let _e52 = (_e39 * _e51);
-    let _e54 = (s.splat(1.0f32) + _e52);
+    let _e54 = _e39.mul_add(_e51, s.splat(1.0f32));
     let _e55 = (_e41 * _e54);
     let _e56 = e_2;
     let _e58 = (_e55 * s.splat(1.442695f32));
-    let _e59 = (_e56 + _e58);
+    let _e59 = _e55.mul_add(s.splat(1.442695f32), _e56);
     return _e59;
 }
 
