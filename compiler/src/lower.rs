@@ -285,14 +285,9 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
     // read the same data from a storage buffer, since a shader indexing a large constant array
     // copies it at every access (naga's SPIR-V writer; lavapipe then never finishes compiling).
     let uses_tables = closure_items.iter().any(|i| i.name == TABLE_ACCESSOR);
-    let cpu_items: Vec<&str> = closure_items.iter().map(|i| i.text.as_str()).collect();
-    let items: Vec<&str> = closure_items
-        .iter()
-        .filter(|i| i.name != TABLE_DATA)
-        .map(|i| if i.name == TABLE_ACCESSOR { GPU_TABLE_ACCESSOR } else { i.text.as_str() })
-        .collect();
-    // The same items with every library function as a stub whose body is imported from the
-    // library parsed once (naga_import.rs), unless the library did not parse as one module.
+    // With `stubs`, every library function and array constant is a stub whose body or value is
+    // imported from the library parsed once (naga_import.rs), unless the library did not parse
+    // as one module; without, the items' full text.
     let library_module = lib.evaluator.as_ref().filter(|_| options.import_library);
     let stub_texts: Vec<Option<String>> = closure_items
         .iter()
@@ -302,10 +297,10 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
             _ => None,
         })
         .collect();
-    let stubbed = |gpu: bool| -> Stubbed {
+    let assemble = |gpu: bool, stubs: bool| -> Stubbed {
         let mut s = Stubbed::default();
         for (i, stub) in closure_items.iter().zip(&stub_texts) {
-            match (gpu, i.name.as_str(), stub) {
+            match (gpu, i.name.as_str(), stub.as_ref().filter(|_| stubs)) {
                 (true, TABLE_DATA, _) => {}
                 (true, TABLE_ACCESSOR, _) => s.texts.push(GPU_TABLE_ACCESSOR),
                 (_, _, Some(stub)) => {
@@ -320,6 +315,7 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
         }
         s
     };
+    let (items, cpu_items) = (assemble(true, false).texts, assemble(false, false).texts);
     if !lib.wgsl.items.contains_key("mx_geometry") {
         return Err(LowerError("the library defines no `mx_geometry` struct (stdlib/wgsl/geometric.wgsl)".into()));
     }
@@ -365,12 +361,12 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
         output_stride,
         workgroup_size: WORKGROUP_SIZE,
     };
-    let (module, info) = kernel_module(&mut template, library_module, stubbed(true), options)?;
+    let (module, info) = kernel_module(&mut template, library_module, assemble(true, true), options)?;
     let (cpu_module, albedo_tables) = if uses_tables {
         template.items = cpu_items;
         template.albedo_table_binding = None;
         let data = lib.albedo_table_data.clone().ok_or_else(|| LowerError(format!("the library's `{TABLE_DATA}` is not a constant f32 array")))?;
-        (Some(kernel_module(&mut template, library_module, stubbed(false), options)?), Some(data))
+        (Some(kernel_module(&mut template, library_module, assemble(false, true), options)?), Some(data))
     } else {
         (None, None)
     };

@@ -57,10 +57,9 @@ type Imported<T> = Result<T, String>;
 /// constant's. `Err` names the first construct or item the import cannot re-point.
 /// `lib_function` finds a library function by name (the library's map, built once).
 pub fn import_bodies(lib: &Module, lib_function: impl Fn(&str) -> Option<Handle<Function>>, kernel: &mut Module, stubs: &[&str], const_stubs: &[&str]) -> Imported<()> {
-    let named = |name: &Option<String>| name.clone();
-    let constants = kernel.constants.iter().filter_map(|(h, c)| Some((named(&c.name)?, h))).collect();
-    let globals = kernel.global_variables.iter().filter_map(|(h, g)| Some((named(&g.name)?, h))).collect();
-    let functions = kernel.functions.iter().filter_map(|(h, f)| Some((named(&f.name)?, h))).collect();
+    let constants = kernel.constants.iter().filter_map(|(h, c)| Some((c.name.clone()?, h))).collect();
+    let globals = kernel.global_variables.iter().filter_map(|(h, g)| Some((g.name.clone()?, h))).collect();
+    let functions = kernel.functions.iter().filter_map(|(h, f)| Some((f.name.clone()?, h))).collect();
     let mut im = Importer { lib, kernel, types: HashMap::new(), constants, globals, functions };
     for name in stubs {
         let from = lib_function(name).ok_or_else(|| format!("`{name}` is not a library function"))?;

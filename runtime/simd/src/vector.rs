@@ -5,8 +5,8 @@
 
 use crate::packets::{F32s, M32s, Simd};
 
-// `map` and `zip` loop over the components (LLVM unrolls the constant trip count) rather than
-// calling `std::array::from_fn`: through `from_fn`'s iterator adapters a closure with a few
+// `map`, `zip` and the functions below loop over the components (LLVM unrolls the constant
+// trip count) rather than calling `std::array::from_fn`: through `from_fn`'s iterator adapters a closure with a few
 // intrinsics in it was left out of line, compiled without the level's target features, and
 // every intrinsic in it became a call (measured: a kernel 2.5× slower).
 #[inline(always)]
@@ -88,17 +88,25 @@ pub fn cross<S: Simd>(a: [S::F; 3], b: [S::F; 3]) -> [S::F; 3] {
 #[inline(always)]
 pub fn mix<S: Simd, const N: usize>(s: S, a: [S::F; N], b: [S::F; N], t: [S::F; N]) -> [S::F; N] {
     let one = s.splat(1.0);
-    std::array::from_fn(|c| b[c].mul_add(t[c], a[c] * (one - t[c])))
+    let mut out = a;
+    for c in 0..N {
+        out[c] = b[c].mul_add(t[c], a[c] * (one - t[c]));
+    }
+    out
 }
 
 /// Component-wise `select(off, on, m)` with one mask per component.
 #[inline(always)]
 pub fn select<S: Simd, const N: usize>(m: [S::M; N], on: [S::F; N], off: [S::F; N]) -> [S::F; N] {
-    std::array::from_fn(|c| m[c].select(on[c], off[c]))
+    let mut out = off;
+    for c in 0..N {
+        out[c] = m[c].select(on[c], off[c]);
+    }
+    out
 }
 
 /// `select` with one mask for every component.
 #[inline(always)]
 pub fn select_all<S: Simd, const N: usize>(m: S::M, on: [S::F; N], off: [S::F; N]) -> [S::F; N] {
-    std::array::from_fn(|c| m.select(on[c], off[c]))
+    zip::<S, N>(on, off, |x, y| m.select(x, y))
 }
