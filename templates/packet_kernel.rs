@@ -74,3 +74,100 @@ pub fn mx_pattern_batch_simd(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [
     }
     uplift_simd::Level::run_hardware(MxBatch(geom, inputs, outputs)).is_some()
 }
+{%- if let Some(sp) = split %}
+
+/// Tape slots per group of the dependence-split passes (`uplift_compiler::packet_split`).
+pub const SPLIT_SLOTS: usize = {{ sp.slots }};
+/// Input columns read per point in the grouped layout (the light direction or the sample's
+/// random numbers); every other input column, and every geometry column, is per group.
+pub const POINT_INPUT_COLUMNS: &[usize] = &[{% for c in sp.point_columns %}{{ c }}, {% endfor %}];
+
+/// [`mx_pattern_packets`] on a grouped batch: `k` consecutive points share a group (one
+/// material and one view, say), so the per-group work runs once per group, vectorised across
+/// groups (the group pass), and the per-point work once per point (the point pass, one
+/// group's points per packet). The columns in `POINT_INPUT_COLUMNS` and the outputs hold one
+/// value per point; every other column one per group (`n / k` values) or one for the batch.
+///
+/// Panics when a column count or length is wrong, or `k` is 0 or does not divide the batch.
+#[inline(always)]
+pub fn mx_pattern_grouped_packets<S: Simd>(s: S, geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut [f32]], k: usize) {
+    assert!(
+        geom.len() == GEOMETRY_COLUMNS && inputs.len() == INPUT_COLUMNS && outputs.len() == OUTPUT_COLUMNS,
+        "mx_pattern_grouped_packets: expected {GEOMETRY_COLUMNS} geometry, {INPUT_COLUMNS} input and {OUTPUT_COLUMNS} output columns"
+    );
+    let mx_n = outputs[0].len();
+    assert!(k > 0 && mx_n % k == 0, "mx_pattern_grouped_packets: {k} points per group do not divide {mx_n} points");
+    let mx_groups = mx_n / k;
+    let per_point = |c: usize| POINT_INPUT_COLUMNS.contains(&c);
+    assert!(
+        geom.iter().all(|c| c.len() == mx_groups || c.len() == 1)
+            && inputs.iter().enumerate().all(|(i, c)| c.len() == 1 || c.len() == if per_point(i) { mx_n } else { mx_groups })
+            && outputs.iter().all(|c| c.len() == mx_n),
+        "mx_pattern_grouped_packets: a column of the wrong length for {mx_groups} groups of {k}"
+    );
+    let mut mx_tape = vec![0.0f32; SPLIT_SLOTS * S::LANES];
+    let mut mx_g0 = 0usize;
+    while mx_g0 < mx_groups {
+        let mx_g1 = (mx_g0 + S::LANES).min(mx_groups);
+        {
+            let mx_gcol = |c: &[f32]| if c.len() == 1 { s.splat(c[0]) } else { s.load_partial(&c[mx_g0..mx_g1]) };
+            let mx_gg = |c: usize| mx_gcol(geom[c]);
+            let mx_xg = |c: usize| mx_gcol(inputs[c]);
+            let mx_geom = {{ geometry_struct }} {
+{%- for f in sp.group_geometry %}
+                {{ f.name }}: {{ f.expr }},
+{%- endfor %}
+            };
+            let mx_inputs = {{ inputs_struct.as_deref().unwrap_or_default() }} {
+{%- for f in sp.group_inputs %}
+                {{ f.name }}: {{ f.expr }},
+{%- endfor %}
+            };
+            let _ = {{ sp.group_fn }}(s, mx_geom, mx_inputs, &mut mx_tape);
+        }
+        for mx_j in 0..mx_g1 - mx_g0 {
+            let mx_group = mx_g0 + mx_j;
+            let mx_row = uplift_simd::tape::TapeRow::new(&mx_tape, S::LANES, mx_j);
+            let mx_value = |c: &[f32]| s.splat(if c.len() == 1 { c[0] } else { c[mx_group] });
+            let mx_gs = |c: usize| mx_value(geom[c]);
+            let mx_xs = |c: usize| mx_value(inputs[c]);
+            let mx_geom = {{ geometry_struct }} {
+{%- for f in sp.point_geometry %}
+                {{ f.name }}: {{ f.expr }},
+{%- endfor %}
+            };
+            let mut mx_start = mx_group * k;
+            let mx_stop = mx_start + k;
+            while mx_start < mx_stop {
+                let mx_end = (mx_start + S::LANES).min(mx_stop);
+                let mx_x = |c: usize| if inputs[c].len() == 1 { s.splat(inputs[c][0]) } else { s.load_partial(&inputs[c][mx_start..mx_end]) };
+                let mx_inputs = {{ inputs_struct.as_deref().unwrap_or_default() }} {
+{%- for f in sp.point_inputs %}
+                    {{ f.name }}: {{ f.expr }},
+{%- endfor %}
+                };
+                let mx_out = {{ sp.point_fn }}(s, mx_geom, mx_inputs, mx_row);
+{%- for st in output_stores %}
+                {{ st }}
+{%- endfor %}
+                mx_start = mx_end;
+            }
+        }
+        mx_g0 = mx_g1;
+    }
+}
+
+/// [`mx_pattern_grouped_packets`] at this machine's SIMD level, with the same contract;
+/// `false`, having done nothing, on a machine without AVX-512 or AVX2.
+pub fn mx_pattern_grouped_batch_simd(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut [f32]], k: usize) -> bool {
+    struct MxBatch<'a, 'b, 'c>(&'a [&'b [f32]], &'a [&'b [f32]], &'a mut [&'c mut [f32]], usize);
+    impl uplift_simd::WithSimd for MxBatch<'_, '_, '_> {
+        type Output = ();
+        #[inline(always)]
+        fn with_simd<S: Simd>(self, s: S) {
+            mx_pattern_grouped_packets(s, self.0, self.1, self.2, self.3)
+        }
+    }
+    uplift_simd::Level::run_hardware(MxBatch(geom, inputs, outputs, k)).is_some()
+}
+{%- endif %}

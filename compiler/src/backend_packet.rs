@@ -54,7 +54,7 @@ pub(crate) fn unsupported(what: impl Into<String>) -> PacketError {
 
 /// The packet kind of a WGSL type.
 #[derive(Clone, Copy, Debug, PartialEq)]
-enum Ty {
+pub(crate) enum Ty {
     /// A scalar of this kind (`S::F`, `S::I`, `S::U`, `S::M`).
     Scalar(ScalarKind),
     /// `vecN<f32>`: `[S::F; N]`.
@@ -71,7 +71,7 @@ fn vsize(s: VectorSize) -> usize {
     }
 }
 
-fn ty_of(inner: &TypeInner) -> R<Ty> {
+pub(crate) fn ty_of(inner: &TypeInner) -> R<Ty> {
     match *inner {
         TypeInner::Scalar(s) if s.width == 4 || s.kind == ScalarKind::Bool => Ok(Ty::Scalar(s.kind)),
         TypeInner::Vector { size, scalar } if scalar.kind == ScalarKind::Float && scalar.width == 4 => Ok(Ty::Vec(vsize(size))),
@@ -80,14 +80,14 @@ fn ty_of(inner: &TypeInner) -> R<Ty> {
 }
 
 /// The packet kind of the type `th` (structs by handle).
-fn ty_of_handle(module: &Module, th: Handle<naga::Type>) -> R<Ty> {
+pub(crate) fn ty_of_handle(module: &Module, th: Handle<naga::Type>) -> R<Ty> {
     match &module.types[th].inner {
         TypeInner::Struct { .. } => Ok(Ty::Struct(th)),
         inner => ty_of(inner),
     }
 }
 
-fn rust_type(t: Ty, names: &naga::FastHashMap<NameKey, String>) -> String {
+pub(crate) fn rust_type(t: Ty, names: &naga::FastHashMap<NameKey, String>) -> String {
     match t {
         Ty::Scalar(ScalarKind::Float) => "S::F".into(),
         Ty::Scalar(ScalarKind::Sint) => "S::I".into(),
@@ -207,6 +207,22 @@ pub fn write_packet_with(module: &Module, options: &PacketOptions) -> R<String> 
     Ok(out)
 }
 
+/// [`write_packet_with`], followed by the dependence-split passes of the function named
+/// `entry` (`packet_split.rs`), the members of its struct arguments named in `point_members`
+/// per point and everything else per group; the entry's passes, `None` where it does not split.
+pub fn write_packet_split(module: &Module, options: &PacketOptions, entry: &str, point_members: &[&str]) -> R<(String, Option<crate::packet_split::SplitInstance>)> {
+    let mut out = write_packet_with(module, options)?;
+    let Some((eh, _)) = module.functions.iter().find(|(_, f)| f.name.as_deref() == Some(entry)) else {
+        return Err(unsupported(format!("a split entry `{entry}` the module lacks")));
+    };
+    let names = packet_names(module);
+    let outlined = outlined_functions(module);
+    let pure = crate::packet_guards::pure_functions(module);
+    let (text, instance, _refused) = crate::packet_split::split_entry(module, &names, &outlined, &pure, eh, point_members);
+    out += &text;
+    Ok((out, instance))
+}
+
 /// Whether `block` holds a `return` (at any depth).
 fn returns_in(block: &naga::Block) -> bool {
     block.iter().any(|s| match s {
@@ -246,7 +262,7 @@ fn continues_or_returns(block: &naga::Block) -> bool {
 }
 
 /// Whether `block` returns from inside an `if` (`inside`: `block` is inside one).
-fn masked_return(block: &naga::Block, inside: bool) -> bool {
+pub(crate) fn masked_return(block: &naga::Block, inside: bool) -> bool {
     block.iter().any(|s| match s {
         Statement::Return { .. } => inside,
         Statement::Block(b) => masked_return(b, inside),
@@ -273,7 +289,7 @@ const OUTLINE_SIZE: usize = 400;
 /// out of the point loop; outlined lobes recompute it per packet — the dependence split of issue
 /// 24 is the way to hoist it). Thresholds of 200 and 1,200 were slower for the stack (18.1 and
 /// 18.7).
-fn outlined_functions(module: &Module) -> std::collections::HashSet<Handle<Function>> {
+pub(crate) fn outlined_functions(module: &Module) -> std::collections::HashSet<Handle<Function>> {
     fn calls(block: &naga::Block, out: &mut Vec<Handle<Function>>) {
         for s in block.iter() {
             match s {
@@ -315,17 +331,32 @@ fn write_function(
     outlined: &std::collections::HashSet<Handle<Function>>,
     pure: &std::collections::HashSet<Handle<Function>>,
 ) -> R<String> {
+    Ok(write_function_with(module, names, h, f, outlined, pure, None)?.0)
+}
+
+/// [`write_function`], or one pass of its dependence split (`split`, returned as the pass
+/// left it: what it recorded).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn write_function_with(
+    module: &Module,
+    names: &naga::FastHashMap<NameKey, String>,
+    h: Handle<Function>,
+    f: &Function,
+    outlined: &std::collections::HashSet<Handle<Function>>,
+    pure: &std::collections::HashSet<Handle<Function>>,
+    split: Option<crate::packet_split::SplitState>,
+) -> R<(String, Option<crate::packet_split::SplitState>)> {
     let ctx = naga::proc::ResolveContext::with_locals(module, &f.local_variables, &f.arguments);
     let mut typifier = naga::front::Typifier::new();
     for (eh, _) in f.expressions.iter() {
         typifier.grow(eh, &f.expressions, &ctx).map_err(|e| PacketError { construct: format!("an expression whose type naga cannot resolve ({e})"), function: f.name.clone() })?;
     }
-    let mut w = FunctionWriter { module, f, names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), loops: Vec::new(), loop_count: 0, inline_all: false, switch_breaks: Vec::new(), calls: HashMap::new(), guards: crate::packet_guards::guarded_calls(f, pure), early: None, outlined };
+    let mut w = FunctionWriter { module, f, names, handle: h, typifier, body: String::new(), mask: None, depth: 1, masks: 0, returns_masked: masked_return(&f.body, false), loops: Vec::new(), loop_count: 0, inline_all: false, switch_breaks: Vec::new(), calls: HashMap::new(), guards: crate::packet_guards::guarded_calls(f, pure), early: None, outlined, split };
     let text = w.function().map_err(|mut e| {
         e.function = f.name.clone();
         e
     })?;
-    Ok(text)
+    Ok((text, w.split))
 }
 
 /// Every function of `module` the writer cannot write yet, with the reason (the next stages'
@@ -336,22 +367,22 @@ pub fn unsupported_functions(module: &Module) -> Vec<PacketError> {
     module.functions.iter().filter_map(|(h, f)| write_function(module, &names, h, f, &Default::default(), &pure).err()).collect()
 }
 
-struct FunctionWriter<'a> {
-    module: &'a Module,
-    f: &'a Function,
-    names: &'a naga::FastHashMap<NameKey, String>,
-    handle: Handle<Function>,
+pub(crate) struct FunctionWriter<'a> {
+    pub(crate) module: &'a Module,
+    pub(crate) f: &'a Function,
+    pub(crate) names: &'a naga::FastHashMap<NameKey, String>,
+    pub(crate) handle: Handle<Function>,
     /// The type of every expression.
-    typifier: naga::front::Typifier,
-    body: String,
+    pub(crate) typifier: naga::front::Typifier,
+    pub(crate) body: String,
     /// The mask of the active lanes (a Rust expression), inside a varying `if`.
-    mask: Option<String>,
+    pub(crate) mask: Option<String>,
     /// Nesting of the current block (indentation, and fresh mask names).
-    depth: usize,
-    masks: usize,
+    pub(crate) depth: usize,
+    pub(crate) masks: usize,
     /// The function returns under a mask somewhere: results gather in `_ret`, and `_done`
     /// holds the lanes that have returned.
-    returns_masked: bool,
+    pub(crate) returns_masked: bool,
     /// The loops around the current statement, innermost last: (break lanes, continue lanes,
     /// looping lanes) variable names.
     loops: Vec<(String, String, String)>,
@@ -362,22 +393,30 @@ struct FunctionWriter<'a> {
     /// that depth ends the case) and its break-lanes variable.
     switch_breaks: Vec<(usize, String)>,
     /// Call results: the name of the `let` holding each.
-    calls: HashMap<Handle<naga::Expression>, String>,
+    pub(crate) calls: HashMap<Handle<naga::Expression>, String>,
     /// Calls run only where a lane needs their result (`packet_guards.rs`), by result.
-    guards: HashMap<Handle<naga::Expression>, crate::packet_guards::Guard>,
+    pub(crate) guards: HashMap<Handle<naga::Expression>, crate::packet_guards::Guard>,
     /// Writing a guard's condition: expressions not bound here are written out.
     early: Option<std::collections::HashSet<Handle<naga::Expression>>>,
     /// Functions whose calls run in `s.outline(…)` (`outlined_functions`).
-    outlined: &'a std::collections::HashSet<Handle<Function>>,
+    pub(crate) outlined: &'a std::collections::HashSet<Handle<Function>>,
+    /// Writing one pass of a dependence-split function (`packet_split.rs`).
+    pub(crate) split: Option<crate::packet_split::SplitState>,
 }
 
 impl FunctionWriter<'_> {
-    fn function(&mut self) -> R<String> {
-        let name = &self.names[&NameKey::Function(self.handle)];
+    pub(crate) fn function(&mut self) -> R<String> {
+        let name = match &self.split {
+            Some(sp) => sp.name.clone(),
+            None => self.names[&NameKey::Function(self.handle)].clone(),
+        };
         let mut params = vec!["s: S".to_string()];
         for (i, a) in self.f.arguments.iter().enumerate() {
             let t = ty_of_handle(self.module, a.ty)?;
             params.push(format!("{}: {}", self.names[&NameKey::FunctionArgument(self.handle, i as u32)], rust_type(t, self.names)));
+        }
+        if let Some(sp) = &self.split {
+            params.push(sp.tape_parameter().into());
         }
         let ret = match &self.f.result {
             Some(r) => format!(" -> {}", rust_type(ty_of_handle(self.module, r.ty)?, self.names)),
@@ -410,7 +449,7 @@ impl FunctionWriter<'_> {
         Ok(format!("#[inline(always)]\n#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]\npub fn {name}<S: Simd>({}){ret} {{\n{}}}\n", params.join(", "), self.body))
     }
 
-    fn ty(&self, h: Handle<naga::Expression>) -> R<Ty> {
+    pub(crate) fn ty(&self, h: Handle<naga::Expression>) -> R<Ty> {
         match &self.typifier[h] {
             naga::proc::TypeResolution::Handle(th) => ty_of_handle(self.module, *th),
             naga::proc::TypeResolution::Value(inner) => ty_of(inner),
@@ -418,11 +457,11 @@ impl FunctionWriter<'_> {
     }
 
     /// The type of an expression.
-    fn resolve(&self, h: Handle<naga::Expression>) -> R<TypeInner> {
+    pub(crate) fn resolve(&self, h: Handle<naga::Expression>) -> R<TypeInner> {
         Ok(self.typifier.get(h, &self.module.types).clone())
     }
 
-    fn zero(&self, t: Ty) -> String {
+    pub(crate) fn zero(&self, t: Ty) -> String {
         match t {
             Ty::Struct(th) => {
                 let TypeInner::Struct { members, .. } = &self.module.types[th].inner else { unreachable!("a struct type") };
@@ -444,7 +483,16 @@ impl FunctionWriter<'_> {
         }
     }
 
-    fn statement(&mut self, s: &Statement) -> R<()> {
+    pub(crate) fn statement(&mut self, s: &Statement) -> R<()> {
+        if self.split.as_ref().is_some_and(|sp| sp.region == 0) {
+            return self.split_statement(s);
+        }
+        self.plain_statement(s)
+    }
+
+    /// A statement as the unsplit packet writer writes it (inside a split function: in a
+    /// per-point region, whose statements the point pass writes whole).
+    pub(crate) fn plain_statement(&mut self, s: &Statement) -> R<()> {
         match s {
             Statement::Emit(range) => {
                 for h in range.clone() {
@@ -587,30 +635,8 @@ impl FunctionWriter<'_> {
                 self.mask = Some(self.fresh_mask("s.first_lanes(0)"));
             }
             Statement::Call { function, arguments, result } => {
-                let mut args = vec!["s".to_string()];
-                for a in arguments {
-                    args.push(self.expr(*a)?);
-                }
-                let mut call = format!("{}(s{})", self.names[&NameKey::Function(*function)], args[1..].iter().map(|a| format!(", {a}")).collect::<String>());
-                if self.outlined.contains(function) {
-                    // The call, with the arguments known here (literals fold into it), in a
-                    // function of its own for the level.
-                    call = format!("s.outline(#[inline(always)] || {call})");
-                }
-                match result {
-                    Some(r) => {
-                        let name = format!("_e{}", r.index());
-                        match self.guard(*r)? {
-                            Some(lanes) => {
-                                let zero = self.zero(self.ty(*r)?);
-                                self.line(&format!("let {name} = if ({lanes}).any() {{ {call} }} else {{ {zero} }};"));
-                            }
-                            None => self.line(&format!("let {name} = {call};")),
-                        }
-                        self.calls.insert(*r, name);
-                    }
-                    None => self.line(&format!("{call};")),
-                }
+                let name = self.names[&NameKey::Function(*function)].clone();
+                self.write_call(*function, &name, arguments, *result, None, true)?;
             }
             Statement::Switch { selector, cases } => {
                 // Each case body under the mask of the lanes whose selector picks it (values of
@@ -680,9 +706,40 @@ impl FunctionWriter<'_> {
         Ok(())
     }
 
-    /// Binds `value` to a fresh mask variable; returns its name.
+    /// A call of `function` written as `callee` (its name, or a split pass's), with `extra`
+    /// appended to its arguments (a split pass's tape) and its result bound to `_e<result>`;
+    /// run only where lanes need it when `guarded` and the call is guarded.
+    pub(crate) fn write_call(&mut self, function: Handle<Function>, callee: &str, arguments: &[Handle<naga::Expression>], result: Option<Handle<naga::Expression>>, extra: Option<String>, guarded: bool) -> R<()> {
+        let mut args = vec!["s".to_string()];
+        for a in arguments {
+            args.push(self.expr(*a)?);
+        }
+        args.extend(extra);
+        let mut call = format!("{callee}({})", args.join(", "));
+        if self.outlined.contains(&function) {
+            // The call, with the arguments known here (literals fold into it), in a
+            // function of its own for the level.
+            call = format!("s.outline(#[inline(always)] || {call})");
+        }
+        match result {
+            Some(r) => {
+                let name = format!("_e{}", r.index());
+                match if guarded { self.guard(r)? } else { None } {
+                    Some(lanes) => {
+                        let zero = self.zero(self.ty(r)?);
+                        self.line(&format!("let {name} = if ({lanes}).any() {{ {call} }} else {{ {zero} }};"));
+                    }
+                    None => self.line(&format!("let {name} = {call};")),
+                }
+                self.calls.insert(r, name);
+            }
+            None => self.line(&format!("{call};")),
+        }
+        Ok(())
+    }
+
     /// The lanes that need the call with result `r`, if it is guarded (`packet_guards.rs`).
-    fn guard(&mut self, r: Handle<naga::Expression>) -> R<Option<String>> {
+    pub(crate) fn guard(&mut self, r: Handle<naga::Expression>) -> R<Option<String>> {
         let Some(g) = self.guards.get(&r).cloned() else { return Ok(None) };
         if self.ty(g.condition)? != Ty::Scalar(ScalarKind::Bool) {
             return Ok(None);
@@ -697,7 +754,8 @@ impl FunctionWriter<'_> {
         }))
     }
 
-    fn fresh_mask(&mut self, value: &str) -> String {
+    /// Binds `value` to a fresh mask variable; returns its name.
+    pub(crate) fn fresh_mask(&mut self, value: &str) -> String {
         self.masks += 1;
         let m = format!("_m{}", self.masks);
         self.line(&format!("let {m} = {value};"));
@@ -705,7 +763,7 @@ impl FunctionWriter<'_> {
     }
 
     /// After a statement some lanes may have returned in: leave as soon as every lane has.
-    fn leave_if_all_done(&mut self) {
+    pub(crate) fn leave_if_all_done(&mut self) {
         let done = if self.f.result.is_some() { "return _ret;" } else { "return;" };
         self.line(&format!("if _done.all() {{ {done} }}"));
     }
@@ -713,7 +771,7 @@ impl FunctionWriter<'_> {
     /// After a statement some lanes may have left by: the current mask minus the lanes that
     /// broke out of or continued the innermost loop, broke out of the current switch case, or
     /// returned.
-    fn exclude_left_lanes(&mut self) {
+    pub(crate) fn exclude_left_lanes(&mut self) {
         let Some(m) = self.mask.clone() else { return };
         let mut ex = String::new();
         if let Some((brk, cont, _)) = self.loops.last() {
@@ -733,12 +791,12 @@ impl FunctionWriter<'_> {
         self.mask = Some(self.fresh_mask(&format!("{m}{ex}")));
     }
 
-    fn line(&mut self, text: &str) {
+    pub(crate) fn line(&mut self, text: &str) {
         let _ = writeln!(self.body, "{}{text}", "    ".repeat(self.depth));
     }
 
     /// A local variable, or one component of a vector local, as an assignable place.
-    fn place(&self, pointer: Handle<naga::Expression>) -> R<String> {
+    pub(crate) fn place(&self, pointer: Handle<naga::Expression>) -> R<String> {
         match &self.f.expressions[pointer] {
             E::LocalVariable(l) => Ok(self.names[&NameKey::FunctionLocal(self.handle, *l)].clone()),
             E::AccessIndex { base, index } => {
@@ -756,7 +814,7 @@ impl FunctionWriter<'_> {
 
     /// A reference to an expression already bound (by `Emit` or a call), or written in place
     /// for those naga never emits (literals, constants, arguments, zero values).
-    fn expr(&mut self, h: Handle<naga::Expression>) -> R<String> {
+    pub(crate) fn expr(&mut self, h: Handle<naga::Expression>) -> R<String> {
         if self.inline_all {
             return self.expr_inline(h);
         }
@@ -764,6 +822,11 @@ impl FunctionWriter<'_> {
             let leaf = matches!(self.f.expressions[h], E::Literal(_) | E::Constant(_) | E::ZeroValue(_) | E::FunctionArgument(_) | E::LocalVariable(_));
             if !leaf && !visible.contains(&h) {
                 return self.expr_inline(h);
+            }
+        }
+        if self.split.is_some() {
+            if let Some(text) = self.split_reference(h)? {
+                return Ok(text);
             }
         }
         match &self.f.expressions[h] {
@@ -799,7 +862,7 @@ impl FunctionWriter<'_> {
     }
 
     /// The expression `h` written out (its operands by reference).
-    fn expr_inline(&mut self, h: Handle<naga::Expression>) -> R<String> {
+    pub(crate) fn expr_inline(&mut self, h: Handle<naga::Expression>) -> R<String> {
         let e = self.f.expressions[h].clone();
         Ok(match e {
             E::Literal(l) => self.literal(&l)?,

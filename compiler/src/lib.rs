@@ -9,6 +9,7 @@ pub mod backend_neural;
 pub mod backend_packet;
 pub mod packet_guards;
 pub mod packet_kernel;
+pub mod packet_split;
 pub mod backend_rust;
 pub mod build_api;
 pub mod compile;

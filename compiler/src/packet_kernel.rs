@@ -4,7 +4,7 @@
 //! batch ABI is the scalar kernel's (`templates/pattern_kernel.rs`) without textures: the
 //! packet writer does not read textures yet, so a kernel with textures is a [`PacketError`].
 
-use crate::backend_packet::{packet_names, unsupported, write_packet_with, PacketError, PacketOptions};
+use crate::backend_packet::{packet_names, unsupported, write_packet_split, write_packet_with, PacketError, PacketOptions};
 use crate::kernel::{PatternKernel, GEOMETRY_LAYOUT, GEOMETRY_STRIDE};
 use askama::Template;
 use mtlx::DataType;
@@ -15,6 +15,26 @@ struct Field {
     name: String,
     expr: String,
 }
+
+/// The grouped batch entry of a dependence-split kernel (`packet_split.rs`).
+struct SplitFields {
+    group_fn: String,
+    point_fn: String,
+    slots: usize,
+    /// Geometry and inputs of the group pass (a packet of groups; per-point inputs zero).
+    group_geometry: Vec<Field>,
+    group_inputs: Vec<Field>,
+    /// Geometry and inputs of the point pass (per-group ones splatted from the group's row).
+    point_geometry: Vec<Field>,
+    point_inputs: Vec<Field>,
+    /// Input columns read per point (the others are per group).
+    point_columns: Vec<usize>,
+}
+
+/// Inputs of a BSDF kernel that vary per point in the grouped layout: the light direction
+/// (eval, pdf) and the sample's random numbers (sample). Everything else — material
+/// parameters, the view, the geometry — is per group.
+pub const POINT_INPUTS: &[&str] = &["wl", "u"];
 
 #[derive(Template)]
 #[template(path = "packet_kernel.rs", escape = "none")]
@@ -31,6 +51,7 @@ struct PacketKernelTemplate<'a> {
     input_fields: Vec<Field>,
     call: String,
     output_stores: Vec<String>,
+    split: Option<SplitFields>,
 }
 
 /// Writes `kernel` as packet Rust with its batch loop (module doc).
@@ -39,7 +60,12 @@ pub fn write_packet_kernel(kernel: &PatternKernel, options: &PacketOptions) -> R
         return Err(unsupported("a kernel that reads textures"));
     }
     let module = kernel.cpu_module.as_ref().map_or(&kernel.module, |m| &m.0);
-    let body = write_packet_with(module, options)?;
+    let is_bsdf = kernel.context.is_some();
+    let (body, instance) = if is_bsdf {
+        write_packet_split(module, options, "mx_pattern", POINT_INPUTS)?
+    } else {
+        (write_packet_with(module, options)?, None)
+    };
     let names = packet_names(module);
     let err = |what: String| PacketError { construct: what, function: Some("mx_pattern".into()) };
     let (ph, pf) = module.functions.iter().find(|(_, f)| f.name.as_deref() == Some("mx_pattern")).ok_or_else(|| err("a pattern kernel without `mx_pattern`".into()))?;
@@ -101,6 +127,34 @@ pub fn write_packet_kernel(kernel: &PatternKernel, options: &PacketOptions) -> R
         }
     }
     let call = format!("{}({})", names[&NameKey::Function(ph)], args.join(", "));
+    let split = match instance {
+        Some(i) if inputs_struct.is_some() => {
+            let zero = |ty: &DataType| match ty.components() {
+                Some(n @ 2..=4) => format!("[s.splat(0.0); {n}]"),
+                _ => "s.splat(0.0)".to_string(),
+            };
+            let mut group_inputs = Vec::new();
+            let mut point_inputs = Vec::new();
+            let mut point_columns = Vec::new();
+            for (f, inp) in input_fields.iter().zip(&kernel.inputs) {
+                if POINT_INPUTS.contains(&inp.input.name.as_str()) {
+                    if !matches!(inp.input.ty, DataType::Float | DataType::Vector2 | DataType::Vector3 | DataType::Vector4) {
+                        return Err(err(format!("a per-point input `{}` of type {}", inp.input.name, inp.input.ty)));
+                    }
+                    group_inputs.push(Field { name: f.name.clone(), expr: zero(&inp.input.ty) });
+                    point_inputs.push(Field { name: f.name.clone(), expr: f.expr.clone() });
+                    point_columns.extend(inp.offset..inp.offset + inp.input.ty.components().unwrap_or(1));
+                } else {
+                    group_inputs.push(Field { name: f.name.clone(), expr: f.expr.replace("mx_x(", "mx_xg(") });
+                    point_inputs.push(Field { name: f.name.clone(), expr: f.expr.replace("mx_x(", "mx_xs(") });
+                }
+            }
+            let group_geometry = geometry_fields.iter().map(|f| Field { name: f.name.clone(), expr: f.expr.replace("mx_g(", "mx_gg(") }).collect();
+            let point_geometry = geometry_fields.iter().map(|f| Field { name: f.name.clone(), expr: f.expr.replace("mx_g(", "mx_gs(") }).collect();
+            Some(SplitFields { group_fn: i.group, point_fn: i.point, slots: i.slots, group_geometry, group_inputs, point_geometry, point_inputs, point_columns })
+        }
+        _ => None,
+    };
     let source = kernel.source_name();
     let template = PacketKernelTemplate {
         source,
@@ -115,6 +169,7 @@ pub fn write_packet_kernel(kernel: &PatternKernel, options: &PacketOptions) -> R
         input_fields,
         call,
         output_stores,
+        split,
     };
     let mut text = template.render().map_err(|e| unsupported(format!("(template error) {e}")))?;
     if !text.ends_with('\n') {

@@ -277,6 +277,12 @@ impl Walk<'_, '_> {
                 if let Some(m) = value.and_then(|h| self.state.members.get(&h.index()).cloned()) {
                     let m: Vec<Variance> = m.iter().map(|&x| x.max(control)).collect();
                     join_members(self.state.result_members.get_or_insert_with(Vec::new), &m);
+                } else if let Some(r) = &self.f.result {
+                    // A struct returned whole (a loaded local, a call's result): every member
+                    // varies as it does, or member-wise uses of the result would be unsound.
+                    if let naga::TypeInner::Struct { members, .. } = &self.analysis.module.types[r.ty].inner {
+                        join_members(self.state.result_members.get_or_insert_with(Vec::new), &vec![v; members.len()]);
+                    }
                 }
             }
             Statement::Call { function, arguments, result } => {

@@ -340,7 +340,7 @@ fn shipped_kernels_are_current() {
     let tables = builder.albedo_tables_source("MX_ALBEDO_TABLE_DATA").unwrap();
     files.push(("albedo_table_data.rs".into(), format!("{}//! The pbrlib albedo tables (mtlx/libraries/pbrlib/wgsl/albedo_tables.wgsl) as one static, which\n//! every shipped kernel that reads them uses.\n\n{tables}", header("the library's albedo tables"))));
     let mut table = header("the table of shipped kernels");
-    table += "//! The kernels the runtime ships (see `crate::shipped`): one module per kernel, and their table.\n\nuse crate::{cpu_batch_fn, packet_batch_fn};\nuse crate::driver::{BatchFn, TextureSet};\nuse crate::shipped::BuiltinKernel;\nuse crate::KernelShape;\n\npub mod albedo_table_data;\n";
+    table += "//! The kernels the runtime ships (see `crate::shipped`): one module per kernel, and their table.\n\nuse crate::{cpu_batch_fn, packet_batch_fn};\nuse crate::driver::{BatchFn, TextureSet};\nuse crate::shipped::{BuiltinKernel, Grouped};\nuse crate::KernelShape;\n\npub mod albedo_table_data;\n";
     let mut entries = String::new();
     for k in &kernels {
         let stem = &k.stem;
@@ -354,9 +354,13 @@ fn shipped_kernels_are_current() {
             Some(packet) => {
                 let _ = writeln!(table, "#[allow(clippy::all, dead_code, unused_imports)]\npub mod {stem}_packet;");
                 files.push((format!("{stem}_packet.rs"), packet.clone()));
-                format!("packet_batch_fn!({stem}_packet, {scalar}), scalar: Some({scalar})")
+                let grouped = match packet.contains("pub fn mx_pattern_grouped_batch_simd") {
+                    true => format!("Some(Grouped {{ run: {stem}_packet::mx_pattern_grouped_batch_simd, point_columns: {stem}_packet::POINT_INPUT_COLUMNS }})"),
+                    false => "None".into(),
+                };
+                format!("packet_batch_fn!({stem}_packet, {scalar}), scalar: Some({scalar}), grouped: {grouped}")
             }
-            None => format!("{scalar}, scalar: None"),
+            None => format!("{scalar}, scalar: None, grouped: None"),
         };
         let context = k.context.map(|c| c.name());
         let _ = writeln!(

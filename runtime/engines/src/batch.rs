@@ -253,6 +253,12 @@ pub struct PatternBatch {
     pub inputs: Columns,
     /// One image per kernel texture, in the kernel's order.
     pub textures: Vec<TextureData>,
+    /// K, the batch's grouped layout: consecutive runs of K points share every input but the
+    /// per-point ones of a BSDF kernel (`wl` in eval and pdf, `u` in sample), and all their
+    /// geometry — one material and one view, K light directions. A promise of the caller
+    /// (1: no grouping); the CPU engine runs such batches through a kernel's dependence-split
+    /// form when it ships one (`uplift_kernels::shipped::Grouped`), other engines ignore it.
+    pub points_per_group: usize,
 }
 
 impl PatternBatch {
@@ -260,7 +266,7 @@ impl PatternBatch {
     /// `points.len()` rows of `input_stride` floats).
     pub fn from_rows(points: &[Geometry], input_rows: &[f32], input_stride: usize, textures: Vec<TextureData>) -> PatternBatch {
         let inputs = if input_stride == 0 { Columns::zeros(points.len(), 0) } else { Columns::from_rows(input_rows, input_stride) };
-        PatternBatch { geometry: Geometry::columns(points), inputs, textures }
+        PatternBatch { geometry: Geometry::columns(points), inputs, textures, points_per_group: 1 }
     }
 
     /// Points in the batch.

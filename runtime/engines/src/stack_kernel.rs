@@ -92,7 +92,7 @@ impl StackKernel {
         }
         // The local frame for every row: uniform columns, not streamed from memory.
         let geometry = Geometry::default().repeated(n);
-        let batch = PatternBatch { geometry, inputs, textures: vec![] };
+        let batch = PatternBatch { geometry, inputs, textures: vec![], points_per_group: 1 };
         match (&self.prepared, engine) {
             (Prepared::Cpu(k), Engine::Cpu(e)) => e.run_prepared(k, &batch),
             (Prepared::Wgpu(p), Engine::Wgpu(e)) => e.run_prepared(p, &batch),

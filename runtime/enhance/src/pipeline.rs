@@ -341,7 +341,7 @@ fn bake(
         .iter()
         .map(|t| load_texture(&t.path, t.colorspace.as_deref()))
         .collect::<Result<Vec<_>, _>>()?;
-    let batch = PatternBatch { geometry: Geometry::columns(geometry), inputs: Columns::from_rows(&rows, kernel.input_stride), textures };
+    let batch = PatternBatch { geometry: Geometry::columns(geometry), inputs: Columns::from_rows(&rows, kernel.input_stride), textures, points_per_group: 1 };
     let out = engine.run_prepared(&prepared, &batch)?;
     let mut img = ExrImage::new(w, h);
     for o in &kernel.outputs {

@@ -26,6 +26,21 @@ pub struct BuiltinKernel {
     /// Where `batch` is a packet kernel: the scalar writer's kernel (`cpu_batch_fn!`), its
     /// oracle and its fallback without SIMD (the same function, compiled once).
     pub scalar: Option<BatchFn>,
+    /// The dependence-split form of a packet BSDF kernel (`uplift_compiler::packet_split`),
+    /// for batches whose points come in groups sharing everything but the light direction or
+    /// the sample's random numbers.
+    pub grouped: Option<Grouped>,
+}
+
+/// A packet kernel's grouped batch entry (`mx_pattern_grouped_batch_simd` of
+/// `templates/packet_kernel.rs`): `run(geom, inputs, outputs, k)` evaluates groups of `k`
+/// points, reading the input columns in `point_columns` per point and every other column per
+/// group (`n / k` values) or per batch (1); `false`, having done nothing, without AVX-512 or
+/// AVX2.
+#[derive(Clone, Copy)]
+pub struct Grouped {
+    pub run: fn(&[&[f32]], &[&[f32]], &mut [&mut [f32]], usize) -> bool,
+    pub point_columns: &'static [usize],
 }
 
 impl BuiltinKernel {

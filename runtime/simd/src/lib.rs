@@ -35,6 +35,7 @@ mod avx512;
 mod emu;
 mod level;
 mod packets;
+pub mod tape;
 pub mod vector;
 
 #[cfg(target_arch = "x86_64")]

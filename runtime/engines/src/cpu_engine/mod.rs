@@ -116,7 +116,15 @@ impl CpuEngine {
                 // Uniform columns (`Columns::mark_uniform`) go in as their one value.
                 let geometry: Vec<&[f32]> = (0..GEOMETRY_STRIDE).map(|c| batch.geometry.column_or_uniform(c)).collect();
                 let inputs: Vec<&[f32]> = (0..s.input_columns).map(|c| batch.inputs.column_or_uniform(c)).collect();
-                self.pool.install(|| driver::run_column_blocks(k.batch, k.is_packet(), n, &geometry, &inputs, out.data_mut(), s.output_columns, &textures));
+                // A grouped batch through the kernel's dependence-split form, where it ships one
+                // and the groups fill its packets (smaller groups leave lanes idle).
+                let grouped = match (&k.grouped, batch.points_per_group) {
+                    (Some(g), per_group) if per_group >= GROUPED_MIN_POINTS => self.pool.install(|| driver::run_grouped_blocks(g, per_group, n, &geometry, &inputs, out.data_mut(), s.output_columns)),
+                    _ => false,
+                };
+                if !grouped {
+                    self.pool.install(|| driver::run_column_blocks(k.batch, k.is_packet(), n, &geometry, &inputs, out.data_mut(), s.output_columns, &textures));
+                }
                 Ok(())
             }
             CpuKernel::External(k) => {
@@ -126,6 +134,10 @@ impl CpuEngine {
         }
     }
 }
+
+/// The smallest group (points per group) the CPU engine runs through a kernel's grouped form:
+/// below it the point pass's packets are mostly empty lanes.
+pub const GROUPED_MIN_POINTS: usize = 4;
 
 /// The kernel's generated Rust (what both the shipped table and the runners are built from).
 fn rust_of(kernel: &PatternKernel) -> Result<String, String> {

@@ -1583,6 +1583,912 @@ pub fn mx_pattern<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>) ->
     return _e23;
 }
 
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_closure_new_p1<S: Simd>(s: S, context: S::I, wv: [S::F; 3], wl: [S::F; 3], u: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_closure<S> {
+    let _e7 = [s.splat(0.0f32), s.splat(0.0f32), s.splat(1.0f32)];
+    let _e9 = [s.splat(0.0f32); 3];
+    let _e11 = [s.splat(0.99999994f32); 3];
+    let _e12 = [tp.f(s, 0), tp.f(s, 1), tp.f(s, 2)];
+    let _e13 = [tp.f(s, 3), tp.f(s, 4), tp.f(s, 5)];
+    let _e14 = mx_normalize_or(s, wl, _e7);
+    let _e16 = mx_closure { context: context, wv: _e13, wl: _e14, u: _e12, lobe_id: s.splat_u(0u32) };
+    return _e16;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_closure_new_g1<S: Simd>(s: S, context: S::I, wv: [S::F; 3], wl: [S::F; 3], u: [S::F; 3], tg: &mut [f32]) -> mx_closure<S> {
+    let _e7 = [s.splat(0.0f32), s.splat(0.0f32), s.splat(1.0f32)];
+    let _e9 = [s.splat(0.0f32); 3];
+    let _e11 = [s.splat(0.99999994f32); 3];
+    let _e12 = uplift_simd::vector::zip::<S, 3>(uplift_simd::vector::zip::<S, 3>(u, _e9, |x, y| x.max(y)), _e11, |x, y| x.min(y));
+    uplift_simd::tape::put(s, tg, 0, _e12[0]);
+    uplift_simd::tape::put(s, tg, 1, _e12[1]);
+    uplift_simd::tape::put(s, tg, 2, _e12[2]);
+    let _e13 = mx_normalize_or(s, wv, _e7);
+    uplift_simd::tape::put(s, tg, 3, _e13[0]);
+    uplift_simd::tape::put(s, tg, 4, _e13[1]);
+    uplift_simd::tape::put(s, tg, 5, _e13[2]);
+    let _e16 = mx_closure { context: context, wv: _e13, wl: [s.splat(0.0); 3], u: _e12, lobe_id: s.splat_u(0u32) };
+    return _e16;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_conductor_p2<S: Simd>(s: S, cos_theta_6: S::F, n_4: [S::F; 3], k_3: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+    let _e5 = cos_theta_6.max(s.splat(0.0f32)).min(s.splat(1.0f32));
+    let _e6 = (_e5 * _e5);
+    let _e8 = (-_e5).mul_add(_e5, s.splat(1.0f32));
+    let _e11 = [tp.f(s, 0), tp.f(s, 1), tp.f(s, 2)];
+    let _e12 = [_e8; 3];
+    let _e13 = uplift_simd::vector::sub::<S, 3>(_e11, _e12);
+    let _e14 = uplift_simd::vector::mul::<S, 3>(_e13, _e13);
+    let _e17 = [tp.f(s, 3), tp.f(s, 4), tp.f(s, 5)];
+    let _e18 = uplift_simd::vector::add::<S, 3>(_e14, _e17);
+    let _e19 = uplift_simd::vector::map::<S, 3>(_e18, |x| x.sqrt());
+    let _e20 = [_e6; 3];
+    let _e21 = uplift_simd::vector::add::<S, 3>(_e19, _e20);
+    let _e22 = uplift_simd::vector::add::<S, 3>(_e19, _e13);
+    let _e24 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e22);
+    let _e26 = [s.splat(0.0f32); 3];
+    let _e27 = uplift_simd::vector::zip::<S, 3>(_e24, _e26, |x, y| x.max(y));
+    let _e28 = uplift_simd::vector::map::<S, 3>(_e27, |x| x.sqrt());
+    let _e30 = (s.splat(2.0f32) * _e5);
+    let _e31 = uplift_simd::vector::mul::<S, 3>([_e30; 3], _e28);
+    let _e32 = uplift_simd::vector::mul::<S, 3>([_e6; 3], _e19);
+    let _e33 = (_e8 * _e8);
+    let _e34 = [_e33; 3];
+    let _e35 = uplift_simd::vector::add::<S, 3>(_e32, _e34);
+    let _e36 = uplift_simd::vector::mul::<S, 3>(_e31, [_e8; 3]);
+    let _e37 = uplift_simd::vector::add::<S, 3>(_e21, _e31);
+    let _e39 = [s.splat(1e-30f32); 3];
+    let _e40 = uplift_simd::vector::zip::<S, 3>(_e37, _e39, |x, y| x.max(y));
+    let _e41 = uplift_simd::vector::add::<S, 3>(_e35, _e36);
+    let _e43 = [s.splat(1e-30f32); 3];
+    let _e44 = uplift_simd::vector::zip::<S, 3>(_e41, _e43, |x, y| x.max(y));
+    let _e45 = uplift_simd::vector::sub::<S, 3>(_e21, _e31);
+    let _e47 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e45);
+    let _e48 = uplift_simd::vector::add::<S, 3>(_e44, _e35);
+    let _e49 = uplift_simd::vector::sub::<S, 3>(_e48, _e36);
+    let _e50 = uplift_simd::vector::mul::<S, 3>(_e47, _e49);
+    let _e51 = uplift_simd::vector::mul::<S, 3>(_e40, _e44);
+    let _e52 = uplift_simd::vector::div::<S, 3>(_e50, _e51);
+    return _e52;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_conductor_g2<S: Simd>(s: S, cos_theta_6: S::F, n_4: [S::F; 3], k_3: [S::F; 3], tg: &mut [f32]) -> [S::F; 3] {
+    let _e9 = uplift_simd::vector::mul::<S, 3>(n_4, n_4);
+    let _e10 = uplift_simd::vector::mul::<S, 3>(k_3, k_3);
+    let _e11 = uplift_simd::vector::sub::<S, 3>(_e9, _e10);
+    uplift_simd::tape::put(s, tg, 0, _e11[0]);
+    uplift_simd::tape::put(s, tg, 1, _e11[1]);
+    uplift_simd::tape::put(s, tg, 2, _e11[2]);
+    let _e16 = uplift_simd::vector::mul::<S, 3>([s.splat(4.0f32); 3], _e9);
+    let _e17 = uplift_simd::vector::mul::<S, 3>(_e16, _e10);
+    uplift_simd::tape::put(s, tg, 3, _e17[0]);
+    uplift_simd::tape::put(s, tg, 4, _e17[1]);
+    uplift_simd::tape::put(s, tg, 5, _e17[2]);
+    let _e26 = [s.splat(0.0f32); 3];
+    let _e39 = [s.splat(1e-30f32); 3];
+    let _e43 = [s.splat(1e-30f32); 3];
+    return [s.splat(0.0); 3];
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_thin_film_cos_p3<S: Simd>(s: S, cos_theta: S::F, eta2_: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let _e4 = cos_theta.max(s.splat(0.0f32)).min(s.splat(1.0f32));
+    let _e5 = (_e4 * _e4);
+    let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
+    let _e8 = tp.f(s, 0);
+    let _e9 = (_e7 / _e8);
+    let _e11 = (s.splat(1.0f32) - _e9);
+    let _e13 = { let (x, y) = (_e11, s.splat(0.0f32)); x.max(y) };
+    let _e14 = { let x = _e13; x.sqrt() };
+    return _e14;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_thin_film_cos_g3<S: Simd>(s: S, cos_theta: S::F, eta2_: S::F, tg: &mut [f32]) -> S::F {
+    let _e8 = (eta2_ * eta2_);
+    uplift_simd::tape::put(s, tg, 0, _e8);
+    return s.splat(0.0);
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_conductor_polarized_p4<S: Simd>(s: S, cos_theta_1: S::F, n_1: [S::F; 3], k_1: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
+    let _e5 = cos_theta_1.max(s.splat(0.0f32)).min(s.splat(1.0f32));
+    let _e6 = (_e5 * _e5);
+    let _e8 = (-_e5).mul_add(_e5, s.splat(1.0f32));
+    let _e11 = [tp.f(s, 0), tp.f(s, 1), tp.f(s, 2)];
+    let _e12 = [_e8; 3];
+    let _e13 = uplift_simd::vector::sub::<S, 3>(_e11, _e12);
+    let _e14 = uplift_simd::vector::mul::<S, 3>(_e13, _e13);
+    let _e17 = [tp.f(s, 3), tp.f(s, 4), tp.f(s, 5)];
+    let _e18 = uplift_simd::vector::add::<S, 3>(_e14, _e17);
+    let _e19 = uplift_simd::vector::map::<S, 3>(_e18, |x| x.sqrt());
+    let _e20 = [_e6; 3];
+    let _e21 = uplift_simd::vector::add::<S, 3>(_e19, _e20);
+    let _e22 = uplift_simd::vector::add::<S, 3>(_e19, _e13);
+    let _e24 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e22);
+    let _e26 = [s.splat(0.0f32); 3];
+    let _e27 = uplift_simd::vector::zip::<S, 3>(_e24, _e26, |x, y| x.max(y));
+    let _e28 = uplift_simd::vector::map::<S, 3>(_e27, |x| x.sqrt());
+    let _e30 = (s.splat(2.0f32) * _e5);
+    let _e31 = uplift_simd::vector::mul::<S, 3>([_e30; 3], _e28);
+    let _e32 = uplift_simd::vector::sub::<S, 3>(_e21, _e31);
+    let _e33 = uplift_simd::vector::add::<S, 3>(_e21, _e31);
+    let _e35 = [s.splat(1e-30f32); 3];
+    let _e36 = uplift_simd::vector::zip::<S, 3>(_e33, _e35, |x, y| x.max(y));
+    let _e37 = uplift_simd::vector::div::<S, 3>(_e32, _e36);
+    let _e38 = uplift_simd::vector::mul::<S, 3>([_e6; 3], _e19);
+    let _e39 = (_e8 * _e8);
+    let _e40 = [_e39; 3];
+    let _e41 = uplift_simd::vector::add::<S, 3>(_e38, _e40);
+    let _e42 = uplift_simd::vector::mul::<S, 3>(_e31, [_e8; 3]);
+    let _e43 = uplift_simd::vector::sub::<S, 3>(_e41, _e42);
+    let _e44 = uplift_simd::vector::mul::<S, 3>(_e37, _e43);
+    let _e45 = uplift_simd::vector::add::<S, 3>(_e41, _e42);
+    let _e47 = [s.splat(1e-30f32); 3];
+    let _e48 = uplift_simd::vector::zip::<S, 3>(_e45, _e47, |x, y| x.max(y));
+    let _e49 = uplift_simd::vector::div::<S, 3>(_e44, _e48);
+    let _e50 = mx_polarized { p: _e49, s_: _e37 };
+    return _e50;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_conductor_polarized_g4<S: Simd>(s: S, cos_theta_1: S::F, n_1: [S::F; 3], k_1: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
+    let _e9 = uplift_simd::vector::mul::<S, 3>(n_1, n_1);
+    let _e10 = uplift_simd::vector::mul::<S, 3>(k_1, k_1);
+    let _e11 = uplift_simd::vector::sub::<S, 3>(_e9, _e10);
+    uplift_simd::tape::put(s, tg, 0, _e11[0]);
+    uplift_simd::tape::put(s, tg, 1, _e11[1]);
+    uplift_simd::tape::put(s, tg, 2, _e11[2]);
+    let _e16 = uplift_simd::vector::mul::<S, 3>([s.splat(4.0f32); 3], _e9);
+    let _e17 = uplift_simd::vector::mul::<S, 3>(_e16, _e10);
+    uplift_simd::tape::put(s, tg, 3, _e17[0]);
+    uplift_simd::tape::put(s, tg, 4, _e17[1]);
+    uplift_simd::tape::put(s, tg, 5, _e17[2]);
+    let _e26 = [s.splat(0.0f32); 3];
+    let _e35 = [s.splat(1e-30f32); 3];
+    let _e47 = [s.splat(1e-30f32); 3];
+    let _e50 = mx_polarized { p: [s.splat(0.0); 3], s_: [s.splat(0.0); 3] };
+    return _e50;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_conductor_phase_polarized_p5<S: Simd>(s: S, cos_theta_2: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
+    let _e5 = [s.splat(1e-6f32); 3];
+    let _e8 = (cos_theta_2 * cos_theta_2);
+    let _e10 = (-cos_theta_2).mul_add(cos_theta_2, s.splat(1.0f32));
+    let _e13 = [s.splat(1.0f32); 3];
+    let _e16 = [tp.f(s, 0), tp.f(s, 1), tp.f(s, 2)];
+    let _e17 = tp.f(s, 3);
+    let _e18 = (_e17 * _e10);
+    let _e19 = [_e18; 3];
+    let _e20 = uplift_simd::vector::sub::<S, 3>(_e16, _e19);
+    let _e21 = uplift_simd::vector::mul::<S, 3>(_e20, _e20);
+    let _e30 = [tp.f(s, 4), tp.f(s, 5), tp.f(s, 6)];
+    let _e31 = uplift_simd::vector::add::<S, 3>(_e21, _e30);
+    let _e32 = uplift_simd::vector::map::<S, 3>(_e31, |x| x.sqrt());
+    let _e33 = uplift_simd::vector::add::<S, 3>(_e20, _e32);
+    let _e35 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e33);
+    let _e37 = [s.splat(0.0f32); 3];
+    let _e38 = uplift_simd::vector::zip::<S, 3>(_e35, _e37, |x, y| x.max(y));
+    let _e39 = uplift_simd::vector::map::<S, 3>(_e38, |x| x.sqrt());
+    let _e40 = uplift_simd::vector::sub::<S, 3>(_e32, _e20);
+    let _e42 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e40);
+    let _e44 = [s.splat(0.0f32); 3];
+    let _e45 = uplift_simd::vector::zip::<S, 3>(_e42, _e44, |x, y| x.max(y));
+    let _e46 = uplift_simd::vector::map::<S, 3>(_e45, |x| x.sqrt());
+    let _e47 = (eta1_ * cos_theta_2);
+    let _e49 = tp.f(s, 7);
+    let _e50 = uplift_simd::vector::mul::<S, 3>([_e49; 3], _e46);
+    let _e51 = uplift_simd::vector::mul::<S, 3>(_e50, [cos_theta_2; 3]);
+    let _e52 = uplift_simd::vector::mul::<S, 3>(_e39, _e39);
+    let _e53 = uplift_simd::vector::mul::<S, 3>(_e46, _e46);
+    let _e54 = uplift_simd::vector::add::<S, 3>(_e52, _e53);
+    let _e55 = (_e47 * _e47);
+    let _e56 = [_e55; 3];
+    let _e57 = uplift_simd::vector::sub::<S, 3>(_e54, _e56);
+    let _e58 = mx_fast_atan2_vec3_(s, _e51, _e57);
+    let _e61 = [s.splat(1.0f32); 3];
+    let _e64 = [tp.f(s, 8), tp.f(s, 9), tp.f(s, 10)];
+    let _e65 = uplift_simd::vector::mul::<S, 3>(_e64, [cos_theta_2; 3]);
+    let _e69 = [tp.f(s, 11), tp.f(s, 12), tp.f(s, 13)];
+    let _e70 = uplift_simd::vector::mul::<S, 3>(_e69, [cos_theta_2; 3]);
+    let _e72 = [tp.f(s, 14), tp.f(s, 15), tp.f(s, 16)];
+    let _e73 = uplift_simd::vector::mul::<S, 3>(_e72, _e39);
+    let _e75 = [s.splat(1.0f32); 3];
+    let _e77 = [tp.f(s, 17), tp.f(s, 18), tp.f(s, 19)];
+    let _e78 = uplift_simd::vector::mul::<S, 3>(_e77, _e46);
+    let _e79 = uplift_simd::vector::sub::<S, 3>(_e73, _e78);
+    let _e80 = uplift_simd::vector::mul::<S, 3>(_e70, _e79);
+    let _e81 = uplift_simd::vector::mul::<S, 3>(_e65, _e65);
+    let _e82 = tp.f(s, 20);
+    let _e83 = uplift_simd::vector::mul::<S, 3>(_e39, _e39);
+    let _e84 = uplift_simd::vector::mul::<S, 3>(_e46, _e46);
+    let _e85 = uplift_simd::vector::add::<S, 3>(_e83, _e84);
+    let _e86 = uplift_simd::vector::mul::<S, 3>([_e82; 3], _e85);
+    let _e87 = uplift_simd::vector::sub::<S, 3>(_e81, _e86);
+    let _e88 = mx_fast_atan2_vec3_(s, _e80, _e87);
+    let _e89 = mx_polarized { p: _e88, s_: _e58 };
+    return _e89;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_conductor_phase_polarized_g5<S: Simd>(s: S, cos_theta_2: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
+    let _e5 = [s.splat(1e-6f32); 3];
+    let _e6 = uplift_simd::vector::zip::<S, 3>(eta2_1, _e5, |x, y| x.max(y));
+    let _e7 = uplift_simd::vector::div::<S, 3>(kappa2_, _e6);
+    let _e11 = uplift_simd::vector::mul::<S, 3>(_e6, _e6);
+    let _e13 = [s.splat(1.0f32); 3];
+    let _e14 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
+    let _e15 = uplift_simd::vector::sub::<S, 3>(_e13, _e14);
+    let _e16 = uplift_simd::vector::mul::<S, 3>(_e11, _e15);
+    uplift_simd::tape::put(s, tg, 0, _e16[0]);
+    uplift_simd::tape::put(s, tg, 1, _e16[1]);
+    uplift_simd::tape::put(s, tg, 2, _e16[2]);
+    let _e17 = (eta1_ * eta1_);
+    uplift_simd::tape::put(s, tg, 3, _e17);
+    let _e23 = uplift_simd::vector::mul::<S, 3>([s.splat(2.0f32); 3], _e6);
+    let _e24 = uplift_simd::vector::mul::<S, 3>(_e23, _e6);
+    let _e25 = uplift_simd::vector::mul::<S, 3>(_e24, _e7);
+    let _e27 = uplift_simd::vector::mul::<S, 3>([s.splat(2.0f32); 3], _e6);
+    let _e28 = uplift_simd::vector::mul::<S, 3>(_e27, _e6);
+    let _e29 = uplift_simd::vector::mul::<S, 3>(_e28, _e7);
+    let _e30 = uplift_simd::vector::mul::<S, 3>(_e25, _e29);
+    uplift_simd::tape::put(s, tg, 4, _e30[0]);
+    uplift_simd::tape::put(s, tg, 5, _e30[1]);
+    uplift_simd::tape::put(s, tg, 6, _e30[2]);
+    let _e37 = [s.splat(0.0f32); 3];
+    let _e44 = [s.splat(0.0f32); 3];
+    let _e49 = (s.splat(2.0f32) * eta1_);
+    uplift_simd::tape::put(s, tg, 7, _e49);
+    let _e59 = uplift_simd::vector::mul::<S, 3>(_e6, _e6);
+    let _e61 = [s.splat(1.0f32); 3];
+    let _e62 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
+    let _e63 = uplift_simd::vector::add::<S, 3>(_e61, _e62);
+    let _e64 = uplift_simd::vector::mul::<S, 3>(_e59, _e63);
+    uplift_simd::tape::put(s, tg, 8, _e64[0]);
+    uplift_simd::tape::put(s, tg, 9, _e64[1]);
+    uplift_simd::tape::put(s, tg, 10, _e64[2]);
+    let _e67 = (s.splat(2.0f32) * eta1_);
+    let _e68 = uplift_simd::vector::mul::<S, 3>([_e67; 3], _e6);
+    let _e69 = uplift_simd::vector::mul::<S, 3>(_e68, _e6);
+    uplift_simd::tape::put(s, tg, 11, _e69[0]);
+    uplift_simd::tape::put(s, tg, 12, _e69[1]);
+    uplift_simd::tape::put(s, tg, 13, _e69[2]);
+    let _e72 = uplift_simd::vector::mul::<S, 3>([s.splat(2.0f32); 3], _e7);
+    uplift_simd::tape::put(s, tg, 14, _e72[0]);
+    uplift_simd::tape::put(s, tg, 15, _e72[1]);
+    uplift_simd::tape::put(s, tg, 16, _e72[2]);
+    let _e75 = [s.splat(1.0f32); 3];
+    let _e76 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
+    let _e77 = uplift_simd::vector::sub::<S, 3>(_e75, _e76);
+    uplift_simd::tape::put(s, tg, 17, _e77[0]);
+    uplift_simd::tape::put(s, tg, 18, _e77[1]);
+    uplift_simd::tape::put(s, tg, 19, _e77[2]);
+    let _e82 = (eta1_ * eta1_);
+    uplift_simd::tape::put(s, tg, 20, _e82);
+    let _e89 = mx_polarized { p: [s.splat(0.0); 3], s_: [s.splat(0.0); 3] };
+    return _e89;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_dielectric_polarized_p6<S: Simd>(s: S, cos_theta_3: S::F, eta: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 2] {
+    let _e4 = cos_theta_3.max(s.splat(0.0f32)).min(s.splat(1.0f32));
+    let _e5 = (_e4 * _e4);
+    let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
+    let _e8 = tp.f(s, 0);
+    let _e9 = eta.mul_add(eta, -_e7);
+    let _e11 = { let (x, y) = (_e9, s.splat(0.0f32)); x.max(y) };
+    let _e12 = _e4.mul_add(_e4, _e11);
+    let _e13 = { let x = _e11; x.sqrt() };
+    let _e15 = (s.splat(2.0f32) * _e13);
+    let _e16 = (_e15 * _e4);
+    let _e17 = (-_e15).mul_add(_e4, _e12);
+    let _e18 = _e15.mul_add(_e4, _e12);
+    let _e20 = { let (x, y) = (_e18, s.splat(1e-30f32)); x.max(y) };
+    let _e21 = (_e17 / _e20);
+    let _e22 = (_e5 * _e11);
+    let _e23 = (_e7 * _e7);
+    let _e24 = _e5.mul_add(_e11, _e23);
+    let _e25 = (_e16 * _e7);
+    let _e26 = (-_e16).mul_add(_e7, _e24);
+    let _e27 = (_e21 * _e26);
+    let _e28 = _e16.mul_add(_e7, _e24);
+    let _e30 = { let (x, y) = (_e28, s.splat(1e-30f32)); x.max(y) };
+    let _e31 = (_e27 / _e30);
+    let _e32 = [_e31, _e21];
+    return _e32;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_dielectric_polarized_g6<S: Simd>(s: S, cos_theta_3: S::F, eta: S::F, tg: &mut [f32]) -> [S::F; 2] {
+    let _e8 = (eta * eta);
+    uplift_simd::tape::put(s, tg, 0, _e8);
+    return [s.splat(0.0); 2];
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_airy_reflectance_p7<S: Simd>(s: S, cos_theta_4: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+    let _e6 = mx_fresnel_dielectric_polarized_p6(s, cos_theta_4, eta2_2, tp.at(3));
+    let _e12 = tp.f(s, 0);
+    let _e14 = cos_theta_4.lt(_e12);
+    let _e16 = _e14.select(s.splat(0.0f32), s.splat(3.1415927f32));
+    let _e18 = tp.f(s, 1);
+    let _e19 = (_e18 * cos_t);
+    let _e21 = tp.f(s, 2);
+    let _e22 = (_e19 * _e21);
+    let _e24 = (_e22 * s.splat(1e-9f32));
+    let _e25 = _e6[0];
+    let _e26 = r23_1.p;
+    let _e27 = phi23_.p;
+    let _e28 = [_e16; 3];
+    let _e29 = uplift_simd::vector::add::<S, 3>(_e27, _e28);
+    let _e30 = mx_airy_polarization(s, _e25, _e26, _e29, _e24);
+    let _e31 = _e6[1];
+    let _e32 = r23_1.s_;
+    let _e33 = phi23_.s_;
+    let _e35 = [s.splat(3.1415927f32); 3];
+    let _e36 = uplift_simd::vector::add::<S, 3>(_e33, _e35);
+    let _e37 = mx_airy_polarization(s, _e31, _e32, _e36, _e24);
+    let _e38 = uplift_simd::vector::add::<S, 3>(_e30, _e37);
+    let _e40 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e38);
+    let _e41 = _e40[0];
+    let _e45 = [s.splat(2.3706744f32), s.splat(-0.513885f32), s.splat(0.0052982f32)];
+    let _e46 = uplift_simd::vector::mul::<S, 3>([_e41; 3], _e45);
+    let _e47 = _e40[1];
+    let _e51 = [s.splat(-0.9000405f32), s.splat(1.4253036f32), s.splat(-0.0146949f32)];
+    let _e52 = uplift_simd::vector::mul::<S, 3>([_e47; 3], _e51);
+    let _e53 = uplift_simd::vector::add::<S, 3>(_e46, _e52);
+    let _e54 = _e40[2];
+    let _e58 = [s.splat(-0.4706338f32), s.splat(0.0885814f32), s.splat(1.0093968f32)];
+    let _e59 = uplift_simd::vector::mul::<S, 3>([_e54; 3], _e58);
+    let _e60 = uplift_simd::vector::add::<S, 3>(_e53, _e59);
+    let _e62 = [s.splat(0.0f32); 3];
+    let _e64 = [s.splat(1.0f32); 3];
+    let _e65 = uplift_simd::vector::zip::<S, 3>(uplift_simd::vector::zip::<S, 3>(_e60, _e62, |x, y| x.max(y)), _e64, |x, y| x.min(y));
+    return _e65;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_airy_reflectance_g7<S: Simd>(s: S, cos_theta_4: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>, tg: &mut [f32]) -> [S::F; 3] {
+    let _e6 = mx_fresnel_dielectric_polarized_g6(s, cos_theta_4, eta2_2, &mut tg[3 * S::LANES..]);
+    let _e7 = (eta2_2 * eta2_2);
+    let _e9 = eta2_2.mul_add(eta2_2, s.splat(1.0f32));
+    let _e10 = { let x = _e9; x.sqrt() };
+    let _e12 = (s.splat(1.0f32) / _e10);
+    uplift_simd::tape::put(s, tg, 0, _e12);
+    let _e18 = (s.splat(2.0f32) * eta2_2);
+    uplift_simd::tape::put(s, tg, 1, _e18);
+    let _e21 = { let (x, y) = (thickness, s.splat(0.0f32)); x.max(y) };
+    uplift_simd::tape::put(s, tg, 2, _e21);
+    let _e35 = [s.splat(3.1415927f32); 3];
+    let _e45 = [s.splat(2.3706744f32), s.splat(-0.513885f32), s.splat(0.0052982f32)];
+    let _e51 = [s.splat(-0.9000405f32), s.splat(1.4253036f32), s.splat(-0.0146949f32)];
+    let _e58 = [s.splat(-0.4706338f32), s.splat(0.0885814f32), s.splat(1.0093968f32)];
+    let _e62 = [s.splat(0.0f32); 3];
+    let _e64 = [s.splat(1.0f32); 3];
+    return [s.splat(0.0); 3];
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_airy_conductor_p8<S: Simd>(s: S, cos_theta_5: S::F, n_2: [S::F; 3], k_2: [S::F; 3], thickness_1: S::F, film_ior: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+    let _e6 = tp.f(s, 0);
+    let _e7 = mx_thin_film_cos_p3(s, cos_theta_5, _e6, tp.at(7));
+    let _e9 = [tp.f(s, 1), tp.f(s, 2), tp.f(s, 3)];
+    let _e11 = [tp.f(s, 4), tp.f(s, 5), tp.f(s, 6)];
+    let _e12 = mx_fresnel_conductor_polarized_p4(s, _e7, _e9, _e11, tp.at(8));
+    let _e13 = s.outline(#[inline(always)] || mx_fresnel_conductor_phase_polarized_p5(s, _e7, _e6, n_2, k_2, tp.at(14)));
+    let _e14 = mx_airy_reflectance_p7(s, cos_theta_5, _e7, _e6, thickness_1, _e12, _e13, tp.at(35));
+    return _e14;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_airy_conductor_g8<S: Simd>(s: S, cos_theta_5: S::F, n_2: [S::F; 3], k_2: [S::F; 3], thickness_1: S::F, film_ior: S::F, tg: &mut [f32]) -> [S::F; 3] {
+    let _e6 = { let (x, y) = (film_ior, s.splat(1.0f32)); x.max(y) };
+    uplift_simd::tape::put(s, tg, 0, _e6);
+    let _e7 = mx_thin_film_cos_g3(s, cos_theta_5, _e6, &mut tg[7 * S::LANES..]);
+    let _e8 = [_e6; 3];
+    let _e9 = uplift_simd::vector::div::<S, 3>(n_2, _e8);
+    uplift_simd::tape::put(s, tg, 1, _e9[0]);
+    uplift_simd::tape::put(s, tg, 2, _e9[1]);
+    uplift_simd::tape::put(s, tg, 3, _e9[2]);
+    let _e10 = [_e6; 3];
+    let _e11 = uplift_simd::vector::div::<S, 3>(k_2, _e10);
+    uplift_simd::tape::put(s, tg, 4, _e11[0]);
+    uplift_simd::tape::put(s, tg, 5, _e11[1]);
+    uplift_simd::tape::put(s, tg, 6, _e11[2]);
+    let _e12 = mx_fresnel_conductor_polarized_g4(s, _e7, _e9, _e11, &mut tg[8 * S::LANES..]);
+    let _e13 = s.outline(#[inline(always)] || mx_fresnel_conductor_phase_polarized_g5(s, _e7, _e6, n_2, k_2, &mut tg[14 * S::LANES..]));
+    let _e14 = mx_airy_reflectance_g7(s, cos_theta_5, _e7, _e6, thickness_1, _e12, _e13, &mut tg[35 * S::LANES..]);
+    return _e14;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_conductor_fresnel_p9<S: Simd>(s: S, vh: S::F, n_5: [S::F; 3], k_4: [S::F; 3], thickness_2: S::F, film_ior_1: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+    let _e5 = if (!(thickness_2.gt(s.splat(0.0f32)))).any() { mx_fresnel_conductor_p2(s, vh, n_5, k_4, tp.at(1)) } else { [s.splat(0.0); 3] };
+    let _e6 = if (thickness_2.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_p8(s, vh, n_5, k_4, thickness_2, film_ior_1, tp.at(7)) } else { [s.splat(0.0); 3] };
+    let _e8 = tp.m(s, 0);
+    let _e9 = uplift_simd::vector::select_all::<S, 3>(_e8, _e6, _e5);
+    return _e9;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_conductor_fresnel_g9<S: Simd>(s: S, vh: S::F, n_5: [S::F; 3], k_4: [S::F; 3], thickness_2: S::F, film_ior_1: S::F, tg: &mut [f32]) -> [S::F; 3] {
+    let _e5 = if (!(thickness_2.gt(s.splat(0.0f32)))).any() { mx_fresnel_conductor_g2(s, vh, n_5, k_4, &mut tg[1 * S::LANES..]) } else { [s.splat(0.0); 3] };
+    let _e6 = if (thickness_2.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_g8(s, vh, n_5, k_4, thickness_2, film_ior_1, &mut tg[7 * S::LANES..]) } else { [s.splat(0.0); 3] };
+    let _e8 = thickness_2.gt(s.splat(0.0f32));
+    uplift_simd::tape::put_m(s, tg, 0, _e8);
+    return [s.splat(0.0); 3];
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_ggx_smith_s_p10<S: Simd>(s: S, w_1: [S::F; 3], a: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let _e2 = w_1[2];
+    let _e4 = { let (x, y) = (_e2, s.splat(1e-8f32)); x.max(y) };
+    let _e5 = (_e4 * _e4);
+    let _e6 = a[0];
+    let _e7 = a[0];
+    let _e8 = tp.f(s, 0);
+    let _e9 = w_1[0];
+    let _e10 = (_e8 * _e9);
+    let _e11 = w_1[0];
+    let _e12 = (_e10 * _e11);
+    let _e13 = _e4.mul_add(_e4, _e12);
+    let _e14 = a[1];
+    let _e15 = a[1];
+    let _e16 = tp.f(s, 1);
+    let _e17 = w_1[1];
+    let _e18 = (_e16 * _e17);
+    let _e19 = w_1[1];
+    let _e20 = (_e18 * _e19);
+    let _e21 = _e18.mul_add(_e19, _e13);
+    let _e22 = { let x = _e21; x.sqrt() };
+    return _e22;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_ggx_smith_s_g10<S: Simd>(s: S, w_1: [S::F; 3], a: [S::F; 2], tg: &mut [f32]) -> S::F {
+    let _e6 = a[0];
+    let _e7 = a[0];
+    let _e8 = (_e6 * _e7);
+    uplift_simd::tape::put(s, tg, 0, _e8);
+    let _e14 = a[1];
+    let _e15 = a[1];
+    let _e16 = (_e14 * _e15);
+    uplift_simd::tape::put(s, tg, 1, _e16);
+    return s.splat(0.0);
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_ggx_d_p11<S: Simd>(s: S, h: [S::F; 3], a_1: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let _e2 = a_1[0];
+    let _e3 = a_1[1];
+    let _e6 = tp.f(s, 0);
+    let _e7 = h[0];
+    let _e8 = a_1[1];
+    let _e9 = (_e7 * _e8);
+    let _e10 = (_e9 * _e6);
+    let _e11 = h[1];
+    let _e12 = a_1[0];
+    let _e13 = (_e11 * _e12);
+    let _e14 = (_e13 * _e6);
+    let _e15 = (_e10 * _e10);
+    let _e16 = (_e14 * _e14);
+    let _e17 = _e10.mul_add(_e10, _e16);
+    let _e18 = h[2];
+    let _e19 = h[2];
+    let _e20 = (_e18 * _e19);
+    let _e21 = _e18.mul_add(_e19, _e17);
+    let _e23 = (s.splat(3.1415927f32) * _e21);
+    let _e24 = (_e23 * _e21);
+    let _e25 = (_e6 / _e24);
+    return _e25;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_ggx_d_g11<S: Simd>(s: S, h: [S::F; 3], a_1: [S::F; 2], tg: &mut [f32]) -> S::F {
+    let _e2 = a_1[0];
+    let _e3 = a_1[1];
+    let _e4 = (_e2 * _e3);
+    let _e6 = (s.splat(1.0f32) / _e4);
+    uplift_simd::tape::put(s, tg, 0, _e6);
+    let _e8 = a_1[1];
+    let _e12 = a_1[0];
+    return s.splat(0.0);
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_ggx_reflection_p12<S: Simd>(s: S, v_5: [S::F; 3], l_1: [S::F; 3], h_1: [S::F; 3], a_2: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let _e4 = v_5[2];
+    let _e6 = tp.f(s, 0);
+    let _e7 = l_1[2];
+    let _e9 = { let (x, y) = (_e7, s.splat(1e-8f32)); x.max(y) };
+    let _e10 = tp.f(s, 1);
+    let _e11 = (_e9 * _e10);
+    let _e12 = if (!(l_1[2].le(s.splat(0.0f32)))).any() { mx_ggx_smith_s_p10(s, l_1, a_2, tp.at(2)) } else { s.splat(0.0) };
+    let _e13 = (_e6 * _e12);
+    let _e14 = _e9.mul_add(_e10, _e13);
+    let _e16 = (s.splat(2.0f32) * _e14);
+    let _e17 = if (!(l_1[2].le(s.splat(0.0f32)))).any() { mx_ggx_d_p11(s, h_1, a_2, tp.at(4)) } else { s.splat(0.0) };
+    let _e18 = (_e17 * _e9);
+    let _e19 = (_e18 / _e16);
+    let _e20 = l_1[2];
+    let _e22 = _e20.le(s.splat(0.0f32));
+    let _e24 = _e22.select(s.splat(0.0f32), _e19);
+    return _e24;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_ggx_reflection_g12<S: Simd>(s: S, v_5: [S::F; 3], l_1: [S::F; 3], h_1: [S::F; 3], a_2: [S::F; 2], tg: &mut [f32]) -> S::F {
+    let _e4 = v_5[2];
+    let _e6 = { let (x, y) = (_e4, s.splat(1e-8f32)); x.max(y) };
+    uplift_simd::tape::put(s, tg, 0, _e6);
+    let _e10 = mx_ggx_smith_s(s, v_5, a_2);
+    uplift_simd::tape::put(s, tg, 1, _e10);
+    let _e12 = mx_ggx_smith_s_g10(s, l_1, a_2, &mut tg[2 * S::LANES..]);
+    let _e17 = mx_ggx_d_g11(s, h_1, a_2, &mut tg[4 * S::LANES..]);
+    return s.splat(0.0);
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_ggx_pdf_p13<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let _e3 = v_9[2];
+    let _e6 = if (!((uplift_simd::vector::dot::<S, 3>(v_9, h_4).le(s.splat(0.0f32)) | h_4[2].le(s.splat(0.0f32))))).any() { mx_ggx_d_p11(s, h_4, a_4, tp.at(1)) } else { s.splat(0.0) };
+    let _e10 = tp.f(s, 0);
+    let _e11 = (_e6 / _e10);
+    let _e12 = uplift_simd::vector::dot::<S, 3>(v_9, h_4);
+    let _e14 = _e12.le(s.splat(0.0f32));
+    let _e15 = h_4[2];
+    let _e17 = _e15.le(s.splat(0.0f32));
+    let _e18 = (_e14 | _e17);
+    let _e20 = _e18.select(s.splat(0.0f32), _e11);
+    return _e20;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_ggx_pdf_g13<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2], tg: &mut [f32]) -> S::F {
+    let _e3 = v_9[2];
+    let _e5 = { let (x, y) = (_e3, s.splat(1e-8f32)); x.max(y) };
+    let _e6 = mx_ggx_d_g11(s, h_4, a_4, &mut tg[1 * S::LANES..]);
+    let _e7 = mx_ggx_smith_s(s, v_9, a_4);
+    let _e8 = (_e5 + _e7);
+    let _e10 = (s.splat(2.0f32) * _e8);
+    uplift_simd::tape::put(s, tg, 0, _e10);
+    return s.splat(0.0);
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_lobe_with_pdf_p14<S: Simd>(s: S, response: [S::F; 3], throughput_2: [S::F; 3], c_3: S::F, pdf: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+    let _e5 = tp.f(s, 0);
+    let _e7 = { let (x, y) = (pdf, s.splat(0.0f32)); x.max(y) };
+    let _e8 = (_e5 * _e7);
+    let _e11 = [_e8, _e5, s.splat(0.0f32), s.splat(0.0f32)];
+    let _e12 = BSDF { response: response, throughput: throughput_2, lobe: _e11 };
+    return _e12;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_lobe_with_pdf_g14<S: Simd>(s: S, response: [S::F; 3], throughput_2: [S::F; 3], c_3: S::F, pdf: S::F, tg: &mut [f32]) -> BSDF<S> {
+    let _e5 = { let (x, y) = (c_3, s.splat(0.0f32)); x.max(y) };
+    uplift_simd::tape::put(s, tg, 0, _e5);
+    let _e12 = BSDF { response: response, throughput: throughput_2, lobe: [s.splat(0.0); 4] };
+    return _e12;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_conductor_bsdf_p15<S: Simd>(s: S, cl_6: mx_closure<S>, weight: S::F, ior: [S::F; 3], extinction: [S::F; 3], roughness_2: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_2: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+    let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
+    let mut _done = s.first_lanes(0);
+    let _e11 = tp.f(s, 0);
+    let _e13 = [s.splat(0.0f32); 3];
+    let _e14 = mx_ggx_setup { frame: mx_frame { x: [tp.f(s, 1), tp.f(s, 2), tp.f(s, 3)], y: [tp.f(s, 4), tp.f(s, 5), tp.f(s, 6)], n: [tp.f(s, 7), tp.f(s, 8), tp.f(s, 9)] }, v: [tp.f(s, 10), tp.f(s, 11), tp.f(s, 12)], a: [tp.f(s, 13), tp.f(s, 14)], abar: tp.f(s, 15), mu: tp.f(s, 16) };
+    let _e16 = [s.splat(0.0f32); 3];
+    let _e18 = [s.splat(1000000.0f32); 3];
+    let _e19 = [tp.f(s, 17), tp.f(s, 18), tp.f(s, 19)];
+    let _e21 = [s.splat(0.0f32); 3];
+    let _e23 = [s.splat(1000000.0f32); 3];
+    let _e24 = [tp.f(s, 20), tp.f(s, 21), tp.f(s, 22)];
+    let _e34 = [s.splat(1.0f32); 3];
+    let _e36 = [tp.f(s, 23), tp.f(s, 24), tp.f(s, 25)];
+    let _e37 = cl_6.context;
+    let _e39 = tp.m(s, 26);
+    let _m1 = _e39;
+    if _m1.any() {
+        let _e40 = mx_ggx_light(s, cl_6, _e14);
+        let _e41 = [tp.f(s, 27), tp.f(s, 28), tp.f(s, 29)];
+        let _e42 = mx_half_vector(s, _e41, _e40);
+        let _e43 = [tp.f(s, 30), tp.f(s, 31), tp.f(s, 32)];
+        let _e44 = uplift_simd::vector::dot::<S, 3>(_e43, _e42);
+        let _e45 = mx_conductor_fresnel_p9(s, _e44, _e19, _e24, thinfilm_thickness, thinfilm_ior, tp.at(81));
+        let _e46 = [tp.f(s, 33), tp.f(s, 34), tp.f(s, 35)];
+        let _e47 = [tp.f(s, 36), tp.f(s, 37)];
+        let _e48 = mx_ggx_reflection_p12(s, _e46, _e40, _e42, _e47, tp.at(127));
+        let _e49 = (_e11 * _e48);
+        let _e50 = uplift_simd::vector::mul::<S, 3>([_e49; 3], _e45);
+        let _e51 = uplift_simd::vector::mul::<S, 3>(_e50, _e36);
+        let _e53 = [tp.f(s, 38), tp.f(s, 39), tp.f(s, 40), tp.f(s, 41)];
+        let _e54 = BSDF { response: _e51, throughput: _e13, lobe: _e53 };
+        _ret = BSDF::<S>::select((_m1 & !_done), _e54, _ret);
+        _done = _done | _m1;
+    }
+    if _done.all() { return _ret; }
+    let _e64 = cl_6.context;
+    let _e66 = tp.m(s, 42);
+    let _m2 = _e66;
+    if _m2.any() {
+        let _e69 = BSDF { response: [tp.f(s, 43), tp.f(s, 44), tp.f(s, 45)], throughput: [tp.f(s, 46), tp.f(s, 47), tp.f(s, 48)], lobe: [tp.f(s, 49), tp.f(s, 50), tp.f(s, 51), tp.f(s, 52)] };
+        _ret = BSDF::<S>::select((_m2 & !_done), _e69, _ret);
+        _done = _done | _m2;
+    }
+    if _done.all() { return _ret; }
+    let _e70 = cl_6.context;
+    let _e72 = tp.m(s, 53);
+    let _m3 = _e72;
+    if _m3.any() {
+        let _e74 = BSDF { response: [tp.f(s, 54), tp.f(s, 55), tp.f(s, 56)], throughput: [tp.f(s, 57), tp.f(s, 58), tp.f(s, 59)], lobe: [tp.f(s, 60), tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)] };
+        _ret = BSDF::<S>::select((_m3 & !_done), _e74, _ret);
+        _done = _done | _m3;
+    }
+    if _done.all() { return _ret; }
+    let _e75 = mx_ggx_light(s, cl_6, _e14);
+    let _e76 = [tp.f(s, 64), tp.f(s, 65), tp.f(s, 66)];
+    let _e77 = mx_half_vector(s, _e76, _e75);
+    let _e78 = [tp.f(s, 67), tp.f(s, 68), tp.f(s, 69)];
+    let _e79 = uplift_simd::vector::dot::<S, 3>(_e78, _e77);
+    let _e80 = mx_conductor_fresnel_p9(s, _e79, _e19, _e24, thinfilm_thickness, thinfilm_ior, tp.at(132));
+    let _e81 = [tp.f(s, 70), tp.f(s, 71), tp.f(s, 72)];
+    let _e82 = [tp.f(s, 73), tp.f(s, 74)];
+    let _e83 = mx_ggx_reflection_p12(s, _e81, _e75, _e77, _e82, tp.at(178));
+    let _e84 = (_e11 * _e83);
+    let _e85 = uplift_simd::vector::mul::<S, 3>([_e84; 3], _e80);
+    let _e86 = uplift_simd::vector::mul::<S, 3>(_e85, _e36);
+    let _e87 = tp.f(s, 75);
+    let _e88 = [tp.f(s, 76), tp.f(s, 77), tp.f(s, 78)];
+    let _e89 = [tp.f(s, 79), tp.f(s, 80)];
+    let _e90 = mx_ggx_pdf_p13(s, _e88, _e77, _e89, tp.at(183));
+    let _e91 = mx_lobe_with_pdf_p14(s, _e86, _e13, _e87, _e90, tp.at(185));
+    return BSDF::<S>::select((!_done), _e91, _ret);
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_conductor_bsdf_g15<S: Simd>(s: S, cl_6: mx_closure<S>, weight: S::F, ior: [S::F; 3], extinction: [S::F; 3], roughness_2: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_2: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, tg: &mut [f32]) -> BSDF<S> {
+    let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
+    let mut _done = s.first_lanes(0);
+    let _e11 = mx_lobe_weight(s, weight);
+    uplift_simd::tape::put(s, tg, 0, _e11);
+    let _e13 = [s.splat(0.0f32); 3];
+    let _e14 = mx_ggx_setup_new(s, cl_6, roughness_2, retroreflective_1, normal_2, tangent_2);
+    uplift_simd::tape::put(s, tg, 1, _e14.frame.x[0]);
+    uplift_simd::tape::put(s, tg, 2, _e14.frame.x[1]);
+    uplift_simd::tape::put(s, tg, 3, _e14.frame.x[2]);
+    uplift_simd::tape::put(s, tg, 4, _e14.frame.y[0]);
+    uplift_simd::tape::put(s, tg, 5, _e14.frame.y[1]);
+    uplift_simd::tape::put(s, tg, 6, _e14.frame.y[2]);
+    uplift_simd::tape::put(s, tg, 7, _e14.frame.n[0]);
+    uplift_simd::tape::put(s, tg, 8, _e14.frame.n[1]);
+    uplift_simd::tape::put(s, tg, 9, _e14.frame.n[2]);
+    uplift_simd::tape::put(s, tg, 10, _e14.v[0]);
+    uplift_simd::tape::put(s, tg, 11, _e14.v[1]);
+    uplift_simd::tape::put(s, tg, 12, _e14.v[2]);
+    uplift_simd::tape::put(s, tg, 13, _e14.a[0]);
+    uplift_simd::tape::put(s, tg, 14, _e14.a[1]);
+    uplift_simd::tape::put(s, tg, 15, _e14.abar);
+    uplift_simd::tape::put(s, tg, 16, _e14.mu);
+    let _e16 = [s.splat(0.0f32); 3];
+    let _e18 = [s.splat(1000000.0f32); 3];
+    let _e19 = uplift_simd::vector::zip::<S, 3>(uplift_simd::vector::zip::<S, 3>(ior, _e16, |x, y| x.max(y)), _e18, |x, y| x.min(y));
+    uplift_simd::tape::put(s, tg, 17, _e19[0]);
+    uplift_simd::tape::put(s, tg, 18, _e19[1]);
+    uplift_simd::tape::put(s, tg, 19, _e19[2]);
+    let _e21 = [s.splat(0.0f32); 3];
+    let _e23 = [s.splat(1000000.0f32); 3];
+    let _e24 = uplift_simd::vector::zip::<S, 3>(uplift_simd::vector::zip::<S, 3>(extinction, _e21, |x, y| x.max(y)), _e23, |x, y| x.min(y));
+    uplift_simd::tape::put(s, tg, 20, _e24[0]);
+    uplift_simd::tape::put(s, tg, 21, _e24[1]);
+    uplift_simd::tape::put(s, tg, 22, _e24[2]);
+    let _e26 = thinfilm_thickness.gt(s.splat(0.0f32));
+    let _e27 = if (!(_e26)).any() { mx_fresnel_conductor_normal(s, _e19, _e24) } else { [s.splat(0.0); 3] };
+    let _e29 = if (_e26).any() { mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e19, _e24, thinfilm_thickness, thinfilm_ior) } else { [s.splat(0.0); 3] };
+    let _e30 = uplift_simd::vector::select_all::<S, 3>(_e26, _e29, _e27);
+    let _e31 = _e14.mu;
+    let _e32 = _e14.abar;
+    let _e34 = [s.splat(1.0f32); 3];
+    let _e35 = mx_fresnel_average(s, _e30, _e34);
+    let _e36 = mx_ggx_energy_compensation(s, _e31, _e32, _e35);
+    uplift_simd::tape::put(s, tg, 23, _e36[0]);
+    uplift_simd::tape::put(s, tg, 24, _e36[1]);
+    uplift_simd::tape::put(s, tg, 25, _e36[2]);
+    let _e37 = cl_6.context;
+    let _e39 = _e37.eq(s.splat_i(0i32));
+    uplift_simd::tape::put_m(s, tg, 26, _e39);
+    let _m1 = _e39;
+    if _m1.any() {
+        let _e41 = _e14.v;
+        uplift_simd::tape::put(s, tg, 27, _e41[0]);
+        uplift_simd::tape::put(s, tg, 28, _e41[1]);
+        uplift_simd::tape::put(s, tg, 29, _e41[2]);
+        let _e43 = _e14.v;
+        uplift_simd::tape::put(s, tg, 30, _e43[0]);
+        uplift_simd::tape::put(s, tg, 31, _e43[1]);
+        uplift_simd::tape::put(s, tg, 32, _e43[2]);
+        let _e45 = mx_conductor_fresnel_g9(s, s.splat(0.0), _e19, _e24, thinfilm_thickness, thinfilm_ior, &mut tg[81 * S::LANES..]);
+        let _e46 = _e14.v;
+        uplift_simd::tape::put(s, tg, 33, _e46[0]);
+        uplift_simd::tape::put(s, tg, 34, _e46[1]);
+        uplift_simd::tape::put(s, tg, 35, _e46[2]);
+        let _e47 = _e14.a;
+        uplift_simd::tape::put(s, tg, 36, _e47[0]);
+        uplift_simd::tape::put(s, tg, 37, _e47[1]);
+        let _e48 = mx_ggx_reflection_g12(s, _e46, [s.splat(0.0); 3], [s.splat(0.0); 3], _e47, &mut tg[127 * S::LANES..]);
+        let _e52 = mx_bsdf_empty(s);
+        let _e53 = _e52.lobe;
+        uplift_simd::tape::put(s, tg, 38, _e53[0]);
+        uplift_simd::tape::put(s, tg, 39, _e53[1]);
+        uplift_simd::tape::put(s, tg, 40, _e53[2]);
+        uplift_simd::tape::put(s, tg, 41, _e53[3]);
+        let _e54 = BSDF { response: [s.splat(0.0); 3], throughput: _e13, lobe: _e53 };
+        _ret = BSDF::<S>::select((_m1 & !_done), _e54, _ret);
+        _done = _done | _m1;
+    }
+    if _done.all() { return _ret; }
+    let _e55 = _e14.mu;
+    let _e56 = _e14.abar;
+    let _e57 = if (!(_e26)).any() { mx_albedo_ggx_conductor(s, _e55, _e56, _e19, _e24) } else { [s.splat(0.0); 3] };
+    let _e58 = _e14.mu;
+    let _e59 = _e14.abar;
+    let _e60 = if (_e26).any() { s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e58, _e59, _e19, _e24, thinfilm_thickness, thinfilm_ior)) } else { [s.splat(0.0); 3] };
+    let _e61 = uplift_simd::vector::select_all::<S, 3>(_e26, _e60, _e57);
+    let _e62 = uplift_simd::vector::mul::<S, 3>([_e11; 3], _e36);
+    let _e63 = uplift_simd::vector::mul::<S, 3>(_e62, _e61);
+    let _e64 = cl_6.context;
+    let _e66 = _e64.eq(s.splat_i(1i32));
+    uplift_simd::tape::put_m(s, tg, 42, _e66);
+    let _m2 = _e66;
+    if _m2.any() {
+        let _e67 = mx_bsdf_empty(s);
+        let _e68 = _e67.lobe;
+        let _e69 = BSDF { response: _e63, throughput: _e13, lobe: _e68 };
+        uplift_simd::tape::put(s, tg, 43, _e69.response[0]);
+        uplift_simd::tape::put(s, tg, 44, _e69.response[1]);
+        uplift_simd::tape::put(s, tg, 45, _e69.response[2]);
+        uplift_simd::tape::put(s, tg, 46, _e69.throughput[0]);
+        uplift_simd::tape::put(s, tg, 47, _e69.throughput[1]);
+        uplift_simd::tape::put(s, tg, 48, _e69.throughput[2]);
+        uplift_simd::tape::put(s, tg, 49, _e69.lobe[0]);
+        uplift_simd::tape::put(s, tg, 50, _e69.lobe[1]);
+        uplift_simd::tape::put(s, tg, 51, _e69.lobe[2]);
+        uplift_simd::tape::put(s, tg, 52, _e69.lobe[3]);
+        _ret = BSDF::<S>::select((_m2 & !_done), _e69, _ret);
+        _done = _done | _m2;
+    }
+    if _done.all() { return _ret; }
+    let _e70 = cl_6.context;
+    let _e72 = _e70.eq(s.splat_i(2i32));
+    uplift_simd::tape::put_m(s, tg, 53, _e72);
+    let _m3 = _e72;
+    if _m3.any() {
+        let _e73 = mx_luminance_rgb(s, _e63);
+        let _e74 = mx_ggx_lobe_sample(s, cl_6, _e14, _e13, _e73);
+        uplift_simd::tape::put(s, tg, 54, _e74.response[0]);
+        uplift_simd::tape::put(s, tg, 55, _e74.response[1]);
+        uplift_simd::tape::put(s, tg, 56, _e74.response[2]);
+        uplift_simd::tape::put(s, tg, 57, _e74.throughput[0]);
+        uplift_simd::tape::put(s, tg, 58, _e74.throughput[1]);
+        uplift_simd::tape::put(s, tg, 59, _e74.throughput[2]);
+        uplift_simd::tape::put(s, tg, 60, _e74.lobe[0]);
+        uplift_simd::tape::put(s, tg, 61, _e74.lobe[1]);
+        uplift_simd::tape::put(s, tg, 62, _e74.lobe[2]);
+        uplift_simd::tape::put(s, tg, 63, _e74.lobe[3]);
+        _ret = BSDF::<S>::select((_m3 & !_done), _e74, _ret);
+        _done = _done | _m3;
+    }
+    if _done.all() { return _ret; }
+    let _e76 = _e14.v;
+    uplift_simd::tape::put(s, tg, 64, _e76[0]);
+    uplift_simd::tape::put(s, tg, 65, _e76[1]);
+    uplift_simd::tape::put(s, tg, 66, _e76[2]);
+    let _e78 = _e14.v;
+    uplift_simd::tape::put(s, tg, 67, _e78[0]);
+    uplift_simd::tape::put(s, tg, 68, _e78[1]);
+    uplift_simd::tape::put(s, tg, 69, _e78[2]);
+    let _e80 = mx_conductor_fresnel_g9(s, s.splat(0.0), _e19, _e24, thinfilm_thickness, thinfilm_ior, &mut tg[132 * S::LANES..]);
+    let _e81 = _e14.v;
+    uplift_simd::tape::put(s, tg, 70, _e81[0]);
+    uplift_simd::tape::put(s, tg, 71, _e81[1]);
+    uplift_simd::tape::put(s, tg, 72, _e81[2]);
+    let _e82 = _e14.a;
+    uplift_simd::tape::put(s, tg, 73, _e82[0]);
+    uplift_simd::tape::put(s, tg, 74, _e82[1]);
+    let _e83 = mx_ggx_reflection_g12(s, _e81, [s.splat(0.0); 3], [s.splat(0.0); 3], _e82, &mut tg[178 * S::LANES..]);
+    let _e87 = mx_luminance_rgb(s, _e63);
+    uplift_simd::tape::put(s, tg, 75, _e87);
+    let _e88 = _e14.v;
+    uplift_simd::tape::put(s, tg, 76, _e88[0]);
+    uplift_simd::tape::put(s, tg, 77, _e88[1]);
+    uplift_simd::tape::put(s, tg, 78, _e88[2]);
+    let _e89 = _e14.a;
+    uplift_simd::tape::put(s, tg, 79, _e89[0]);
+    uplift_simd::tape::put(s, tg, 80, _e89[1]);
+    let _e90 = mx_ggx_pdf_g13(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[183 * S::LANES..]);
+    let _e91 = mx_lobe_with_pdf_g14(s, [s.splat(0.0); 3], _e13, _e87, _e90, &mut tg[185 * S::LANES..]);
+    return BSDF::<S>::select((!_done), _e91, _ret);
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_pattern_p16<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>, tp: uplift_simd::tape::TapeRow<'_>) -> MxOutputs<S> {
+    let _e3 = inputs.wv;
+    let _e4 = inputs.wl;
+    let _e6 = [s.splat(0.0f32); 3];
+    let _e7 = mx_closure_new_p1(s, s.splat_i(0i32), _e3, _e4, _e6, tp.at(3));
+    let _e9 = mx_closure_for_lobe(s, _e7, s.splat_u(10u32));
+    let _e10 = inputs.weight;
+    let _e11 = inputs.ior;
+    let _e12 = inputs.extinction;
+    let _e13 = inputs.roughness;
+    let _e17 = geom_1.normal_world;
+    let _e18 = geom_1.tangent_world;
+    let _e20 = s.outline(#[inline(always)] || mx_conductor_bsdf_p15(s, _e9, _e10, _e11, _e12, _e13, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e17, _e18, s.splat_i(0i32), tp.at(9)));
+    let _e21 = _e20.response;
+    let _e22 = [tp.f(s, 0), tp.f(s, 1), tp.f(s, 2)];
+    let _e23 = MxOutputs { response: _e21, throughput: _e22 };
+    return _e23;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_pattern_g16<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>, tg: &mut [f32]) -> MxOutputs<S> {
+    let _e3 = inputs.wv;
+    let _e6 = [s.splat(0.0f32); 3];
+    let _e7 = mx_closure_new_g1(s, s.splat_i(0i32), _e3, [s.splat(0.0); 3], _e6, &mut tg[3 * S::LANES..]);
+    let _e9 = mx_closure_for_lobe(s, _e7, s.splat_u(10u32));
+    let _e10 = inputs.weight;
+    let _e11 = inputs.ior;
+    let _e12 = inputs.extinction;
+    let _e13 = inputs.roughness;
+    let _e17 = geom_1.normal_world;
+    let _e18 = geom_1.tangent_world;
+    let _e20 = s.outline(#[inline(always)] || mx_conductor_bsdf_g15(s, _e9, _e10, _e11, _e12, _e13, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e17, _e18, s.splat_i(0i32), &mut tg[9 * S::LANES..]));
+    let _e22 = _e20.throughput;
+    uplift_simd::tape::put(s, tg, 0, _e22[0]);
+    uplift_simd::tape::put(s, tg, 1, _e22[1]);
+    uplift_simd::tape::put(s, tg, 2, _e22[2]);
+    let _e23 = MxOutputs { response: [s.splat(0.0); 3], throughput: _e22 };
+    return _e23;
+}
+
 
 /// Columns of `geom`: texcoord (2), then position, normal and tangent, each in object and world
 /// space (3 each). Bitangents are normal × tangent.
@@ -1660,4 +2566,120 @@ pub fn mx_pattern_batch_simd(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [
         }
     }
     uplift_simd::Level::run_hardware(MxBatch(geom, inputs, outputs)).is_some()
+}
+
+/// Tape slots per group of the dependence-split passes (`uplift_compiler::packet_split`).
+pub const SPLIT_SLOTS: usize = 195;
+/// Input columns read per point in the grouped layout (the light direction or the sample's
+/// random numbers); every other input column, and every geometry column, is per group.
+pub const POINT_INPUT_COLUMNS: &[usize] = &[3, 4, 5, ];
+
+/// [`mx_pattern_packets`] on a grouped batch: `k` consecutive points share a group (one
+/// material and one view, say), so the per-group work runs once per group, vectorised across
+/// groups (the group pass), and the per-point work once per point (the point pass, one
+/// group's points per packet). The columns in `POINT_INPUT_COLUMNS` and the outputs hold one
+/// value per point; every other column one per group (`n / k` values) or one for the batch.
+///
+/// Panics when a column count or length is wrong, or `k` is 0 or does not divide the batch.
+#[inline(always)]
+pub fn mx_pattern_grouped_packets<S: Simd>(s: S, geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut [f32]], k: usize) {
+    assert!(
+        geom.len() == GEOMETRY_COLUMNS && inputs.len() == INPUT_COLUMNS && outputs.len() == OUTPUT_COLUMNS,
+        "mx_pattern_grouped_packets: expected {GEOMETRY_COLUMNS} geometry, {INPUT_COLUMNS} input and {OUTPUT_COLUMNS} output columns"
+    );
+    let mx_n = outputs[0].len();
+    assert!(k > 0 && mx_n % k == 0, "mx_pattern_grouped_packets: {k} points per group do not divide {mx_n} points");
+    let mx_groups = mx_n / k;
+    let per_point = |c: usize| POINT_INPUT_COLUMNS.contains(&c);
+    assert!(
+        geom.iter().all(|c| c.len() == mx_groups || c.len() == 1)
+            && inputs.iter().enumerate().all(|(i, c)| c.len() == 1 || c.len() == if per_point(i) { mx_n } else { mx_groups })
+            && outputs.iter().all(|c| c.len() == mx_n),
+        "mx_pattern_grouped_packets: a column of the wrong length for {mx_groups} groups of {k}"
+    );
+    let mut mx_tape = vec![0.0f32; SPLIT_SLOTS * S::LANES];
+    let mut mx_g0 = 0usize;
+    while mx_g0 < mx_groups {
+        let mx_g1 = (mx_g0 + S::LANES).min(mx_groups);
+        {
+            let mx_gcol = |c: &[f32]| if c.len() == 1 { s.splat(c[0]) } else { s.load_partial(&c[mx_g0..mx_g1]) };
+            let mx_gg = |c: usize| mx_gcol(geom[c]);
+            let mx_xg = |c: usize| mx_gcol(inputs[c]);
+            let mx_geom = mx_geometry {
+                texcoord: [mx_gg(0), mx_gg(1)],
+                position_object: [mx_gg(2), mx_gg(3), mx_gg(4)],
+                position_world: [mx_gg(5), mx_gg(6), mx_gg(7)],
+                normal_object: [mx_gg(8), mx_gg(9), mx_gg(10)],
+                normal_world: [mx_gg(11), mx_gg(12), mx_gg(13)],
+                tangent_object: [mx_gg(14), mx_gg(15), mx_gg(16)],
+                tangent_world: [mx_gg(17), mx_gg(18), mx_gg(19)],
+                bitangent_object: uplift_simd::vector::cross::<S>([mx_gg(8), mx_gg(9), mx_gg(10)], [mx_gg(14), mx_gg(15), mx_gg(16)]),
+                bitangent_world: uplift_simd::vector::cross::<S>([mx_gg(11), mx_gg(12), mx_gg(13)], [mx_gg(17), mx_gg(18), mx_gg(19)]),
+            };
+            let mx_inputs = MxInputs {
+                wv: [mx_xg(0), mx_xg(1), mx_xg(2)],
+                wl: [s.splat(0.0); 3],
+                weight: mx_xg(6),
+                ior: [mx_xg(7), mx_xg(8), mx_xg(9)],
+                extinction: [mx_xg(10), mx_xg(11), mx_xg(12)],
+                roughness: [mx_xg(13), mx_xg(14)],
+            };
+            let _ = mx_pattern_g16(s, mx_geom, mx_inputs, &mut mx_tape);
+        }
+        for mx_j in 0..mx_g1 - mx_g0 {
+            let mx_group = mx_g0 + mx_j;
+            let mx_row = uplift_simd::tape::TapeRow::new(&mx_tape, S::LANES, mx_j);
+            let mx_value = |c: &[f32]| s.splat(if c.len() == 1 { c[0] } else { c[mx_group] });
+            let mx_gs = |c: usize| mx_value(geom[c]);
+            let mx_xs = |c: usize| mx_value(inputs[c]);
+            let mx_geom = mx_geometry {
+                texcoord: [mx_gs(0), mx_gs(1)],
+                position_object: [mx_gs(2), mx_gs(3), mx_gs(4)],
+                position_world: [mx_gs(5), mx_gs(6), mx_gs(7)],
+                normal_object: [mx_gs(8), mx_gs(9), mx_gs(10)],
+                normal_world: [mx_gs(11), mx_gs(12), mx_gs(13)],
+                tangent_object: [mx_gs(14), mx_gs(15), mx_gs(16)],
+                tangent_world: [mx_gs(17), mx_gs(18), mx_gs(19)],
+                bitangent_object: uplift_simd::vector::cross::<S>([mx_gs(8), mx_gs(9), mx_gs(10)], [mx_gs(14), mx_gs(15), mx_gs(16)]),
+                bitangent_world: uplift_simd::vector::cross::<S>([mx_gs(11), mx_gs(12), mx_gs(13)], [mx_gs(17), mx_gs(18), mx_gs(19)]),
+            };
+            let mut mx_start = mx_group * k;
+            let mx_stop = mx_start + k;
+            while mx_start < mx_stop {
+                let mx_end = (mx_start + S::LANES).min(mx_stop);
+                let mx_x = |c: usize| if inputs[c].len() == 1 { s.splat(inputs[c][0]) } else { s.load_partial(&inputs[c][mx_start..mx_end]) };
+                let mx_inputs = MxInputs {
+                    wv: [mx_xs(0), mx_xs(1), mx_xs(2)],
+                    wl: [mx_x(3), mx_x(4), mx_x(5)],
+                    weight: mx_xs(6),
+                    ior: [mx_xs(7), mx_xs(8), mx_xs(9)],
+                    extinction: [mx_xs(10), mx_xs(11), mx_xs(12)],
+                    roughness: [mx_xs(13), mx_xs(14)],
+                };
+                let mx_out = mx_pattern_p16(s, mx_geom, mx_inputs, mx_row);
+                s.store_partial(mx_out.response[0], &mut outputs[0][mx_start..mx_end]);
+                s.store_partial(mx_out.response[1], &mut outputs[1][mx_start..mx_end]);
+                s.store_partial(mx_out.response[2], &mut outputs[2][mx_start..mx_end]);
+                s.store_partial(mx_out.throughput[0], &mut outputs[3][mx_start..mx_end]);
+                s.store_partial(mx_out.throughput[1], &mut outputs[4][mx_start..mx_end]);
+                s.store_partial(mx_out.throughput[2], &mut outputs[5][mx_start..mx_end]);
+                mx_start = mx_end;
+            }
+        }
+        mx_g0 = mx_g1;
+    }
+}
+
+/// [`mx_pattern_grouped_packets`] at this machine's SIMD level, with the same contract;
+/// `false`, having done nothing, on a machine without AVX-512 or AVX2.
+pub fn mx_pattern_grouped_batch_simd(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut [f32]], k: usize) -> bool {
+    struct MxBatch<'a, 'b, 'c>(&'a [&'b [f32]], &'a [&'b [f32]], &'a mut [&'c mut [f32]], usize);
+    impl uplift_simd::WithSimd for MxBatch<'_, '_, '_> {
+        type Output = ();
+        #[inline(always)]
+        fn with_simd<S: Simd>(self, s: S) {
+            mx_pattern_grouped_packets(s, self.0, self.1, self.2, self.3)
+        }
+    }
+    uplift_simd::Level::run_hardware(MxBatch(geom, inputs, outputs, k)).is_some()
 }

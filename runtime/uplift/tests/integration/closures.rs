@@ -698,7 +698,7 @@ fn degenerate_inputs_stay_finite() {
                     }
                 }
             }
-            let batch = PatternBatch { geometry: local_frame(wv.len()), inputs, textures: vec![] };
+            let batch = PatternBatch { geometry: local_frame(wv.len()), inputs, textures: vec![], points_per_group: 1 };
             let gpu_out = gpu.run_pattern(&b.kernel, &batch).unwrap();
             assert!(gpu_out.data().iter().all(|x| x.is_finite()), "{graph} {}: wgpu gives NaN or Inf", context.name());
         }

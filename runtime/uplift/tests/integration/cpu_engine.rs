@@ -215,6 +215,80 @@ fn packet_kernels_agree_with_the_scalar_kernels() {
     }
 }
 
+/// Every shipped kernel with a dependence-split form (issue 24, `uplift_compiler::packet_split`):
+/// its grouped batch entry — group pass, tape, point pass — against the scalar writer's kernel
+/// (the oracle) on the same points, to 1e-4 relative (floor 1e-6), for groups of 4, 16 and 19
+/// points (19: each group's last packet partial) and a group count that leaves the group
+/// pass's last packet partial. Lanes diverge in both passes: each group has its own random
+/// material, view and frame (weights drawn from [0, 1), views on the whole sphere, so groups
+/// in one packet take different sides of per-group branches) and each point its own light
+/// direction on the whole sphere (points of one group take different sides of per-point
+/// branches). The same batch through the CPU engine with `points_per_group` gives the same
+/// bits as the driver call. AVX2 is checked by the packet test's second run on AVX-512
+/// machines (`UPLIFT_SIMD=avx2` reaches this test too when named).
+#[test]
+fn grouped_kernels_agree_with_the_scalar_kernels() {
+    let level = uplift_simd::Level::current();
+    let compiler = Compiler::builtin();
+    let grouped: Vec<_> = BUILTIN_KERNELS.iter().enumerate().filter(|(_, k)| k.grouped.is_some()).collect();
+    assert!(!grouped.is_empty(), "no grouped kernels");
+    if level == uplift_simd::Level::Scalar {
+        eprintln!("NOT TESTED on this machine: no AVX2 or AVX-512, the grouped kernels decline");
+        return;
+    }
+    let engine = cpu(2);
+    for (ki, shipped) in grouped {
+        let g = shipped.grouped.unwrap();
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..").join(shipped.source);
+        let context = shipped.context.and_then(uplift_compiler::ClosureContext::from_name);
+        let kernel = compiler.compile_file_in(&path, &OutputSelection::AllNumeric, context).kernel.unwrap();
+        for per_group in [4usize, 16, 19] {
+            let groups = 37;
+            let n = groups * per_group;
+            let mut rng = Rng::new(0x5917 ^ ki as u64 ^ (per_group as u64) << 20);
+            let group_points = random_points(&mut rng, groups);
+            let group_rows = random_inputs(&mut rng, &kernel, groups);
+            let point_rows = random_inputs(&mut rng, &kernel, n);
+            let stride = kernel.input_stride;
+            let mut rows = Vec::with_capacity(n * stride);
+            let mut points = Vec::with_capacity(n);
+            for i in 0..n {
+                let grp = i / per_group;
+                let mut row = group_rows[grp * stride..(grp + 1) * stride].to_vec();
+                for &c in g.point_columns {
+                    row[c] = point_rows[i * stride + c];
+                }
+                rows.extend(row);
+                points.push(group_points[grp]);
+            }
+            let mut batch = PatternBatch::from_rows(&points, &rows, stride, vec![]);
+            let geometry: Vec<&[f32]> = (0..batch.geometry.width()).map(|c| batch.geometry.column(c)).collect();
+            let inputs: Vec<&[f32]> = (0..batch.inputs.width()).map(|c| batch.inputs.column(c)).collect();
+            let mut split_out = Columns::zeros(n, kernel.output_stride);
+            assert!(uplift_kernels::driver::run_grouped_blocks(&g, per_group, n, &geometry, &inputs, split_out.data_mut(), kernel.output_stride), "the grouped form declined");
+            let mut scalar_out = Columns::zeros(n, kernel.output_stride);
+            {
+                let mut cols: Vec<&mut [f32]> = scalar_out.data_mut().chunks_exact_mut(n).collect();
+                (shipped.scalar_batch())(&geometry, &inputs, &mut cols, &uplift_kernels::driver::TextureSet::default());
+            }
+            let mut worst = 0.0f32;
+            for (k, (x, y)) in split_out.data().iter().zip(scalar_out.data()).enumerate() {
+                let allowed = (1e-4 * x.abs().max(y.abs())).max(1e-6);
+                let err = (x - y).abs();
+                assert!(err <= allowed || (x.is_nan() && y.is_nan()), "{} ({}, {per_group} per group): column {} point {}: grouped {x}, scalar {y}", shipped.name, level.name(), k / n, k % n);
+                worst = worst.max(err / allowed);
+            }
+            assert!(split_out.data().iter().any(|v| *v != split_out.data()[0]), "{}: constant output", shipped.name);
+            // Through the engine: the same bits.
+            batch.points_per_group = per_group;
+            let prepared = engine.prepare(&kernel).unwrap();
+            let via_engine = engine.run_prepared(&prepared, &batch).unwrap();
+            assert!(via_engine.data().iter().zip(split_out.data()).all(|(a, b)| a.to_bits() == b.to_bits()), "{}: the engine's grouped run differs", shipped.name);
+            eprintln!("{} ({}): {groups} groups of {per_group}, worst error / tolerance {worst:.3}", shipped.name, level.name());
+        }
+    }
+}
+
 /// Uniform columns (`Columns::mark_uniform`): the CPU engine hands them to the kernel as one
 /// value per block; results are bit for bit those of the same batch unmarked, for n below,
 /// at and above a block, and writing a column clears its mark.

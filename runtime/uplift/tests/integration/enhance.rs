@@ -126,7 +126,7 @@ fn run_wgpu(k: &PatternKernel, geometry: &[Geometry], set: &[(&str, Vec<[f32; 3]
             }
         }
     }
-    let batch = PatternBatch { geometry: Geometry::columns(geometry), inputs, textures: kernel_textures(k) };
+    let batch = PatternBatch { geometry: Geometry::columns(geometry), inputs, textures: kernel_textures(k), points_per_group: 1 };
     common::engine().run_pattern(k, &batch).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -228,7 +228,7 @@ fn rules_validate_and_their_shipped_kernels_agree_with_wgpu() {
                 }
             }
         }
-        let batch = PatternBatch { geometry: Geometry::columns(&geometry), inputs, textures: kernel_textures(&kernel) };
+        let batch = PatternBatch { geometry: Geometry::columns(&geometry), inputs, textures: kernel_textures(&kernel), points_per_group: 1 };
         let cpu = engine.run_prepared(&prepared, &batch).unwrap();
         let gpu = common::engine().run_pattern(&kernel, &batch).unwrap();
         for col in 0..kernel.output_stride {

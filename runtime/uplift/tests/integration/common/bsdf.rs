@@ -63,7 +63,7 @@ impl Bsdf {
                 assert!(self.kernel.inputs.iter().any(|i| i.input.name == *name), "no input `{name}`");
             }
         }
-        let batch = PatternBatch { geometry: local_frame(n), inputs, textures: vec![] };
+        let batch = PatternBatch { geometry: local_frame(n), inputs, textures: vec![], points_per_group: 1 };
         cpu_engine().run_prepared(&self.prepared, &batch).unwrap()
     }
 
