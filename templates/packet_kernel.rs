@@ -4,7 +4,8 @@
 // over an `uplift_simd` level and computing `S::LANES` points per call, written from the same
 // naga module as the WGSL kernel and the scalar Rust kernel (the oracle); `mx_pattern_packets`,
 // the loop over a structure-of-arrays batch one packet at a time; and `mx_pattern_batch_simd`,
-// that loop at this machine's SIMD level. Include it in a module of its own; it needs uplift_simd.
+// that loop at this machine's SIMD level (both left out of a kernel shipped in its grouped form
+// only); for a BSDF kernel, the dependence-split passes and their grouped batch entry. Include it in a module of its own; it needs uplift_simd.
 {{ module }}
 
 /// Columns of `geom`: texcoord (2), then position, normal and tangent, each in object and world
@@ -15,6 +16,7 @@ pub const INPUT_COLUMNS: usize = {{ input_stride }};
 /// Columns of `outputs`: the outputs' components.
 pub const OUTPUT_COLUMNS: usize = {{ output_stride }};
 
+{%- if plain_entry %}
 /// Evaluates `mx_pattern` for every point of a structure-of-arrays batch, `S::LANES` points at
 /// a time: `geom` holds `GEOMETRY_COLUMNS` columns, `inputs` `INPUT_COLUMNS`, `outputs`
 /// `OUTPUT_COLUMNS`, all of one length; point `i` reads `geom[c][i]` and `inputs[c][i]` and
@@ -74,6 +76,7 @@ pub fn mx_pattern_batch_simd(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [
     }
     uplift_simd::Level::run_hardware(MxBatch(geom, inputs, outputs)).is_some()
 }
+{%- endif %}
 {%- if let Some(sp) = split %}
 
 /// Tape slots per group of the dependence-split passes (`uplift_compiler::packet_split`).
@@ -82,7 +85,7 @@ pub const SPLIT_SLOTS: usize = {{ sp.slots }};
 /// random numbers); every other input column, and every geometry column, is per group.
 pub const POINT_INPUT_COLUMNS: &[usize] = &[{% for c in sp.point_columns %}{{ c }}, {% endfor %}];
 
-/// [`mx_pattern_packets`] on a grouped batch: `k` consecutive points share a group (one
+/// `mx_pattern` on a grouped batch: `k` consecutive points share a group (one
 /// material and one view, say), so the per-group work runs once per group, vectorised across
 /// groups (the group pass), and the per-point work once per point (the point pass, one
 /// group's points per packet). The columns in `POINT_INPUT_COLUMNS` and the outputs hold one

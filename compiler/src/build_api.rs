@@ -24,6 +24,8 @@ pub struct Builder {
     graphs: Vec<(PathBuf, OutputSelection, Option<ClosureContext>)>,
     /// Indices into `graphs` of those that also get a packet kernel.
     packet: Vec<usize>,
+    /// Those among `packet` whose packet kernel is only its grouped (dependence-split) form.
+    grouped_only: Vec<usize>,
     albedo_table_data: Option<String>,
 }
 
@@ -83,6 +85,13 @@ impl Builder {
     pub fn packet_closure_graph(mut self, path: impl Into<PathBuf>, context: ClosureContext) -> Builder {
         self.packet.push(self.graphs.len());
         self.closure_graph(path, context)
+    }
+
+    /// [`Builder::packet_closure_graph`] with only the grouped batch entry (the dependence-split
+    /// passes, `packet_split.rs`): for a kernel whose scalar form beats its unsplit packet form.
+    pub fn grouped_closure_graph(mut self, path: impl Into<PathBuf>, context: ClosureContext) -> Builder {
+        self.grouped_only.push(self.graphs.len());
+        self.packet_closure_graph(path, context)
     }
 
     /// Adds a document, compiling only the named outputs.
@@ -168,7 +177,7 @@ impl Builder {
             }
             let packet = match self.packet.contains(&index) {
                 true => {
-                    let options = crate::backend_packet::PacketOptions { table_data: self.albedo_table_data.clone() };
+                    let options = crate::backend_packet::PacketOptions { table_data: self.albedo_table_data.clone(), grouped_only: self.grouped_only.contains(&index) };
                     Some(crate::packet_kernel::write_packet_kernel(&kernel, &options).map_err(|e| format!("{} (packet kernel): {e}", path.display()))?)
                 }
                 false => None,

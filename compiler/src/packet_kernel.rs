@@ -52,6 +52,8 @@ struct PacketKernelTemplate<'a> {
     call: String,
     output_stores: Vec<String>,
     split: Option<SplitFields>,
+    /// Write the unsplit batch entry (`mx_pattern_packets`, `mx_pattern_batch_simd`).
+    plain_entry: bool,
 }
 
 /// Writes `kernel` as packet Rust with its batch loop (module doc).
@@ -169,6 +171,7 @@ pub fn write_packet_kernel(kernel: &PatternKernel, options: &PacketOptions) -> R
         input_fields,
         call,
         output_stores,
+        plain_entry: !options.grouped_only || split.is_none(),
         split,
     };
     let mut text = template.render().map_err(|e| unsupported(format!("(template error) {e}")))?;

@@ -78,11 +78,13 @@ pub(crate) struct SplitState {
     region_defined: HashSet<H>,
     /// Why the function cannot be split, when writing found out.
     invalid: Option<String>,
+    /// Slots of the function's range, its callees' included (known after the first pass).
+    total: usize,
 }
 
 impl SplitState {
     fn new(pass: Pass, name: String, fv: FunctionVariance) -> Self {
-        SplitState { pass, name, fv, recording: false, referenced: BTreeMap::new(), pending: Vec::new(), slots: HashMap::new(), sites: HashMap::new(), region: 0, region_defined: HashSet::new(), invalid: None }
+        SplitState { pass, name, fv, recording: false, referenced: BTreeMap::new(), pending: Vec::new(), slots: HashMap::new(), sites: HashMap::new(), region: 0, region_defined: HashSet::new(), invalid: None, total: 0 }
     }
 
     /// The pass's extra parameter: the tape it writes or reads.
@@ -90,6 +92,16 @@ impl SplitState {
         match self.pass {
             Pass::Group => "tg: &mut [f32]",
             Pass::Point => "tp: uplift_simd::tape::TapeRow<'_>",
+        }
+    }
+
+    /// A line opening the pass's body: the point pass checks its tape row's length once.
+    pub(crate) fn entry_line(&self) -> Option<String> {
+        match (self.pass, self.recording) {
+            (Pass::Point, false) => Some(format!("    let tp = tp.fit::<S>({});\n", self.total)),
+            // The group pass's stores need no bounds check of their own either.
+            (Pass::Group, _) => Some(format!("    assert!(tg.len() >= {} * S::LANES, \"the tape is shorter than the pass's slots\");\n", self.total)),
+            _ => None,
         }
     }
 
@@ -484,7 +496,7 @@ impl FunctionWriter<'_> {
         }
         let site = self.sp().sites.get(&r).cloned().flatten();
         match (pass, site) {
-            (Pass::Point, Some(cs)) => self.write_call(function, &cs.point, arguments, Some(r), Some(format!("tp.at({})", cs.base)), true),
+            (Pass::Point, Some(cs)) => self.write_call(function, &cs.point, arguments, Some(r), Some(format!("tp.at::<S>({})", cs.base)), true),
             (Pass::Point, None) => self.write_call(function, &plain, arguments, Some(r), None, true),
             (Pass::Group, Some(cs)) => {
                 let guarded = self.group_guard(r);
@@ -601,6 +613,7 @@ impl<'m> Splitter<'m> {
             let mut state = SplitState::new(p, if p == Pass::Point { point.clone() } else { group.clone() }, fv.clone());
             state.slots = slots.clone();
             state.sites = sites.clone();
+            state.total = next;
             let (text, _) = pass(self, state)?;
             out += "\n";
             out += &text;

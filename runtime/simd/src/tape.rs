@@ -37,57 +37,65 @@ pub fn put_m<S: Simd>(s: S, tape: &mut [f32], k: usize, v: S::M) {
     put(s, tape, k, v.select(s.splat(1.0), s.splat(0.0)));
 }
 
-/// One group's view of a tape written by a group pass of `lanes`-wide packets: the group is
-/// lane `lane` of its packet.
+/// One group's view of a tape written by a group pass of `S::LANES`-wide packets (the same
+/// level as the point pass that reads it): the group is lane `lane` of its packet.
 #[derive(Clone, Copy, Debug)]
 pub struct TapeRow<'a> {
+    /// The tape from the group's lane of the current range's first slot on: slot `k` is at
+    /// `k · S::LANES`.
     slots: &'a [f32],
-    lanes: usize,
-    lane: usize,
 }
 
 impl<'a> TapeRow<'a> {
     /// The row of lane `lane` of a tape written `lanes` groups at a time.
     pub fn new(slots: &'a [f32], lanes: usize, lane: usize) -> Self {
         assert!(lane < lanes, "TapeRow: lane {lane} of a {lanes}-lane tape");
-        TapeRow { slots, lanes, lane }
+        TapeRow { slots: &slots[lane.min(slots.len())..] }
+    }
+
+    /// The row, checked once to hold `slots` slots (a split pass calls this on entry, so that
+    /// its reads at constant slots need no bounds check of their own).
+    #[inline(always)]
+    pub fn fit<S: Simd>(self, slots: usize) -> Self {
+        assert!(slots == 0 || self.slots.len() > (slots - 1) * S::LANES, "TapeRow: fewer than {slots} slots");
+        self
     }
 
     /// The slots from `base` on (a callee's range).
     #[inline(always)]
-    pub fn at(self, base: usize) -> Self {
-        TapeRow { slots: &self.slots[base * self.lanes..], ..self }
+    pub fn at<S: Simd>(self, base: usize) -> Self {
+        TapeRow { slots: &self.slots[base * S::LANES..] }
     }
 
     /// Slot `k`, every lane the group's value.
     #[inline(always)]
     pub fn f<S: Simd>(self, s: S, k: usize) -> S::F {
-        s.splat(self.slots[k * self.lanes + self.lane])
+        s.splat(self.slots[k * S::LANES])
     }
 
     /// Slot `k` as an i32 packet.
     #[inline(always)]
     pub fn i<S: Simd>(self, s: S, k: usize) -> S::I {
-        s.splat_i(self.slots[k * self.lanes + self.lane].to_bits() as i32)
+        s.splat_i(self.slots[k * S::LANES].to_bits() as i32)
     }
 
     /// Slot `k` as a u32 packet.
     #[inline(always)]
     pub fn u<S: Simd>(self, s: S, k: usize) -> S::U {
-        s.splat_u(self.slots[k * self.lanes + self.lane].to_bits())
+        s.splat_u(self.slots[k * S::LANES].to_bits())
     }
 
     /// Slot `k` as a mask.
     #[inline(always)]
     pub fn m<S: Simd>(self, s: S, k: usize) -> S::M {
-        s.first_lanes(if self.slots[k * self.lanes + self.lane] != 0.0 { usize::MAX } else { 0 })
+        s.first_lanes(if self.slots[k * S::LANES] != 0.0 { usize::MAX } else { 0 })
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Emu;
+    use crate::{Emu, F32s};
 
     #[test]
     fn every_kind_round_trips_through_a_slot() {
@@ -100,7 +108,7 @@ mod tests {
         let expect_i = [-7, i32::MIN, 0, 123_456_789];
         let expect_u = [u32::MAX, 0x7fc0_0001, 1, 0];
         for lane in 0..4 {
-            let row = TapeRow::new(&tape, 4, lane);
+            let row = TapeRow::new(&tape, 4, lane).fit::<Emu<4>>(4);
             let mut f = [0.0f32; 4];
             row.f(s, 0).write_to(&mut f);
             assert_eq!(f[0].to_bits(), [1.5f32, -2.0, f32::INFINITY, 0.0][lane].to_bits());
@@ -114,7 +122,7 @@ mod tests {
             assert_eq!(row.m(s, 3).any(), lane == 0);
             // A callee's range starts `base` slots in.
             let mut g = [0.0f32; 4];
-            row.at(1).f(s, 1).write_to(&mut g);
+            row.at::<Emu<4>>(1).f(s, 1).write_to(&mut g);
             assert_eq!(g[0].to_bits(), f32::from_bits(expect_u[lane]).to_bits());
         }
     }

@@ -23,7 +23,10 @@
 //! defaults leave 6 of the 8 lobes at weight 0) and the conductor graph at GGX α 0.3 (gold, as
 //! Mitsuba's `roughconductor` below); `--random-params` draws every `uplift_stack` parameter
 //! per row inside its range (stack_params.rs; weights at least 5 % of their range, so no lobe
-//! is dead). Directions: `wv` and `wl` uniform on the upper hemisphere. Closure kernels: the
+//! is dead). Directions: `wv` and `wl` uniform on the upper hemisphere. `--per-view K`: the
+//! grouped layout (`PatternBatch::points_per_group`): runs of K rows share their first row's
+//! view and parameters, each row its own `wl` — a kernel with a dependence-split form runs its
+//! per-view work once per K rows. Closure kernels: the
 //! frame and every parameter not drawn per row are uniform columns (`Columns::mark_uniform`),
 //! as Mitsuba's benchmark has one material and one frame. In-process runs write into one
 //! output buffer reused from batch to batch (`CpuEngine::run_prepared_into`), as Dr.Jit's
@@ -54,10 +57,11 @@ struct Options {
     random_params: bool,
     mitsuba: Option<String>,
     in_process: bool,
+    per_view: usize,
 }
 
 fn options() -> Options {
-    let mut o = Options { graph: None, context: None, points: 1 << 20, seconds: 2.0, wgpu_child: false, params: Vec::new(), random_params: false, mitsuba: None, in_process: false };
+    let mut o = Options { graph: None, context: None, points: 1 << 20, seconds: 2.0, wgpu_child: false, params: Vec::new(), random_params: false, mitsuba: None, in_process: false, per_view: 1 };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
@@ -85,6 +89,10 @@ fn options() -> Options {
                 o.params.push((name.to_string(), values));
             }
             "--random-params" => o.random_params = true,
+            "--per-view" => {
+                i += 1;
+                o.per_view = args[i].parse().ok().filter(|&k: &usize| k > 0).expect("--per-view K (K ≥ 1)");
+            }
             "--in-process" => o.in_process = true,
             "--mitsuba" => {
                 i += 1;
@@ -115,7 +123,7 @@ fn parameters(graph: &Path, o: &Options) -> Vec<(String, Vec<f32>)> {
 
 /// Seeded points on a sphere of radius 3 (world position, normal, tangent) with the documented
 /// interface inputs.
-fn batch(kernel: &PatternKernel, n: usize, params: &[(String, Vec<f32>)], random_params: bool) -> PatternBatch {
+fn batch(kernel: &PatternKernel, n: usize, params: &[(String, Vec<f32>)], random_params: bool, per_view: usize) -> PatternBatch {
     let mut state = 0x2545_f491_4f6c_dd1du64;
     let mut next = move || {
         state ^= state << 13;
@@ -177,12 +185,25 @@ fn batch(kernel: &PatternKernel, n: usize, params: &[(String, Vec<f32>)], random
             row[kernel.inputs[d].offset..kernel.inputs[d].offset + 3].copy_from_slice(&v);
         }
     }
+    // Groups of `per_view` rows share the first one's view and parameters (the grouped layout).
+    if per_view > 1 {
+        assert!(n % per_view == 0, "--per-view {per_view} does not divide --points {n}");
+        let stride = kernel.input_stride;
+        let shared: Vec<usize> = kernel.inputs.iter().filter(|i| !["wl", "u"].contains(&i.input.name.as_str())).flat_map(|i| i.offset..i.offset + i.input.ty.components().unwrap_or(1)).collect();
+        for r in 0..n {
+            let leader = r - r % per_view;
+            for &c in &shared {
+                rows[r * stride + c] = rows[leader * stride + c];
+            }
+        }
+    }
     // One frame and (without --random-params) one material for the whole batch, as Mitsuba's
     // benchmark has them: those columns are marked uniform, so the CPU engine does not stream
     // them from memory.
     let mut b = PatternBatch::from_rows(&vec![local; n], &rows, kernel.input_stride, vec![]);
     b.geometry.mark_uniform_columns();
     b.inputs.mark_uniform_columns();
+    b.points_per_group = per_view;
     b
 }
 
@@ -211,7 +232,7 @@ fn main() {
     let c = compiler.compile_file_in(&graph, &OutputSelection::AllNumeric, o.context);
     let kernel = c.kernel.unwrap_or_else(|| panic!("{}: {:?}", graph.display(), c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>()));
     let params = parameters(&graph, &o);
-    let b = batch(&kernel, o.points, &params, o.random_params);
+    let b = batch(&kernel, o.points, &params, o.random_params, o.per_view);
     if o.wgpu_child {
         match wgpu_rate(&kernel, &b, o.seconds) {
             Ok((r, _)) => println!("rate={r}"),
@@ -247,6 +268,9 @@ fn main() {
                 all.run_prepared_into(&prepared, &b, &mut out).unwrap();
             });
             let form = match &prepared {
+                CpuKernel::Builtin(k) if k.grouped.is_some() && o.per_view >= uplift_engines::cpu_engine::GROUPED_MIN_POINTS && uplift_simd::Level::current() != uplift_simd::Level::Scalar => {
+                    format!("dependence-split packet kernel, {} points per view, {}", o.per_view, uplift_simd::Level::current().name())
+                }
                 CpuKernel::Builtin(k) if k.is_packet() && uplift_simd::Level::current() != uplift_simd::Level::Scalar => format!("packet kernel, {}", uplift_simd::Level::current().name()),
                 _ => "scalar kernel".to_string(),
             };
@@ -255,7 +279,7 @@ fn main() {
             // A kernel shipped in packet form: the scalar writer's kernel too (what it replaces).
             if let CpuKernel::Builtin(k) = &prepared {
                 if let Some(scalar) = k.scalar {
-                    let scalar = CpuKernel::Builtin(Box::leak(Box::new(uplift_kernels::shipped::BuiltinKernel { batch: scalar, scalar: None, ..**k })));
+                    let scalar = CpuKernel::Builtin(Box::leak(Box::new(uplift_kernels::shipped::BuiltinKernel { batch: scalar, scalar: None, grouped: None, ..**k })));
                     let s1 = rate(o.points, o.seconds, || {
                         one.run_prepared_into(&scalar, &b, &mut out).unwrap();
                     });
@@ -319,6 +343,9 @@ fn main() {
     }
     if o.random_params {
         child_args.push("--random-params".into());
+    }
+    if o.per_view > 1 {
+        child_args.extend(["--per-view".to_string(), o.per_view.to_string()]);
     }
     if let Some(c) = o.context {
         child_args.extend(["--context".to_string(), c.name().to_string()]);

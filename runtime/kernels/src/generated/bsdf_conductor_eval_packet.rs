@@ -4,7 +4,8 @@
 // over an `uplift_simd` level and computing `S::LANES` points per call, written from the same
 // naga module as the WGSL kernel and the scalar Rust kernel (the oracle); `mx_pattern_packets`,
 // the loop over a structure-of-arrays batch one packet at a time; and `mx_pattern_batch_simd`,
-// that loop at this machine's SIMD level. Include it in a module of its own; it needs uplift_simd.
+// that loop at this machine's SIMD level (both left out of a kernel shipped in its grouped form
+// only); for a BSDF kernel, the dependence-split passes and their grouped batch entry. Include it in a module of its own; it needs uplift_simd.
 #[allow(unused_imports)]
 use uplift_simd::{F32s, I32s, M32s, Simd, U32s};
 
@@ -1586,6 +1587,7 @@ pub fn mx_pattern<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>) ->
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_closure_new_p1<S: Simd>(s: S, context: S::I, wv: [S::F; 3], wl: [S::F; 3], u: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_closure<S> {
+    let tp = tp.fit::<S>(6);
     let _e7 = [s.splat(0.0f32), s.splat(0.0f32), s.splat(1.0f32)];
     let _e9 = [s.splat(0.0f32); 3];
     let _e11 = [s.splat(0.99999994f32); 3];
@@ -1599,6 +1601,7 @@ pub fn mx_closure_new_p1<S: Simd>(s: S, context: S::I, wv: [S::F; 3], wl: [S::F;
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_closure_new_g1<S: Simd>(s: S, context: S::I, wv: [S::F; 3], wl: [S::F; 3], u: [S::F; 3], tg: &mut [f32]) -> mx_closure<S> {
+    assert!(tg.len() >= 6 * S::LANES, "the tape is shorter than the pass's slots");
     let _e7 = [s.splat(0.0f32), s.splat(0.0f32), s.splat(1.0f32)];
     let _e9 = [s.splat(0.0f32); 3];
     let _e11 = [s.splat(0.99999994f32); 3];
@@ -1617,6 +1620,7 @@ pub fn mx_closure_new_g1<S: Simd>(s: S, context: S::I, wv: [S::F; 3], wl: [S::F;
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_fresnel_conductor_p2<S: Simd>(s: S, cos_theta_6: S::F, n_4: [S::F; 3], k_3: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+    let tp = tp.fit::<S>(6);
     let _e5 = cos_theta_6.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e6 = (_e5 * _e5);
     let _e8 = (-_e5).mul_add(_e5, s.splat(1.0f32));
@@ -1660,6 +1664,7 @@ pub fn mx_fresnel_conductor_p2<S: Simd>(s: S, cos_theta_6: S::F, n_4: [S::F; 3],
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_fresnel_conductor_g2<S: Simd>(s: S, cos_theta_6: S::F, n_4: [S::F; 3], k_3: [S::F; 3], tg: &mut [f32]) -> [S::F; 3] {
+    assert!(tg.len() >= 6 * S::LANES, "the tape is shorter than the pass's slots");
     let _e9 = uplift_simd::vector::mul::<S, 3>(n_4, n_4);
     let _e10 = uplift_simd::vector::mul::<S, 3>(k_3, k_3);
     let _e11 = uplift_simd::vector::sub::<S, 3>(_e9, _e10);
@@ -1680,6 +1685,7 @@ pub fn mx_fresnel_conductor_g2<S: Simd>(s: S, cos_theta_6: S::F, n_4: [S::F; 3],
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_thin_film_cos_p3<S: Simd>(s: S, cos_theta: S::F, eta2_: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let tp = tp.fit::<S>(1);
     let _e4 = cos_theta.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e5 = (_e4 * _e4);
     let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
@@ -1694,6 +1700,7 @@ pub fn mx_thin_film_cos_p3<S: Simd>(s: S, cos_theta: S::F, eta2_: S::F, tp: upli
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_thin_film_cos_g3<S: Simd>(s: S, cos_theta: S::F, eta2_: S::F, tg: &mut [f32]) -> S::F {
+    assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
     let _e8 = (eta2_ * eta2_);
     uplift_simd::tape::put(s, tg, 0, _e8);
     return s.splat(0.0);
@@ -1702,6 +1709,7 @@ pub fn mx_thin_film_cos_g3<S: Simd>(s: S, cos_theta: S::F, eta2_: S::F, tg: &mut
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_fresnel_conductor_polarized_p4<S: Simd>(s: S, cos_theta_1: S::F, n_1: [S::F; 3], k_1: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
+    let tp = tp.fit::<S>(6);
     let _e5 = cos_theta_1.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e6 = (_e5 * _e5);
     let _e8 = (-_e5).mul_add(_e5, s.splat(1.0f32));
@@ -1744,6 +1752,7 @@ pub fn mx_fresnel_conductor_polarized_p4<S: Simd>(s: S, cos_theta_1: S::F, n_1: 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_fresnel_conductor_polarized_g4<S: Simd>(s: S, cos_theta_1: S::F, n_1: [S::F; 3], k_1: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
+    assert!(tg.len() >= 6 * S::LANES, "the tape is shorter than the pass's slots");
     let _e9 = uplift_simd::vector::mul::<S, 3>(n_1, n_1);
     let _e10 = uplift_simd::vector::mul::<S, 3>(k_1, k_1);
     let _e11 = uplift_simd::vector::sub::<S, 3>(_e9, _e10);
@@ -1765,6 +1774,7 @@ pub fn mx_fresnel_conductor_polarized_g4<S: Simd>(s: S, cos_theta_1: S::F, n_1: 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_fresnel_conductor_phase_polarized_p5<S: Simd>(s: S, cos_theta_2: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
+    let tp = tp.fit::<S>(21);
     let _e5 = [s.splat(1e-6f32); 3];
     let _e8 = (cos_theta_2 * cos_theta_2);
     let _e10 = (-cos_theta_2).mul_add(cos_theta_2, s.splat(1.0f32));
@@ -1826,6 +1836,7 @@ pub fn mx_fresnel_conductor_phase_polarized_p5<S: Simd>(s: S, cos_theta_2: S::F,
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_fresnel_conductor_phase_polarized_g5<S: Simd>(s: S, cos_theta_2: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
+    assert!(tg.len() >= 21 * S::LANES, "the tape is shorter than the pass's slots");
     let _e5 = [s.splat(1e-6f32); 3];
     let _e6 = uplift_simd::vector::zip::<S, 3>(eta2_1, _e5, |x, y| x.max(y));
     let _e7 = uplift_simd::vector::div::<S, 3>(kappa2_, _e6);
@@ -1886,6 +1897,7 @@ pub fn mx_fresnel_conductor_phase_polarized_g5<S: Simd>(s: S, cos_theta_2: S::F,
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_fresnel_dielectric_polarized_p6<S: Simd>(s: S, cos_theta_3: S::F, eta: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 2] {
+    let tp = tp.fit::<S>(1);
     let _e4 = cos_theta_3.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e5 = (_e4 * _e4);
     let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
@@ -1916,6 +1928,7 @@ pub fn mx_fresnel_dielectric_polarized_p6<S: Simd>(s: S, cos_theta_3: S::F, eta:
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_fresnel_dielectric_polarized_g6<S: Simd>(s: S, cos_theta_3: S::F, eta: S::F, tg: &mut [f32]) -> [S::F; 2] {
+    assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
     let _e8 = (eta * eta);
     uplift_simd::tape::put(s, tg, 0, _e8);
     return [s.splat(0.0); 2];
@@ -1924,7 +1937,8 @@ pub fn mx_fresnel_dielectric_polarized_g6<S: Simd>(s: S, cos_theta_3: S::F, eta:
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_airy_reflectance_p7<S: Simd>(s: S, cos_theta_4: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
-    let _e6 = mx_fresnel_dielectric_polarized_p6(s, cos_theta_4, eta2_2, tp.at(3));
+    let tp = tp.fit::<S>(4);
+    let _e6 = mx_fresnel_dielectric_polarized_p6(s, cos_theta_4, eta2_2, tp.at::<S>(3));
     let _e12 = tp.f(s, 0);
     let _e14 = cos_theta_4.lt(_e12);
     let _e16 = _e14.select(s.splat(0.0f32), s.splat(3.1415927f32));
@@ -1967,6 +1981,7 @@ pub fn mx_airy_reflectance_p7<S: Simd>(s: S, cos_theta_4: S::F, cos_t: S::F, eta
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_airy_reflectance_g7<S: Simd>(s: S, cos_theta_4: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>, tg: &mut [f32]) -> [S::F; 3] {
+    assert!(tg.len() >= 4 * S::LANES, "the tape is shorter than the pass's slots");
     let _e6 = mx_fresnel_dielectric_polarized_g6(s, cos_theta_4, eta2_2, &mut tg[3 * S::LANES..]);
     let _e7 = (eta2_2 * eta2_2);
     let _e9 = eta2_2.mul_add(eta2_2, s.splat(1.0f32));
@@ -1989,19 +2004,21 @@ pub fn mx_airy_reflectance_g7<S: Simd>(s: S, cos_theta_4: S::F, cos_t: S::F, eta
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_fresnel_airy_conductor_p8<S: Simd>(s: S, cos_theta_5: S::F, n_2: [S::F; 3], k_2: [S::F; 3], thickness_1: S::F, film_ior: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+    let tp = tp.fit::<S>(39);
     let _e6 = tp.f(s, 0);
-    let _e7 = mx_thin_film_cos_p3(s, cos_theta_5, _e6, tp.at(7));
+    let _e7 = mx_thin_film_cos_p3(s, cos_theta_5, _e6, tp.at::<S>(7));
     let _e9 = [tp.f(s, 1), tp.f(s, 2), tp.f(s, 3)];
     let _e11 = [tp.f(s, 4), tp.f(s, 5), tp.f(s, 6)];
-    let _e12 = mx_fresnel_conductor_polarized_p4(s, _e7, _e9, _e11, tp.at(8));
-    let _e13 = s.outline(#[inline(always)] || mx_fresnel_conductor_phase_polarized_p5(s, _e7, _e6, n_2, k_2, tp.at(14)));
-    let _e14 = mx_airy_reflectance_p7(s, cos_theta_5, _e7, _e6, thickness_1, _e12, _e13, tp.at(35));
+    let _e12 = mx_fresnel_conductor_polarized_p4(s, _e7, _e9, _e11, tp.at::<S>(8));
+    let _e13 = mx_fresnel_conductor_phase_polarized_p5(s, _e7, _e6, n_2, k_2, tp.at::<S>(14));
+    let _e14 = mx_airy_reflectance_p7(s, cos_theta_5, _e7, _e6, thickness_1, _e12, _e13, tp.at::<S>(35));
     return _e14;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_fresnel_airy_conductor_g8<S: Simd>(s: S, cos_theta_5: S::F, n_2: [S::F; 3], k_2: [S::F; 3], thickness_1: S::F, film_ior: S::F, tg: &mut [f32]) -> [S::F; 3] {
+    assert!(tg.len() >= 39 * S::LANES, "the tape is shorter than the pass's slots");
     let _e6 = { let (x, y) = (film_ior, s.splat(1.0f32)); x.max(y) };
     uplift_simd::tape::put(s, tg, 0, _e6);
     let _e7 = mx_thin_film_cos_g3(s, cos_theta_5, _e6, &mut tg[7 * S::LANES..]);
@@ -2024,8 +2041,9 @@ pub fn mx_fresnel_airy_conductor_g8<S: Simd>(s: S, cos_theta_5: S::F, n_2: [S::F
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_conductor_fresnel_p9<S: Simd>(s: S, vh: S::F, n_5: [S::F; 3], k_4: [S::F; 3], thickness_2: S::F, film_ior_1: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
-    let _e5 = if (!(thickness_2.gt(s.splat(0.0f32)))).any() { mx_fresnel_conductor_p2(s, vh, n_5, k_4, tp.at(1)) } else { [s.splat(0.0); 3] };
-    let _e6 = if (thickness_2.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_p8(s, vh, n_5, k_4, thickness_2, film_ior_1, tp.at(7)) } else { [s.splat(0.0); 3] };
+    let tp = tp.fit::<S>(46);
+    let _e5 = if (!(thickness_2.gt(s.splat(0.0f32)))).any() { mx_fresnel_conductor_p2(s, vh, n_5, k_4, tp.at::<S>(1)) } else { [s.splat(0.0); 3] };
+    let _e6 = if (thickness_2.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_p8(s, vh, n_5, k_4, thickness_2, film_ior_1, tp.at::<S>(7)) } else { [s.splat(0.0); 3] };
     let _e8 = tp.m(s, 0);
     let _e9 = uplift_simd::vector::select_all::<S, 3>(_e8, _e6, _e5);
     return _e9;
@@ -2034,6 +2052,7 @@ pub fn mx_conductor_fresnel_p9<S: Simd>(s: S, vh: S::F, n_5: [S::F; 3], k_4: [S:
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_conductor_fresnel_g9<S: Simd>(s: S, vh: S::F, n_5: [S::F; 3], k_4: [S::F; 3], thickness_2: S::F, film_ior_1: S::F, tg: &mut [f32]) -> [S::F; 3] {
+    assert!(tg.len() >= 46 * S::LANES, "the tape is shorter than the pass's slots");
     let _e5 = if (!(thickness_2.gt(s.splat(0.0f32)))).any() { mx_fresnel_conductor_g2(s, vh, n_5, k_4, &mut tg[1 * S::LANES..]) } else { [s.splat(0.0); 3] };
     let _e6 = if (thickness_2.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_g8(s, vh, n_5, k_4, thickness_2, film_ior_1, &mut tg[7 * S::LANES..]) } else { [s.splat(0.0); 3] };
     let _e8 = thickness_2.gt(s.splat(0.0f32));
@@ -2044,6 +2063,7 @@ pub fn mx_conductor_fresnel_g9<S: Simd>(s: S, vh: S::F, n_5: [S::F; 3], k_4: [S:
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_ggx_smith_s_p10<S: Simd>(s: S, w_1: [S::F; 3], a: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let tp = tp.fit::<S>(2);
     let _e2 = w_1[2];
     let _e4 = { let (x, y) = (_e2, s.splat(1e-8f32)); x.max(y) };
     let _e5 = (_e4 * _e4);
@@ -2070,6 +2090,7 @@ pub fn mx_ggx_smith_s_p10<S: Simd>(s: S, w_1: [S::F; 3], a: [S::F; 2], tp: uplif
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_ggx_smith_s_g10<S: Simd>(s: S, w_1: [S::F; 3], a: [S::F; 2], tg: &mut [f32]) -> S::F {
+    assert!(tg.len() >= 2 * S::LANES, "the tape is shorter than the pass's slots");
     let _e6 = a[0];
     let _e7 = a[0];
     let _e8 = (_e6 * _e7);
@@ -2084,6 +2105,7 @@ pub fn mx_ggx_smith_s_g10<S: Simd>(s: S, w_1: [S::F; 3], a: [S::F; 2], tg: &mut 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_ggx_d_p11<S: Simd>(s: S, h: [S::F; 3], a_1: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let tp = tp.fit::<S>(1);
     let _e2 = a_1[0];
     let _e3 = a_1[1];
     let _e6 = tp.f(s, 0);
@@ -2111,6 +2133,7 @@ pub fn mx_ggx_d_p11<S: Simd>(s: S, h: [S::F; 3], a_1: [S::F; 2], tp: uplift_simd
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_ggx_d_g11<S: Simd>(s: S, h: [S::F; 3], a_1: [S::F; 2], tg: &mut [f32]) -> S::F {
+    assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
     let _e2 = a_1[0];
     let _e3 = a_1[1];
     let _e4 = (_e2 * _e3);
@@ -2124,17 +2147,18 @@ pub fn mx_ggx_d_g11<S: Simd>(s: S, h: [S::F; 3], a_1: [S::F; 2], tg: &mut [f32])
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_ggx_reflection_p12<S: Simd>(s: S, v_5: [S::F; 3], l_1: [S::F; 3], h_1: [S::F; 3], a_2: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let tp = tp.fit::<S>(5);
     let _e4 = v_5[2];
     let _e6 = tp.f(s, 0);
     let _e7 = l_1[2];
     let _e9 = { let (x, y) = (_e7, s.splat(1e-8f32)); x.max(y) };
     let _e10 = tp.f(s, 1);
     let _e11 = (_e9 * _e10);
-    let _e12 = if (!(l_1[2].le(s.splat(0.0f32)))).any() { mx_ggx_smith_s_p10(s, l_1, a_2, tp.at(2)) } else { s.splat(0.0) };
+    let _e12 = if (!(l_1[2].le(s.splat(0.0f32)))).any() { mx_ggx_smith_s_p10(s, l_1, a_2, tp.at::<S>(2)) } else { s.splat(0.0) };
     let _e13 = (_e6 * _e12);
     let _e14 = _e9.mul_add(_e10, _e13);
     let _e16 = (s.splat(2.0f32) * _e14);
-    let _e17 = if (!(l_1[2].le(s.splat(0.0f32)))).any() { mx_ggx_d_p11(s, h_1, a_2, tp.at(4)) } else { s.splat(0.0) };
+    let _e17 = if (!(l_1[2].le(s.splat(0.0f32)))).any() { mx_ggx_d_p11(s, h_1, a_2, tp.at::<S>(4)) } else { s.splat(0.0) };
     let _e18 = (_e17 * _e9);
     let _e19 = (_e18 / _e16);
     let _e20 = l_1[2];
@@ -2146,6 +2170,7 @@ pub fn mx_ggx_reflection_p12<S: Simd>(s: S, v_5: [S::F; 3], l_1: [S::F; 3], h_1:
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_ggx_reflection_g12<S: Simd>(s: S, v_5: [S::F; 3], l_1: [S::F; 3], h_1: [S::F; 3], a_2: [S::F; 2], tg: &mut [f32]) -> S::F {
+    assert!(tg.len() >= 5 * S::LANES, "the tape is shorter than the pass's slots");
     let _e4 = v_5[2];
     let _e6 = { let (x, y) = (_e4, s.splat(1e-8f32)); x.max(y) };
     uplift_simd::tape::put(s, tg, 0, _e6);
@@ -2159,8 +2184,9 @@ pub fn mx_ggx_reflection_g12<S: Simd>(s: S, v_5: [S::F; 3], l_1: [S::F; 3], h_1:
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_ggx_pdf_p13<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let tp = tp.fit::<S>(2);
     let _e3 = v_9[2];
-    let _e6 = if (!((uplift_simd::vector::dot::<S, 3>(v_9, h_4).le(s.splat(0.0f32)) | h_4[2].le(s.splat(0.0f32))))).any() { mx_ggx_d_p11(s, h_4, a_4, tp.at(1)) } else { s.splat(0.0) };
+    let _e6 = if (!((uplift_simd::vector::dot::<S, 3>(v_9, h_4).le(s.splat(0.0f32)) | h_4[2].le(s.splat(0.0f32))))).any() { mx_ggx_d_p11(s, h_4, a_4, tp.at::<S>(1)) } else { s.splat(0.0) };
     let _e10 = tp.f(s, 0);
     let _e11 = (_e6 / _e10);
     let _e12 = uplift_simd::vector::dot::<S, 3>(v_9, h_4);
@@ -2175,6 +2201,7 @@ pub fn mx_ggx_pdf_p13<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F;
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_ggx_pdf_g13<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2], tg: &mut [f32]) -> S::F {
+    assert!(tg.len() >= 2 * S::LANES, "the tape is shorter than the pass's slots");
     let _e3 = v_9[2];
     let _e5 = { let (x, y) = (_e3, s.splat(1e-8f32)); x.max(y) };
     let _e6 = mx_ggx_d_g11(s, h_4, a_4, &mut tg[1 * S::LANES..]);
@@ -2188,6 +2215,7 @@ pub fn mx_ggx_pdf_g13<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F;
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_lobe_with_pdf_p14<S: Simd>(s: S, response: [S::F; 3], throughput_2: [S::F; 3], c_3: S::F, pdf: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+    let tp = tp.fit::<S>(1);
     let _e5 = tp.f(s, 0);
     let _e7 = { let (x, y) = (pdf, s.splat(0.0f32)); x.max(y) };
     let _e8 = (_e5 * _e7);
@@ -2199,6 +2227,7 @@ pub fn mx_lobe_with_pdf_p14<S: Simd>(s: S, response: [S::F; 3], throughput_2: [S
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_lobe_with_pdf_g14<S: Simd>(s: S, response: [S::F; 3], throughput_2: [S::F; 3], c_3: S::F, pdf: S::F, tg: &mut [f32]) -> BSDF<S> {
+    assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
     let _e5 = { let (x, y) = (c_3, s.splat(0.0f32)); x.max(y) };
     uplift_simd::tape::put(s, tg, 0, _e5);
     let _e12 = BSDF { response: response, throughput: throughput_2, lobe: [s.splat(0.0); 4] };
@@ -2208,6 +2237,7 @@ pub fn mx_lobe_with_pdf_g14<S: Simd>(s: S, response: [S::F; 3], throughput_2: [S
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_conductor_bsdf_p15<S: Simd>(s: S, cl_6: mx_closure<S>, weight: S::F, ior: [S::F; 3], extinction: [S::F; 3], roughness_2: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_2: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+    let tp = tp.fit::<S>(186);
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e11 = tp.f(s, 0);
@@ -2230,10 +2260,10 @@ pub fn mx_conductor_bsdf_p15<S: Simd>(s: S, cl_6: mx_closure<S>, weight: S::F, i
         let _e42 = mx_half_vector(s, _e41, _e40);
         let _e43 = [tp.f(s, 30), tp.f(s, 31), tp.f(s, 32)];
         let _e44 = uplift_simd::vector::dot::<S, 3>(_e43, _e42);
-        let _e45 = mx_conductor_fresnel_p9(s, _e44, _e19, _e24, thinfilm_thickness, thinfilm_ior, tp.at(81));
+        let _e45 = mx_conductor_fresnel_p9(s, _e44, _e19, _e24, thinfilm_thickness, thinfilm_ior, tp.at::<S>(81));
         let _e46 = [tp.f(s, 33), tp.f(s, 34), tp.f(s, 35)];
         let _e47 = [tp.f(s, 36), tp.f(s, 37)];
-        let _e48 = mx_ggx_reflection_p12(s, _e46, _e40, _e42, _e47, tp.at(127));
+        let _e48 = mx_ggx_reflection_p12(s, _e46, _e40, _e42, _e47, tp.at::<S>(127));
         let _e49 = (_e11 * _e48);
         let _e50 = uplift_simd::vector::mul::<S, 3>([_e49; 3], _e45);
         let _e51 = uplift_simd::vector::mul::<S, 3>(_e50, _e36);
@@ -2266,24 +2296,25 @@ pub fn mx_conductor_bsdf_p15<S: Simd>(s: S, cl_6: mx_closure<S>, weight: S::F, i
     let _e77 = mx_half_vector(s, _e76, _e75);
     let _e78 = [tp.f(s, 67), tp.f(s, 68), tp.f(s, 69)];
     let _e79 = uplift_simd::vector::dot::<S, 3>(_e78, _e77);
-    let _e80 = mx_conductor_fresnel_p9(s, _e79, _e19, _e24, thinfilm_thickness, thinfilm_ior, tp.at(132));
+    let _e80 = mx_conductor_fresnel_p9(s, _e79, _e19, _e24, thinfilm_thickness, thinfilm_ior, tp.at::<S>(132));
     let _e81 = [tp.f(s, 70), tp.f(s, 71), tp.f(s, 72)];
     let _e82 = [tp.f(s, 73), tp.f(s, 74)];
-    let _e83 = mx_ggx_reflection_p12(s, _e81, _e75, _e77, _e82, tp.at(178));
+    let _e83 = mx_ggx_reflection_p12(s, _e81, _e75, _e77, _e82, tp.at::<S>(178));
     let _e84 = (_e11 * _e83);
     let _e85 = uplift_simd::vector::mul::<S, 3>([_e84; 3], _e80);
     let _e86 = uplift_simd::vector::mul::<S, 3>(_e85, _e36);
     let _e87 = tp.f(s, 75);
     let _e88 = [tp.f(s, 76), tp.f(s, 77), tp.f(s, 78)];
     let _e89 = [tp.f(s, 79), tp.f(s, 80)];
-    let _e90 = mx_ggx_pdf_p13(s, _e88, _e77, _e89, tp.at(183));
-    let _e91 = mx_lobe_with_pdf_p14(s, _e86, _e13, _e87, _e90, tp.at(185));
+    let _e90 = mx_ggx_pdf_p13(s, _e88, _e77, _e89, tp.at::<S>(183));
+    let _e91 = mx_lobe_with_pdf_p14(s, _e86, _e13, _e87, _e90, tp.at::<S>(185));
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_conductor_bsdf_g15<S: Simd>(s: S, cl_6: mx_closure<S>, weight: S::F, ior: [S::F; 3], extinction: [S::F; 3], roughness_2: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_2: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, tg: &mut [f32]) -> BSDF<S> {
+    assert!(tg.len() >= 186 * S::LANES, "the tape is shorter than the pass's slots");
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e11 = mx_lobe_weight(s, weight);
@@ -2449,10 +2480,11 @@ pub fn mx_conductor_bsdf_g15<S: Simd>(s: S, cl_6: mx_closure<S>, weight: S::F, i
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_pattern_p16<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>, tp: uplift_simd::tape::TapeRow<'_>) -> MxOutputs<S> {
+    let tp = tp.fit::<S>(195);
     let _e3 = inputs.wv;
     let _e4 = inputs.wl;
     let _e6 = [s.splat(0.0f32); 3];
-    let _e7 = mx_closure_new_p1(s, s.splat_i(0i32), _e3, _e4, _e6, tp.at(3));
+    let _e7 = mx_closure_new_p1(s, s.splat_i(0i32), _e3, _e4, _e6, tp.at::<S>(3));
     let _e9 = mx_closure_for_lobe(s, _e7, s.splat_u(10u32));
     let _e10 = inputs.weight;
     let _e11 = inputs.ior;
@@ -2460,7 +2492,7 @@ pub fn mx_pattern_p16<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
     let _e13 = inputs.roughness;
     let _e17 = geom_1.normal_world;
     let _e18 = geom_1.tangent_world;
-    let _e20 = s.outline(#[inline(always)] || mx_conductor_bsdf_p15(s, _e9, _e10, _e11, _e12, _e13, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e17, _e18, s.splat_i(0i32), tp.at(9)));
+    let _e20 = mx_conductor_bsdf_p15(s, _e9, _e10, _e11, _e12, _e13, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e17, _e18, s.splat_i(0i32), tp.at::<S>(9));
     let _e21 = _e20.response;
     let _e22 = [tp.f(s, 0), tp.f(s, 1), tp.f(s, 2)];
     let _e23 = MxOutputs { response: _e21, throughput: _e22 };
@@ -2470,6 +2502,7 @@ pub fn mx_pattern_p16<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_pattern_g16<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>, tg: &mut [f32]) -> MxOutputs<S> {
+    assert!(tg.len() >= 195 * S::LANES, "the tape is shorter than the pass's slots");
     let _e3 = inputs.wv;
     let _e6 = [s.splat(0.0f32); 3];
     let _e7 = mx_closure_new_g1(s, s.splat_i(0i32), _e3, [s.splat(0.0); 3], _e6, &mut tg[3 * S::LANES..]);
@@ -2497,7 +2530,6 @@ pub const GEOMETRY_COLUMNS: usize = 20;
 pub const INPUT_COLUMNS: usize = 15;
 /// Columns of `outputs`: the outputs' components.
 pub const OUTPUT_COLUMNS: usize = 6;
-
 /// Evaluates `mx_pattern` for every point of a structure-of-arrays batch, `S::LANES` points at
 /// a time: `geom` holds `GEOMETRY_COLUMNS` columns, `inputs` `INPUT_COLUMNS`, `outputs`
 /// `OUTPUT_COLUMNS`, all of one length; point `i` reads `geom[c][i]` and `inputs[c][i]` and
@@ -2574,7 +2606,7 @@ pub const SPLIT_SLOTS: usize = 195;
 /// random numbers); every other input column, and every geometry column, is per group.
 pub const POINT_INPUT_COLUMNS: &[usize] = &[3, 4, 5, ];
 
-/// [`mx_pattern_packets`] on a grouped batch: `k` consecutive points share a group (one
+/// `mx_pattern` on a grouped batch: `k` consecutive points share a group (one
 /// material and one view, say), so the per-group work runs once per group, vectorised across
 /// groups (the group pass), and the per-point work once per point (the point pass, one
 /// group's points per packet). The columns in `POINT_INPUT_COLUMNS` and the outputs hold one

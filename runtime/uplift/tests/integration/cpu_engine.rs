@@ -224,8 +224,8 @@ fn packet_kernels_agree_with_the_scalar_kernels() {
 /// in one packet take different sides of per-group branches) and each point its own light
 /// direction on the whole sphere (points of one group take different sides of per-point
 /// branches). The same batch through the CPU engine with `points_per_group` gives the same
-/// bits as the driver call. AVX2 is checked by the packet test's second run on AVX-512
-/// machines (`UPLIFT_SIMD=avx2` reaches this test too when named).
+/// bits as the driver call. On an AVX-512 machine the test runs itself again with
+/// `UPLIFT_SIMD=avx2`, so both hardware levels are checked.
 #[test]
 fn grouped_kernels_agree_with_the_scalar_kernels() {
     let level = uplift_simd::Level::current();
@@ -286,6 +286,16 @@ fn grouped_kernels_agree_with_the_scalar_kernels() {
             assert!(via_engine.data().iter().zip(split_out.data()).all(|(a, b)| a.to_bits() == b.to_bits()), "{}: the engine's grouped run differs", shipped.name);
             eprintln!("{} ({}): {groups} groups of {per_group}, worst error / tolerance {worst:.3}", shipped.name, level.name());
         }
+    }
+    if level == uplift_simd::Level::Avx512 && std::env::var_os("UPLIFT_SIMD").is_none() {
+        let out = std::process::Command::new(std::env::current_exe().unwrap())
+            .args(["cpu_engine::grouped_kernels_agree_with_the_scalar_kernels", "--exact", "--nocapture"])
+            .env("UPLIFT_SIMD", "avx2")
+            .output()
+            .unwrap();
+        let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+        assert!(out.status.success() && text.contains("(avx2)"), "the AVX2 run failed:\n{text}");
+        eprintln!("AVX2 run:\n{}", text.lines().filter(|l| l.contains("(avx2)")).collect::<Vec<_>>().join("\n"));
     }
 }
 
