@@ -287,7 +287,7 @@ const PACKET_KERNELS: &[&str] = &["bsdf_conductor_eval"];
 /// kernel stays their ungrouped form, being faster than the unsplit packet one (above).
 /// Measured (engines bench, Xeon AVX-512, 2 threads, one material, 16 directions per view):
 /// `uplift_stack` eval grouped 54.5 M evals/s against 36.1 scalar (1.51×).
-const GROUPED_KERNELS: &[&str] = &["uplift_stack_eval"];
+const GROUPED_KERNELS: &[&str] = &["uplift_stack_eval", "uplift_stack_sample"];
 
 /// The kernels the runtime ships, `runtime/kernels/src/generated/`, are snapshots too: the
 /// compiler's Rust for every graph in `runtime/kernels/graphs/`, `examples/marble.mtlx`, the

@@ -71,8 +71,19 @@ impl StackKernel {
         self.run_on(Engine::Cpu(engine), params, rows, directions)
     }
 
+    /// [`run`](Self::run) on a grouped batch (`PatternBatch::points_per_group`): runs of
+    /// `per_group` consecutive entries of `rows` share their parameters and `wv` (the caller's
+    /// promise), so the CPU engine runs the kernel's dependence-split form where it ships one.
+    pub fn run_grouped(&self, engine: &CpuEngine, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])], per_group: usize) -> Result<Columns, String> {
+        self.run_layout(Engine::Cpu(engine), params, rows, directions, per_group)
+    }
+
     /// [`run`](Self::run) on the engine the kernel was prepared on (`engine` must be it).
     pub fn run_on(&self, engine: Engine<'_>, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])]) -> Result<Columns, String> {
+        self.run_layout(engine, params, rows, directions, 1)
+    }
+
+    fn run_layout(&self, engine: Engine<'_>, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])], per_group: usize) -> Result<Columns, String> {
         let n = rows.len();
         let mut inputs = Columns::zeros(n, self.kernel.input_stride);
         for (name, dirs) in directions {
@@ -92,7 +103,7 @@ impl StackKernel {
         }
         // The local frame for every row: uniform columns, not streamed from memory.
         let geometry = Geometry::default().repeated(n);
-        let batch = PatternBatch { geometry, inputs, textures: vec![], points_per_group: 1 };
+        let batch = PatternBatch { geometry, inputs, textures: vec![], points_per_group: per_group };
         match (&self.prepared, engine) {
             (Prepared::Cpu(k), Engine::Cpu(e)) => e.run_prepared(k, &batch),
             (Prepared::Wgpu(p), Engine::Wgpu(e)) => e.run_prepared(p, &batch),

@@ -72,6 +72,12 @@ pub struct DataGenerator {
     pub mix: ClassMix,
     pub seed: u64,
     pub views: ViewDistribution,
+    /// K, light directions per (parameter set, view): a batch holds rows / K groups of K rows
+    /// sharing their class, parameters and view, the first K/2 lit uniformly and the rest from
+    /// the stack's sampler (1: every row its own parameters and view, the light's kind a coin
+    /// flip). With K > 1 the albedo runs once per group and the eval through the stack's
+    /// dependence-split kernel (issue 24).
+    pub directions_per_view: usize,
 }
 
 /// How training views are drawn.
@@ -111,6 +117,7 @@ impl DataGenerator {
             mix,
             seed,
             views: ViewDistribution::Cosine,
+            directions_per_view: 1,
         })
     }
 
@@ -139,8 +146,12 @@ impl DataGenerator {
         self.eval.describe()
     }
 
-    /// Batch `index` of `rows` rows.
+    /// Batch `index` of `rows` rows (a multiple of `directions_per_view`).
     pub fn batch(&self, index: u64, rows: usize) -> Result<TrainingBatch, String> {
+        let k = self.directions_per_view.max(1);
+        if rows % k != 0 {
+            return Err(format!("a batch of {rows} rows does not hold whole groups of {k} light directions per view (--directions-per-view)"));
+        }
         let key = mix64(self.seed ^ 0x6461_7461) ^ mix64(index.wrapping_mul(uplift_base::rng::GOLDEN_GAMMA));
         // Rows are independent (each draws from its own key): drawn in parallel, the same
         // rows whatever the thread count. The kernels run on the engine's threads; this part,
@@ -148,24 +159,33 @@ impl DataGenerator {
         let mut params = vec![0.0; rows * PARAMETERS];
         let mut classes = vec![0u8; rows];
         let (mix, seed) = (self.mix, self.seed);
-        params.par_chunks_mut(PARAMETERS).zip(classes.par_iter_mut()).enumerate().for_each(|(r, (row, class_index))| {
-            let rk = mix64(key.wrapping_add(r as u64));
+        params.par_chunks_mut(PARAMETERS * k).zip(classes.par_chunks_mut(k)).enumerate().for_each(|(g, (group, class_index))| {
+            let rk = mix64(key.wrapping_add(g as u64));
             let class = match mix {
                 ClassMix::All => DataClass::ALL[(unit(rk ^ 1) * 5.0) as usize % 5],
                 ClassMix::Only(c) => c,
             };
-            *class_index = class.index() as u8;
+            class_index.fill(class.index() as u8);
             let tile = mix64(rk ^ 2) % TILES_PER_CLASS;
             let cell = mix64(rk ^ 3) % (super::classes::TILE * super::classes::TILE);
-            row.copy_from_slice(&class_parameters(class, seed, tile, cell));
+            let p = class_parameters(class, seed, tile, cell);
+            for row in group.chunks_mut(PARAMETERS) {
+                row.copy_from_slice(&p);
+            }
         });
-        let mut b = self.evaluate(params, key)?;
+        let mut b = self.evaluate_grouped(params, key, k)?;
         b.class = classes;
         Ok(b)
     }
 
     /// Directions and reference targets for given parameter rows (rows × 22), drawn from `key`.
     pub fn evaluate(&self, params: Vec<f32>, key: u64) -> Result<TrainingBatch, String> {
+        self.evaluate_grouped(params, key, 1)
+    }
+
+    /// [`evaluate`](Self::evaluate) for rows in groups of `k` sharing their parameters (the
+    /// caller's promise): one view per group (`directions_per_view`).
+    fn evaluate_grouped(&self, params: Vec<f32>, key: u64, k: usize) -> Result<TrainingBatch, String> {
         let rows = params.len() / PARAMETERS;
         let mut b = TrainingBatch { rows, params, class: vec![0; rows], ..Default::default() };
         let mut sampled = Vec::new();
@@ -177,9 +197,12 @@ impl DataGenerator {
             .into_par_iter()
             .map(|r| {
                 let rk = mix64(key.wrapping_add(r as u64)) ^ 0x5eed;
-                let grazing = mixed && unit(rk ^ 12) < 0.5;
-                let wv = if grazing { uniform_cosine_view(unit(rk ^ 4), unit(rk ^ 5)) } else { cosine_view(unit(rk ^ 4), unit(rk ^ 5)) };
-                (wv, uniform_hemisphere(unit(rk ^ 6), unit(rk ^ 7)), [unit(rk ^ 8), unit(rk ^ 9), unit(rk ^ 10)], unit(rk ^ 11) < 0.5)
+                // The view from the group's first row's key.
+                let vk = mix64(key.wrapping_add((r - r % k) as u64)) ^ 0x5eed;
+                let grazing = mixed && unit(vk ^ 12) < 0.5;
+                let wv = if grazing { uniform_cosine_view(unit(vk ^ 4), unit(vk ^ 5)) } else { cosine_view(unit(vk ^ 4), unit(vk ^ 5)) };
+                let sample = if k == 1 { unit(rk ^ 11) < 0.5 } else { r % k >= k / 2 };
+                (wv, uniform_hemisphere(unit(rk ^ 6), unit(rk ^ 7)), [unit(rk ^ 8), unit(rk ^ 9), unit(rk ^ 10)], sample)
             })
             .collect();
         for (r, (wv, wl, u, sample)) in drawn.into_iter().enumerate() {
@@ -189,9 +212,13 @@ impl DataGenerator {
             if sample { sampled.push(r) } else { uniform.push(r) }
         }
         b.target = vec![0.0; rows * OUTPUTS];
+        // Uniformly lit rows: with groups, the first k/2 of each group, contiguous in `uniform`
+        // (the eval's grouped layout); failed samples join them below, evaluated ungrouped.
+        let grouped_uniform = uniform.len();
         // Lights from the stack's sampler; rows whose sample fails fall back to uniform.
         if !sampled.is_empty() {
-            let out = self.sample.run(&self.engine, &b.params, &sampled, &[("wv", &b.wv), ("u", &u3)])?;
+            // With groups, the last k − k/2 rows of each group: contiguous in `sampled`.
+            let out = self.sample.run_grouped(&self.engine, &b.params, &sampled, &[("wv", &b.wv), ("u", &u3)], if k == 1 { 1 } else { k - k / 2 })?;
             let (wl_at, pdf_at, resp_at) = (self.sample.output_offset("wl"), self.sample.output_offset("pdf"), self.sample.output_offset("response"));
             for (k, &r) in sampled.iter().enumerate() {
                 let wl = [0, 1, 2].map(|c| out.column(wl_at + c)[k]);
@@ -205,25 +232,31 @@ impl DataGenerator {
                 }
             }
         }
-        if !uniform.is_empty() {
-            let out = self.eval.run(&self.engine, &b.params, &uniform, &[("wv", &b.wv), ("wl", &b.wl)])?;
-            let resp_at = self.eval.output_offset("response");
-            for (k, &r) in uniform.iter().enumerate() {
+        let resp_at = self.eval.output_offset("response");
+        let (grouped, fallback) = uniform.split_at(grouped_uniform);
+        for (part, per_group) in [(grouped, (k / 2).max(1)), (fallback, 1)] {
+            if part.is_empty() {
+                continue;
+            }
+            let out = self.eval.run_grouped(&self.engine, &b.params, part, &[("wv", &b.wv), ("wl", &b.wl)], per_group)?;
+            for (j, &r) in part.iter().enumerate() {
                 for c in 0..3 {
-                    b.target[r * OUTPUTS + c] = out.column(resp_at + c)[k];
+                    b.target[r * OUTPUTS + c] = out.column(resp_at + c)[j];
                 }
             }
         }
-        let all: Vec<usize> = (0..rows).collect();
-        let out = self.albedo.run(&self.engine, &b.params, &all, &[("wv", &b.wv)])?;
+        // The albedo depends on the parameters and the view only: once per group.
+        let leaders: Vec<usize> = (0..rows).step_by(k).collect();
+        let out = self.albedo.run(&self.engine, &b.params, &leaders, &[("wv", &b.wv)])?;
         let (alb_at, thr_at) = (self.albedo.output_offset("albedo"), self.albedo.output_offset("throughput"));
         for r in 0..rows {
+            let g = r / k;
             let t = &mut b.target[r * OUTPUTS..(r + 1) * OUTPUTS];
             for c in 0..3 {
                 t[c] = t[c].max(0.0);
-                t[3 + c] = out.column(thr_at + c)[r];
+                t[3 + c] = out.column(thr_at + c)[g];
             }
-            let a = [0, 1, 2].map(|c| out.column(alb_at + c)[r]);
+            let a = [0, 1, 2].map(|c| out.column(alb_at + c)[g]);
             t[6] = 0.2126 * a[0] + 0.7152 * a[1] + 0.0722 * a[2];
         }
         b.encoded = vec![0.0; rows * PARAMETERS];

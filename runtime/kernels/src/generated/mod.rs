@@ -118,6 +118,8 @@ static UPLIFT_STACK_ALBEDO_SCALAR: BatchFn = cpu_batch_fn!(uplift_stack_albedo);
 pub mod uplift_stack_sample;
 static UPLIFT_STACK_SAMPLE_SCALAR: BatchFn = cpu_batch_fn!(uplift_stack_sample);
 #[allow(clippy::all, dead_code, unused_imports)]
+pub mod uplift_stack_sample_packet;
+#[allow(clippy::all, dead_code, unused_imports)]
 pub mod uplift_stack_pdf;
 static UPLIFT_STACK_PDF_SCALAR: BatchFn = cpu_batch_fn!(uplift_stack_pdf);
 
@@ -157,6 +159,6 @@ pub static BUILTIN_KERNELS: &[BuiltinKernel] = &[
     BuiltinKernel { name: "bsdf_transparent_lobes_pdf", source: "runtime/kernels/graphs/bsdf/bsdf_transparent_lobes.mtlx", context: Some("pdf"), fingerprint: 0x2ab3a313210205b4, shape: KernelShape { input_columns: bsdf_transparent_lobes_pdf::INPUT_COLUMNS, output_columns: bsdf_transparent_lobes_pdf::OUTPUT_COLUMNS, texture_count: bsdf_transparent_lobes_pdf::TEXTURE_COUNT }, batch: BSDF_TRANSPARENT_LOBES_PDF_SCALAR, scalar: None, grouped: None },
     BuiltinKernel { name: "uplift_stack_eval", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("eval"), fingerprint: 0xe3181aa344c14fae, shape: KernelShape { input_columns: uplift_stack_eval::INPUT_COLUMNS, output_columns: uplift_stack_eval::OUTPUT_COLUMNS, texture_count: uplift_stack_eval::TEXTURE_COUNT }, batch: UPLIFT_STACK_EVAL_SCALAR, scalar: None, grouped: Some(Grouped { run: uplift_stack_eval_packet::mx_pattern_grouped_batch_simd, point_columns: uplift_stack_eval_packet::POINT_INPUT_COLUMNS }) },
     BuiltinKernel { name: "uplift_stack_albedo", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("albedo"), fingerprint: 0x72ed30888eca0ee3, shape: KernelShape { input_columns: uplift_stack_albedo::INPUT_COLUMNS, output_columns: uplift_stack_albedo::OUTPUT_COLUMNS, texture_count: uplift_stack_albedo::TEXTURE_COUNT }, batch: UPLIFT_STACK_ALBEDO_SCALAR, scalar: None, grouped: None },
-    BuiltinKernel { name: "uplift_stack_sample", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("sample"), fingerprint: 0x5af11452ed7e00dc, shape: KernelShape { input_columns: uplift_stack_sample::INPUT_COLUMNS, output_columns: uplift_stack_sample::OUTPUT_COLUMNS, texture_count: uplift_stack_sample::TEXTURE_COUNT }, batch: UPLIFT_STACK_SAMPLE_SCALAR, scalar: None, grouped: None },
+    BuiltinKernel { name: "uplift_stack_sample", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("sample"), fingerprint: 0x5af11452ed7e00dc, shape: KernelShape { input_columns: uplift_stack_sample::INPUT_COLUMNS, output_columns: uplift_stack_sample::OUTPUT_COLUMNS, texture_count: uplift_stack_sample::TEXTURE_COUNT }, batch: UPLIFT_STACK_SAMPLE_SCALAR, scalar: None, grouped: Some(Grouped { run: uplift_stack_sample_packet::mx_pattern_grouped_batch_simd, point_columns: uplift_stack_sample_packet::POINT_INPUT_COLUMNS }) },
     BuiltinKernel { name: "uplift_stack_pdf", source: "runtime/kernels/graphs/bsdf/uplift_stack.mtlx", context: Some("pdf"), fingerprint: 0x5410fabe6fc36cac, shape: KernelShape { input_columns: uplift_stack_pdf::INPUT_COLUMNS, output_columns: uplift_stack_pdf::OUTPUT_COLUMNS, texture_count: uplift_stack_pdf::TEXTURE_COUNT }, batch: UPLIFT_STACK_PDF_SCALAR, scalar: None, grouped: None },
 ];
