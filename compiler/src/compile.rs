@@ -20,6 +20,10 @@ pub struct Compiler {
     pub file_roots: Option<Vec<PathBuf>>,
     /// How lowering builds naga modules (library functions imported pre-parsed by default).
     pub lower_options: LowerOptions,
+    /// Interface inputs bound to constants at compile time (name, MaterialX value text): a
+    /// specialised kernel without those inputs, in which what depends on them folds — a lobe
+    /// whose weight becomes a constant 0 leaves the kernel (closure_fold.rs).
+    pub constant_inputs: Vec<(String, String)>,
 }
 
 /// What to compile: every numeric output, or the outputs named (`graph/output` or `output`).
@@ -45,12 +49,12 @@ impl Compiler {
         let mut roots: Vec<PathBuf> = extra.iter().cloned().chain(mtlx::library::search_path_from_env()).collect();
         let parents: Vec<PathBuf> = roots.iter().filter(|r| r.file_name().is_some_and(|n| n == "libraries")).filter_map(|r| r.parent().map(Path::to_path_buf)).collect();
         roots.extend(parents);
-        Compiler { library: NodeLibrary::new(Library::load(extra)), file_roots: Some(roots), lower_options: LowerOptions::default() }
+        Compiler { library: NodeLibrary::new(Library::load(extra)), file_roots: Some(roots), lower_options: LowerOptions::default(), constant_inputs: Vec::new() }
     }
 
     /// Only the library embedded in the crate (tests, benchmarks).
     pub fn builtin() -> Compiler {
-        Compiler { library: NodeLibrary::new(Library::builtin()), file_roots: Some(Vec::new()), lower_options: LowerOptions::default() }
+        Compiler { library: NodeLibrary::new(Library::builtin()), file_roots: Some(Vec::new()), lower_options: LowerOptions::default(), constant_inputs: Vec::new() }
     }
 
     /// Lets documents name files anywhere (`--allow-any-path`), not only in their own folder
@@ -142,6 +146,7 @@ impl Compiler {
         }
         let mut builder = GraphBuilder::new(&self.library, Arc::new(doc));
         builder.file_roots = self.file_roots.clone();
+        builder.constant_inputs = self.constant_inputs.iter().cloned().collect();
         let (graph, build_diags) = builder.build(&chosen);
         diagnostics.extend(build_diags);
         if has_errors(&diagnostics) {

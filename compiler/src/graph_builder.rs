@@ -151,6 +151,11 @@ pub struct GraphBuilder<'a> {
     inlining: Vec<String>,
     consing: HashMap<(ConsKey, DataType), H>,
     kernel_inputs: HashMap<(usize, String), H>,
+    /// Interface inputs bound to constants at compile time (`Compiler::constant_inputs`):
+    /// name → MaterialX value text. They are no kernel inputs; what depends on them folds.
+    pub constant_inputs: HashMap<String, String>,
+    /// Bindings of `constant_inputs` used (an unused one is an error).
+    constant_inputs_used: HashSet<String>,
     pub diagnostics: Vec<Diagnostic>,
     /// Folders besides the document's own where the files it names may lie (`Compiler::file_roots`);
     /// `None`: anywhere.
@@ -186,6 +191,8 @@ impl<'a> GraphBuilder<'a> {
             inlining: Vec::new(),
             consing: HashMap::new(),
             kernel_inputs: HashMap::new(),
+            constant_inputs: HashMap::new(),
+            constant_inputs_used: HashSet::new(),
             diagnostics: Vec::new(),
             file_roots: Some(Vec::new()),
         };
@@ -242,6 +249,12 @@ impl<'a> GraphBuilder<'a> {
             if let Ok(h) = value {
                 self.graph.outputs.push(GraphOutput { name: o.name.clone(), ty: o.ty.clone(), value: h, pos: o.pos.clone() });
             }
+        }
+        let mut unused: Vec<&String> = self.constant_inputs.keys().filter(|k| !self.constant_inputs_used.contains(*k)).collect();
+        unused.sort();
+        for name in unused {
+            let pos = self.doc().get(self.doc().root()).pos.clone();
+            self.diagnostics.push(Diagnostic::error(pos, format!("an input `{name}` was bound to a constant, but the document has no such interface input")));
         }
         self.graph.remove_dead();
         (self.graph, self.diagnostics)
@@ -444,6 +457,16 @@ impl<'a> GraphBuilder<'a> {
         let e = doc.get(inp);
         let key = (s, e.name().to_string());
         if let Some(&h) = self.kernel_inputs.get(&key) {
+            return Ok(h);
+        }
+        if let Some(text) = self.constant_inputs.get(e.name()).cloned() {
+            self.constant_inputs_used.insert(e.name().to_string());
+            let origin = format!("{}{}", self.scopes[s].path, e.name());
+            let h = match Literal::parse(&ty, &text) {
+                Ok(v) => self.add(ValueKind::Constant(v), ty.clone(), origin, e.pos.clone()),
+                Err(m) => return Err(self.error(&e.pos, format!("the constant bound to input `{}`: {m}", e.name()))),
+            };
+            self.kernel_inputs.insert(key, h);
             return Ok(h);
         }
         let default = match e.attr("value") {
@@ -694,7 +717,11 @@ impl<'a> GraphBuilder<'a> {
         let closure = sig.params.get(usize::from(geometry)).is_some_and(|(_, t)| t == "mx_closure");
         let mut args = Vec::new();
         let mut missing_file = None;
+        let mut weight_arg = None;
         for (p, h) in &bound {
+            if p.name == "weight" && p.ty == DataType::Float {
+                weight_arg = Some(args.len());
+            }
             match (&p.ty, &p.enum_values) {
                 (DataType::String, None) => continue,
                 (DataType::String, Some(options)) => {
@@ -733,6 +760,19 @@ impl<'a> GraphBuilder<'a> {
         if !geometry && !closure {
             if let Some(folded) = self.fold(&fname, nd, &args, origin, pos) {
                 return Ok(folded);
+            }
+        }
+        // A lobe whose weight is a constant at or below 0 that is then the empty BSDF
+        // (closure_fold.rs): the empty BSDF, and the lobe leaves the kernel.
+        if let (true, false, Some(w), [out]) = (closure, geometry, weight_arg, nd.outputs.as_slice()) {
+            let dead = matches!(&self.graph.values[args[w]].kind, ValueKind::Constant(Literal::Floats(f)) if f.len() == 1 && !(f[0] > 0.0));
+            if dead && out.ty.is_closure() {
+                if let Some(evaluator) = &self.lib.evaluator {
+                    // The weight's position among the function's parameters (the closure first).
+                    if crate::closure_fold::vanishes_at_zero_weight(evaluator, &fname, &sig.params, w + 1) {
+                        return self.zero(&out.ty, pos, origin).map(NodeResult::Single);
+                    }
+                }
             }
         }
         let ty = nd.node_type();

@@ -13,6 +13,7 @@ pub mod packet_split;
 pub mod backend_rust;
 pub mod build_api;
 pub mod compile;
+pub mod closure_fold;
 pub mod const_eval;
 pub mod fuzz_entry;
 pub mod graph_builder;

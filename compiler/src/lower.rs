@@ -247,7 +247,10 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
                     let Some(k) = pass.map(|p| passes[p]) else {
                         return Err(LowerError(format!("`{function}` evaluates a closure: compile its output with a closure context (eval, albedo or sample)")));
                     };
-                    a.insert(0, format!("mx_closure_for_lobe(cl{k}, {h}u)"));
+                    // The lobe's id (its race variable in the sample context) from its node's
+                    // path, not its place in the graph: a kernel specialised with some lobes
+                    // removed (closure_fold.rs) samples the others exactly as the generic one.
+                    a.insert(0, format!("mx_closure_for_lobe(cl{k}, {}u)", lobe_id(&v.origin)));
                 }
                 if *geometry {
                     a.insert(0, "geom".into());
@@ -467,4 +470,9 @@ pub fn to_naga(text: &str) -> Result<(naga::Module, naga::valid::ModuleInfo), Lo
 fn compact_and_validate(module: &mut naga::Module) -> Result<naga::valid::ModuleInfo, Box<naga::WithSpan<naga::valid::ValidationError>>> {
     naga::compact::compact(module, naga::compact::KeepUnused::No);
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::default()).validate(module).map_err(Box::new)
+}
+
+/// A lobe's id: the FNV-1a hash of its node's path (`Value::origin`).
+fn lobe_id(origin: &str) -> u32 {
+    origin.bytes().fold(0x811c_9dc5u32, |h, b| (h ^ b as u32).wrapping_mul(0x0100_0193))
 }

@@ -747,7 +747,7 @@ pub fn mx_conductor_bsdf(cl_6: mx_closure, weight: f32, ior: Vec3, extinction: V
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl1_ = mx_closure_new(1i32, inputs.wv, Vec3::new(0.0f32, 0.0f32, 1.0f32), Vec3::splat(0.0f32));
-    let _e12 = mx_closure_for_lobe(cl1_, 10u32);
+    let _e12 = mx_closure_for_lobe(cl1_, 506647123u32);
     let v10_ = mx_conductor_bsdf(_e12, inputs.weight, inputs.ior, inputs.extinction, inputs.roughness, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
     MxOutputs { albedo: v10_.response, throughput: v10_.throughput }
 }

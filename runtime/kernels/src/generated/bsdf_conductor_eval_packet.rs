@@ -1570,7 +1570,7 @@ pub fn mx_pattern<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>) ->
     let _e4 = inputs.wl;
     let _e6 = [s.splat(0.0f32); 3];
     let _e7 = mx_closure_new(s, s.splat_i(0i32), _e3, _e4, _e6);
-    let _e9 = mx_closure_for_lobe(s, _e7, s.splat_u(10u32));
+    let _e9 = mx_closure_for_lobe(s, _e7, s.splat_u(506647123u32));
     let _e10 = inputs.weight;
     let _e11 = inputs.ior;
     let _e12 = inputs.extinction;
@@ -2485,7 +2485,7 @@ pub fn mx_pattern_p16<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
     let _e4 = inputs.wl;
     let _e6 = [s.splat(0.0f32); 3];
     let _e7 = mx_closure_new_p1(s, s.splat_i(0i32), _e3, _e4, _e6, tp.at::<S>(3));
-    let _e9 = mx_closure_for_lobe(s, _e7, s.splat_u(10u32));
+    let _e9 = mx_closure_for_lobe(s, _e7, s.splat_u(506647123u32));
     let _e10 = inputs.weight;
     let _e11 = inputs.ior;
     let _e12 = inputs.extinction;
@@ -2506,7 +2506,7 @@ pub fn mx_pattern_g16<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
     let _e3 = inputs.wv;
     let _e6 = [s.splat(0.0f32); 3];
     let _e7 = mx_closure_new_g1(s, s.splat_i(0i32), _e3, [s.splat(0.0); 3], _e6, &mut tg[3 * S::LANES..]);
-    let _e9 = mx_closure_for_lobe(s, _e7, s.splat_u(10u32));
+    let _e9 = mx_closure_for_lobe(s, _e7, s.splat_u(506647123u32));
     let _e10 = inputs.weight;
     let _e11 = inputs.ior;
     let _e12 = inputs.extinction;

@@ -754,7 +754,7 @@ pub fn mx_conductor_bsdf(cl_6: mx_closure, weight: f32, ior: Vec3, extinction: V
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl3_ = mx_closure_new(3i32, inputs.wv, inputs.wl, Vec3::splat(0.0f32));
-    let _e9 = mx_closure_for_lobe(cl3_, 10u32);
+    let _e9 = mx_closure_for_lobe(cl3_, 506647123u32);
     let v10_ = mx_conductor_bsdf(_e9, inputs.weight, inputs.ior, inputs.extinction, inputs.roughness, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
     let _e21 = mx_closure_pdf(v10_);
     MxOutputs { pdf: _e21, response: v10_.response, throughput: v10_.throughput }

@@ -755,10 +755,10 @@ pub fn mx_conductor_bsdf(cl_6: mx_closure, weight: f32, ior: Vec3, extinction: V
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl2_ = mx_closure_new(2i32, inputs.wv, Vec3::new(0.0f32, 0.0f32, 1.0f32), inputs.u);
-    let _e11 = mx_closure_for_lobe(cl2_, 10u32);
+    let _e11 = mx_closure_for_lobe(cl2_, 506647123u32);
     let v10_0_ = mx_conductor_bsdf(_e11, inputs.weight, inputs.ior, inputs.extinction, inputs.roughness, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
     let cl3_ = mx_closure_new(3i32, cl2_.wv, Vec3::new(v10_0_.lobe.x, v10_0_.lobe.y, v10_0_.lobe.z), cl2_.u);
-    let _e30 = mx_closure_for_lobe(cl3_, 10u32);
+    let _e30 = mx_closure_for_lobe(cl3_, 506647123u32);
     let v10_1_ = mx_conductor_bsdf(_e30, inputs.weight, inputs.ior, inputs.extinction, inputs.roughness, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
     let _e43 = mx_closure_pdf(v10_1_);
     MxOutputs { wl: cl3_.wl, pdf: _e43, response: v10_1_.response, throughput: v10_1_.throughput }

@@ -505,7 +505,7 @@ pub fn mx_chiang_hair_bsdf(cl_3: mx_closure, tint_R: Vec3, tint_TT: Vec3, tint_T
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl0_ = mx_closure_new(0i32, inputs.wv, inputs.wl, Vec3::splat(0.0f32));
-    let _e9 = mx_closure_for_lobe(cl0_, 11u32);
+    let _e9 = mx_closure_for_lobe(cl0_, 1285682170u32);
     let v11_ = mx_chiang_hair_bsdf(_e9, inputs.tint_r, inputs.tint_tt, inputs.tint_trt, inputs.ior, inputs.roughness_r, inputs.roughness_tt, inputs.roughness_trt, inputs.cuticle_angle, inputs.absorption, geom_1.normal_world, geom_1.tangent_world);
     MxOutputs { response: v11_.response, throughput: v11_.throughput }
 }

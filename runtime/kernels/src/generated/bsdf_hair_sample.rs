@@ -512,10 +512,10 @@ pub fn mx_chiang_hair_bsdf(cl_3: mx_closure, tint_R: Vec3, tint_TT: Vec3, tint_T
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl2_ = mx_closure_new(2i32, inputs.wv, Vec3::new(0.0f32, 0.0f32, 1.0f32), inputs.u);
-    let _e11 = mx_closure_for_lobe(cl2_, 11u32);
+    let _e11 = mx_closure_for_lobe(cl2_, 1285682170u32);
     let v11_0_ = mx_chiang_hair_bsdf(_e11, inputs.tint_r, inputs.tint_tt, inputs.tint_trt, inputs.ior, inputs.roughness_r, inputs.roughness_tt, inputs.roughness_trt, inputs.cuticle_angle, inputs.absorption, geom_1.normal_world, geom_1.tangent_world);
     let cl3_ = mx_closure_new(3i32, cl2_.wv, Vec3::new(v11_0_.lobe.x, v11_0_.lobe.y, v11_0_.lobe.z), cl2_.u);
-    let _e31 = mx_closure_for_lobe(cl3_, 11u32);
+    let _e31 = mx_closure_for_lobe(cl3_, 1285682170u32);
     let v11_1_ = mx_chiang_hair_bsdf(_e31, inputs.tint_r, inputs.tint_tt, inputs.tint_trt, inputs.ior, inputs.roughness_r, inputs.roughness_tt, inputs.roughness_trt, inputs.cuticle_angle, inputs.absorption, geom_1.normal_world, geom_1.tangent_world);
     let _e45 = mx_closure_pdf(v11_1_);
     MxOutputs { wl: cl3_.wl, pdf: _e45, response: v11_1_.response, throughput: v11_1_.throughput }

@@ -932,23 +932,23 @@ pub fn mx_translucent_bsdf(_cl_13: mx_closure, _weight_5: f32, _color_4: Vec3, _
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl1_ = mx_closure_new(1i32, inputs.wv, Vec3::new(0.0f32, 0.0f32, 1.0f32), Vec3::splat(0.0f32));
-    let _e12 = mx_closure_for_lobe(cl1_, 10u32);
+    let _e12 = mx_closure_for_lobe(cl1_, 61361468u32);
     let v10_ = mx_conductor_bsdf(_e12, inputs.c_weight, inputs.c_ior, inputs.c_extinction, inputs.c_roughness, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
-    let _e25 = mx_closure_for_lobe(cl1_, 14u32);
+    let _e25 = mx_closure_for_lobe(cl1_, 575708029u32);
     let v14_ = mx_oren_nayar_diffuse_bsdf(_e25, inputs.o_weight, inputs.o_color, inputs.o_roughness, geom_1.normal_world, false);
-    let _e33 = mx_closure_for_lobe(cl1_, 15u32);
+    let _e33 = mx_closure_for_lobe(cl1_, 522458049u32);
     let v15_ = mx_add_bsdf(_e33, v10_, v14_);
-    let _e36 = mx_closure_for_lobe(cl1_, 19u32);
+    let _e36 = mx_closure_for_lobe(cl1_, 4194937842u32);
     let v19_ = mx_burley_diffuse_bsdf(_e36, inputs.b_weight, inputs.b_color, inputs.b_roughness, geom_1.normal_world);
-    let _e43 = mx_closure_for_lobe(cl1_, 20u32);
+    let _e43 = mx_closure_for_lobe(cl1_, 472125192u32);
     let v20_ = mx_add_bsdf(_e43, v15_, v19_);
-    let _e46 = mx_closure_for_lobe(cl1_, 24u32);
+    let _e46 = mx_closure_for_lobe(cl1_, 3562411614u32);
     let v24_ = mx_subsurface_bsdf(_e46, inputs.u_weight, inputs.u_color, inputs.u_radius, 0.0f32, geom_1.normal_world);
-    let _e54 = mx_closure_for_lobe(cl1_, 27u32);
+    let _e54 = mx_closure_for_lobe(cl1_, 4020961862u32);
     let v27_ = mx_translucent_bsdf(_e54, inputs.t_weight, inputs.t_color, geom_1.normal_world);
-    let _e60 = mx_closure_for_lobe(cl1_, 28u32);
+    let _e60 = mx_closure_for_lobe(cl1_, 488902811u32);
     let v28_ = mx_add_bsdf(_e60, v24_, v27_);
-    let _e63 = mx_closure_for_lobe(cl1_, 29u32);
+    let _e63 = mx_closure_for_lobe(cl1_, 1857239530u32);
     let v29_ = mx_add_bsdf(_e63, v20_, v28_);
     MxOutputs { albedo: v29_.response, throughput: v29_.throughput }
 }

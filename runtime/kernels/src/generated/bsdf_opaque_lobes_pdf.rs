@@ -939,23 +939,23 @@ pub fn mx_translucent_bsdf(_cl_13: mx_closure, _weight_5: f32, _color_4: Vec3, _
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl3_ = mx_closure_new(3i32, inputs.wv, inputs.wl, Vec3::splat(0.0f32));
-    let _e9 = mx_closure_for_lobe(cl3_, 10u32);
+    let _e9 = mx_closure_for_lobe(cl3_, 61361468u32);
     let v10_ = mx_conductor_bsdf(_e9, inputs.c_weight, inputs.c_ior, inputs.c_extinction, inputs.c_roughness, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
-    let _e22 = mx_closure_for_lobe(cl3_, 14u32);
+    let _e22 = mx_closure_for_lobe(cl3_, 575708029u32);
     let v14_ = mx_oren_nayar_diffuse_bsdf(_e22, inputs.o_weight, inputs.o_color, inputs.o_roughness, geom_1.normal_world, false);
-    let _e30 = mx_closure_for_lobe(cl3_, 15u32);
+    let _e30 = mx_closure_for_lobe(cl3_, 522458049u32);
     let v15_ = mx_add_bsdf(_e30, v10_, v14_);
-    let _e33 = mx_closure_for_lobe(cl3_, 19u32);
+    let _e33 = mx_closure_for_lobe(cl3_, 4194937842u32);
     let v19_ = mx_burley_diffuse_bsdf(_e33, inputs.b_weight, inputs.b_color, inputs.b_roughness, geom_1.normal_world);
-    let _e40 = mx_closure_for_lobe(cl3_, 20u32);
+    let _e40 = mx_closure_for_lobe(cl3_, 472125192u32);
     let v20_ = mx_add_bsdf(_e40, v15_, v19_);
-    let _e43 = mx_closure_for_lobe(cl3_, 24u32);
+    let _e43 = mx_closure_for_lobe(cl3_, 3562411614u32);
     let v24_ = mx_subsurface_bsdf(_e43, inputs.u_weight, inputs.u_color, inputs.u_radius, 0.0f32, geom_1.normal_world);
-    let _e51 = mx_closure_for_lobe(cl3_, 27u32);
+    let _e51 = mx_closure_for_lobe(cl3_, 4020961862u32);
     let v27_ = mx_translucent_bsdf(_e51, inputs.t_weight, inputs.t_color, geom_1.normal_world);
-    let _e57 = mx_closure_for_lobe(cl3_, 28u32);
+    let _e57 = mx_closure_for_lobe(cl3_, 488902811u32);
     let v28_ = mx_add_bsdf(_e57, v24_, v27_);
-    let _e60 = mx_closure_for_lobe(cl3_, 29u32);
+    let _e60 = mx_closure_for_lobe(cl3_, 1857239530u32);
     let v29_ = mx_add_bsdf(_e60, v20_, v28_);
     let _e62 = mx_closure_pdf(v29_);
     MxOutputs { pdf: _e62, response: v29_.response, throughput: v29_.throughput }

@@ -1018,15 +1018,15 @@ pub fn mx_generalized_schlick_bsdf(cl_10: mx_closure, weight_2: f32, color0_: Ve
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl1_ = mx_closure_new(1i32, inputs.wv, Vec3::new(0.0f32, 0.0f32, 1.0f32), Vec3::splat(0.0f32));
-    let _e12 = mx_closure_for_lobe(cl1_, 10u32);
+    let _e12 = mx_closure_for_lobe(cl1_, 3263561412u32);
     let v10_ = mx_dielectric_bsdf(_e12, inputs.d_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.d_ior, inputs.d_roughness, false, inputs.d_film_thickness, inputs.d_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
-    let _e29 = mx_closure_for_lobe(cl1_, 17u32);
+    let _e29 = mx_closure_for_lobe(cl1_, 4155984565u32);
     let v17_ = mx_conductor_bsdf(_e29, inputs.c_weight, inputs.c_ior, inputs.c_extinction, inputs.c_roughness, false, inputs.c_film_thickness, inputs.c_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32);
-    let _e42 = mx_closure_for_lobe(cl1_, 18u32);
+    let _e42 = mx_closure_for_lobe(cl1_, 4176295926u32);
     let v18_ = mx_add_bsdf(_e42, v10_, v17_);
-    let _e45 = mx_closure_for_lobe(cl1_, 27u32);
+    let _e45 = mx_closure_for_lobe(cl1_, 3785977527u32);
     let v27_ = mx_generalized_schlick_bsdf(_e45, inputs.s_weight, inputs.s_color0_, inputs.s_color82_, inputs.s_color90_, inputs.s_exponent, inputs.s_roughness, false, inputs.s_film_thickness, inputs.s_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
-    let _e61 = mx_closure_for_lobe(cl1_, 28u32);
+    let _e61 = mx_closure_for_lobe(cl1_, 3261479363u32);
     let v28_ = mx_add_bsdf(_e61, v18_, v27_);
     MxOutputs { albedo: v28_.response, throughput: v28_.throughput }
 }

@@ -1025,15 +1025,15 @@ pub fn mx_generalized_schlick_bsdf(cl_10: mx_closure, weight_2: f32, color0_: Ve
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl3_ = mx_closure_new(3i32, inputs.wv, inputs.wl, Vec3::splat(0.0f32));
-    let _e9 = mx_closure_for_lobe(cl3_, 10u32);
+    let _e9 = mx_closure_for_lobe(cl3_, 3263561412u32);
     let v10_ = mx_dielectric_bsdf(_e9, inputs.d_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.d_ior, inputs.d_roughness, false, inputs.d_film_thickness, inputs.d_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
-    let _e26 = mx_closure_for_lobe(cl3_, 17u32);
+    let _e26 = mx_closure_for_lobe(cl3_, 4155984565u32);
     let v17_ = mx_conductor_bsdf(_e26, inputs.c_weight, inputs.c_ior, inputs.c_extinction, inputs.c_roughness, false, inputs.c_film_thickness, inputs.c_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32);
-    let _e39 = mx_closure_for_lobe(cl3_, 18u32);
+    let _e39 = mx_closure_for_lobe(cl3_, 4176295926u32);
     let v18_ = mx_add_bsdf(_e39, v10_, v17_);
-    let _e42 = mx_closure_for_lobe(cl3_, 27u32);
+    let _e42 = mx_closure_for_lobe(cl3_, 3785977527u32);
     let v27_ = mx_generalized_schlick_bsdf(_e42, inputs.s_weight, inputs.s_color0_, inputs.s_color82_, inputs.s_color90_, inputs.s_exponent, inputs.s_roughness, false, inputs.s_film_thickness, inputs.s_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
-    let _e58 = mx_closure_for_lobe(cl3_, 28u32);
+    let _e58 = mx_closure_for_lobe(cl3_, 3261479363u32);
     let v28_ = mx_add_bsdf(_e58, v18_, v27_);
     let _e60 = mx_closure_pdf(v28_);
     MxOutputs { pdf: _e60, response: v28_.response, throughput: v28_.throughput }

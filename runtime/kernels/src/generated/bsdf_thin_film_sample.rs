@@ -1026,26 +1026,26 @@ pub fn mx_generalized_schlick_bsdf(cl_10: mx_closure, weight_2: f32, color0_: Ve
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl2_ = mx_closure_new(2i32, inputs.wv, Vec3::new(0.0f32, 0.0f32, 1.0f32), inputs.u);
-    let _e11 = mx_closure_for_lobe(cl2_, 10u32);
+    let _e11 = mx_closure_for_lobe(cl2_, 3263561412u32);
     let v10_0_ = mx_dielectric_bsdf(_e11, inputs.d_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.d_ior, inputs.d_roughness, false, inputs.d_film_thickness, inputs.d_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
-    let _e28 = mx_closure_for_lobe(cl2_, 17u32);
+    let _e28 = mx_closure_for_lobe(cl2_, 4155984565u32);
     let v17_0_ = mx_conductor_bsdf(_e28, inputs.c_weight, inputs.c_ior, inputs.c_extinction, inputs.c_roughness, false, inputs.c_film_thickness, inputs.c_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32);
-    let _e41 = mx_closure_for_lobe(cl2_, 18u32);
+    let _e41 = mx_closure_for_lobe(cl2_, 4176295926u32);
     let v18_0_ = mx_add_bsdf(_e41, v10_0_, v17_0_);
-    let _e44 = mx_closure_for_lobe(cl2_, 27u32);
+    let _e44 = mx_closure_for_lobe(cl2_, 3785977527u32);
     let v27_0_ = mx_generalized_schlick_bsdf(_e44, inputs.s_weight, inputs.s_color0_, inputs.s_color82_, inputs.s_color90_, inputs.s_exponent, inputs.s_roughness, false, inputs.s_film_thickness, inputs.s_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
-    let _e60 = mx_closure_for_lobe(cl2_, 28u32);
+    let _e60 = mx_closure_for_lobe(cl2_, 3261479363u32);
     let v28_0_ = mx_add_bsdf(_e60, v18_0_, v27_0_);
     let cl3_ = mx_closure_new(3i32, cl2_.wv, Vec3::new(v28_0_.lobe.x, v28_0_.lobe.y, v28_0_.lobe.z), cl2_.u);
-    let _e69 = mx_closure_for_lobe(cl3_, 10u32);
+    let _e69 = mx_closure_for_lobe(cl3_, 3263561412u32);
     let v10_1_ = mx_dielectric_bsdf(_e69, inputs.d_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.d_ior, inputs.d_roughness, false, inputs.d_film_thickness, inputs.d_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
-    let _e86 = mx_closure_for_lobe(cl3_, 17u32);
+    let _e86 = mx_closure_for_lobe(cl3_, 4155984565u32);
     let v17_1_ = mx_conductor_bsdf(_e86, inputs.c_weight, inputs.c_ior, inputs.c_extinction, inputs.c_roughness, false, inputs.c_film_thickness, inputs.c_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32);
-    let _e99 = mx_closure_for_lobe(cl3_, 18u32);
+    let _e99 = mx_closure_for_lobe(cl3_, 4176295926u32);
     let v18_1_ = mx_add_bsdf(_e99, v10_1_, v17_1_);
-    let _e102 = mx_closure_for_lobe(cl3_, 27u32);
+    let _e102 = mx_closure_for_lobe(cl3_, 3785977527u32);
     let v27_1_ = mx_generalized_schlick_bsdf(_e102, inputs.s_weight, inputs.s_color0_, inputs.s_color82_, inputs.s_color90_, inputs.s_exponent, inputs.s_roughness, false, inputs.s_film_thickness, inputs.s_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
-    let _e118 = mx_closure_for_lobe(cl3_, 28u32);
+    let _e118 = mx_closure_for_lobe(cl3_, 3261479363u32);
     let v28_1_ = mx_add_bsdf(_e118, v18_1_, v27_1_);
     let _e121 = mx_closure_pdf(v28_1_);
     MxOutputs { wl: cl3_.wl, pdf: _e121, response: v28_1_.response, throughput: v28_1_.throughput }

@@ -1049,19 +1049,19 @@ pub fn mx_sheen_bsdf(cl_10: mx_closure, weight_2: f32, color: Vec3, roughness_5:
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl3_ = mx_closure_new(3i32, inputs.wv, inputs.wl, Vec3::splat(0.0f32));
-    let _e9 = mx_closure_for_lobe(cl3_, 10u32);
+    let _e9 = mx_closure_for_lobe(cl3_, 289314943u32);
     let v10_ = mx_dielectric_bsdf(_e9, inputs.d_weight, inputs.d_tint, inputs.d_ior, inputs.d_roughness, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
-    let _e23 = mx_closure_for_lobe(cl3_, 17u32);
+    let _e23 = mx_closure_for_lobe(cl3_, 1859605822u32);
     let v17_ = mx_generalized_schlick_bsdf(_e23, inputs.s_weight, inputs.s_color0_, inputs.s_color82_, inputs.s_color90_, inputs.s_exponent, inputs.s_roughness, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
-    let _e39 = mx_closure_for_lobe(cl3_, 18u32);
+    let _e39 = mx_closure_for_lobe(cl3_, 522458049u32);
     let v18_ = mx_add_bsdf(_e39, v10_, v17_);
-    let _e42 = mx_closure_for_lobe(cl3_, 22u32);
+    let _e42 = mx_closure_for_lobe(cl3_, 2369748183u32);
     let v22_ = mx_sheen_bsdf(_e42, inputs.k_weight, inputs.k_color, inputs.k_roughness, geom_1.normal_world, 0i32);
-    let _e50 = mx_closure_for_lobe(cl3_, 27u32);
+    let _e50 = mx_closure_for_lobe(cl3_, 295557537u32);
     let v27_ = mx_sheen_bsdf(_e50, inputs.z_weight, inputs.z_color, inputs.z_roughness, geom_1.normal_world, 1i32);
-    let _e58 = mx_closure_for_lobe(cl3_, 28u32);
+    let _e58 = mx_closure_for_lobe(cl3_, 472125192u32);
     let v28_ = mx_add_bsdf(_e58, v22_, v27_);
-    let _e61 = mx_closure_for_lobe(cl3_, 29u32);
+    let _e61 = mx_closure_for_lobe(cl3_, 1857239530u32);
     let v29_ = mx_add_bsdf(_e61, v18_, v28_);
     let _e63 = mx_closure_pdf(v29_);
     MxOutputs { pdf: _e63, response: v29_.response, throughput: v29_.throughput }

@@ -33,4 +33,5 @@ mod numeric_smoke;
 mod numeric_texture;
 mod random_graphs;
 mod render;
+mod specialisation;
 mod uplift_stack;
