@@ -18,6 +18,7 @@
 pub mod albedo_tables;
 pub mod driver;
 pub mod generated;
+pub mod grouped;
 pub mod shipped;
 
 /// The pbrlib albedo tables as one static (generated from the node library).

@@ -26,7 +26,9 @@
 //! is dead). Directions: `wv` and `wl` uniform on the upper hemisphere. `--per-view K`: the
 //! grouped layout (`PatternBatch::points_per_group`): runs of K rows share their first row's
 //! view and parameters, each row its own `wl` — a kernel with a dependence-split form runs its
-//! per-view work once per K rows. Closure kernels: the
+//! per-view work once per K rows. `--set NAME=VALUE` (repeatable) binds an interface input at
+//! compile time (`Compiler::constant_inputs`): a specialised kernel, not shipped, so measured
+//! through its runner. Closure kernels: the
 //! frame and every parameter not drawn per row are uniform columns (`Columns::mark_uniform`),
 //! as Mitsuba's benchmark has one material and one frame. In-process runs write into one
 //! output buffer reused from batch to batch (`CpuEngine::run_prepared_into`), as Dr.Jit's
@@ -58,10 +60,12 @@ struct Options {
     mitsuba: Option<String>,
     in_process: bool,
     per_view: usize,
+    /// `--set NAME=VALUE`: interface inputs bound at compile time (specialisation).
+    set: Vec<(String, String)>,
 }
 
 fn options() -> Options {
-    let mut o = Options { graph: None, context: None, points: 1 << 20, seconds: 2.0, wgpu_child: false, params: Vec::new(), random_params: false, mitsuba: None, in_process: false, per_view: 1 };
+    let mut o = Options { graph: None, context: None, points: 1 << 20, seconds: 2.0, wgpu_child: false, params: Vec::new(), random_params: false, mitsuba: None, in_process: false, per_view: 1, set: Vec::new() };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
@@ -89,6 +93,11 @@ fn options() -> Options {
                 o.params.push((name.to_string(), values));
             }
             "--random-params" => o.random_params = true,
+            "--set" => {
+                i += 1;
+                let (name, value) = args[i].split_once('=').expect("--set NAME=VALUE");
+                o.set.push((name.to_string(), value.to_string()));
+            }
             "--per-view" => {
                 i += 1;
                 o.per_view = args[i].parse().ok().filter(|&k: &usize| k > 0).expect("--per-view K (K ≥ 1)");
@@ -118,6 +127,8 @@ fn parameters(graph: &Path, o: &Options) -> Vec<(String, Vec<f32>)> {
         _ => Vec::new(),
     };
     params.extend(o.params.iter().cloned());
+    // Inputs bound at compile time are no inputs of the kernel.
+    params.retain(|(n, _)| !o.set.iter().any(|(s, _)| s == n));
     params
 }
 
@@ -151,15 +162,14 @@ fn batch(kernel: &PatternKernel, n: usize, params: &[(String, Vec<f32>)], random
         // Every uplift_stack parameter per row, inside its range (weights ≥ 5 % of it); each
         // parameter's column found once.
         let table = &uplift_engines::stack_params::PARAMETER_TABLE;
-        let columns: Vec<usize> = table
+        // (Inputs a specialised kernel no longer has are skipped.)
+        let columns: Vec<(usize, &uplift_engines::stack_params::Parameter)> = table
             .iter()
-            .map(|p| {
-                let input = kernel.inputs.iter().find(|i| i.input.name == p.input).unwrap_or_else(|| panic!("--random-params: the graph has no input {} (uplift_stack only)", p.input));
-                input.offset + p.component
-            })
+            .filter_map(|p| kernel.inputs.iter().find(|i| i.input.name == p.input).map(|input| (input.offset + p.component, p)))
             .collect();
+        assert!(!columns.is_empty(), "--random-params: the graph has none of uplift_stack's inputs");
         for row in rows.chunks_mut(kernel.input_stride) {
-            for (p, &c) in table.iter().zip(&columns) {
+            for &(c, p) in &columns {
                 row[c] = p.lo + (p.hi - p.lo) * (0.05 + 0.95 * next());
             }
         }
@@ -228,7 +238,8 @@ fn cache_dir() -> PathBuf {
 fn main() {
     let o = options();
     let graph = o.graph.clone().unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../kernels/graphs/triplanar_mask.mtlx"));
-    let compiler = Compiler::builtin();
+    let mut compiler = Compiler::builtin();
+    compiler.constant_inputs = o.set.clone();
     let c = compiler.compile_file_in(&graph, &OutputSelection::AllNumeric, o.context);
     let kernel = c.kernel.unwrap_or_else(|| panic!("{}: {:?}", graph.display(), c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>()));
     let params = parameters(&graph, &o);
@@ -346,6 +357,9 @@ fn main() {
     }
     if o.per_view > 1 {
         child_args.extend(["--per-view".to_string(), o.per_view.to_string()]);
+    }
+    for (n, v) in &o.set {
+        child_args.extend(["--set".to_string(), format!("{n}={v}")]);
     }
     if let Some(c) = o.context {
         child_args.extend(["--context".to_string(), c.name().to_string()]);

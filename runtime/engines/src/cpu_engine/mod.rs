@@ -5,7 +5,7 @@
 //! child process (`external.rs`). Both paths run the same generated `mx_pattern_batch` through
 //! the same driver.
 
-pub use uplift_kernels::{driver, shipped};
+pub use uplift_kernels::{driver, grouped, shipped};
 pub mod external;
 pub mod runner_protocol;
 
@@ -119,7 +119,7 @@ impl CpuEngine {
                 // A grouped batch through the kernel's dependence-split form, where it ships one
                 // and the groups fill its packets (smaller groups leave lanes idle).
                 let grouped = match (&k.grouped, batch.points_per_group) {
-                    (Some(g), per_group) if per_group >= GROUPED_MIN_POINTS => self.pool.install(|| driver::run_grouped_blocks(g, per_group, n, &geometry, &inputs, out.data_mut(), s.output_columns)),
+                    (Some(g), per_group) if per_group >= GROUPED_MIN_POINTS => self.pool.install(|| grouped::run_grouped_blocks(g, per_group, n, &geometry, &inputs, out.data_mut(), s.output_columns)),
                     _ => false,
                 };
                 if !grouped {

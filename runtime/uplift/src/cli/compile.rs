@@ -120,6 +120,12 @@ pub struct CompileArgs {
     /// directions become the first inputs) instead of the pattern outputs.
     #[arg(long, value_enum)]
     pub context: Option<super::ContextArg>,
+    /// Specialise: bind interface input NAME to the constant VALUE (MaterialX value text, e.g.
+    /// `fuzz_weight=0` or `scatter_color=0.5,0.5,0.5`; repeatable). The input leaves the
+    /// kernel's interface and what depends on it folds: a lobe whose weight becomes 0 leaves
+    /// the kernel.
+    #[arg(long = "set", value_name = "NAME=VALUE")]
+    pub set: Vec<String>,
 }
 
 /// Metal argument slots for the kernel's resources: buffers in `[[buffer(k)]]` in binding order,
@@ -150,7 +156,13 @@ pub fn run(args: CompileArgs) -> Result<(), String> {
     if args.bench {
         return crate::cli::compile_bench::run(&args.files, &args.library, args.context.map(|c| c.context()));
     }
-    let compiler = super::compiler(&args.library, args.allow_any_path)?;
+    let mut compiler = super::compiler(&args.library, args.allow_any_path)?;
+    for binding in &args.set {
+        let Some((name, value)) = binding.split_once('=') else {
+            return Err(format!("--set {binding}: expected NAME=VALUE"));
+        };
+        compiler.constant_inputs.push((name.trim().to_string(), value.trim().to_string()));
+    }
     let selection = if args.output.is_empty() { OutputSelection::AllNumeric } else { OutputSelection::Named(args.output.clone()) };
     let mut failed = false;
     for file in &args.files {

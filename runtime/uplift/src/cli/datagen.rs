@@ -32,6 +32,12 @@ pub struct DatagenArgs {
     /// Output folder.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Light directions per (parameter set, view): rows come in groups of K sharing their
+    /// material and view (the first K/2 lit uniformly, the rest sampled); the albedo runs once
+    /// per group and eval and sample through the stack's dependence-split kernels. A divisor
+    /// of 16384.
+    #[arg(long, default_value_t = 1)]
+    pub directions_per_view: usize,
 }
 
 pub fn run(args: DatagenArgs) -> Result<(), String> {
@@ -42,8 +48,12 @@ pub fn run(args: DatagenArgs) -> Result<(), String> {
     if args.shard_rows == 0 || args.shard_rows % CHUNK != 0 {
         return Err(format!("--shard-rows {}: a shard holds a positive multiple of {CHUNK} rows", args.shard_rows));
     }
+    if args.directions_per_view == 0 || CHUNK % args.directions_per_view != 0 || args.count % args.directions_per_view != 0 {
+        return Err(format!("--directions-per-view {}: a divisor of {CHUNK} and of --count {}", args.directions_per_view, args.count));
+    }
     std::fs::create_dir_all(&args.output).map_err(|e| format!("{}: {e}", args.output.display()))?;
-    let generator = DataGenerator::new(CpuEngine::new()?, mix, args.seed)?;
+    let mut generator = DataGenerator::new(CpuEngine::new()?, mix, args.seed)?;
+    generator.directions_per_view = args.directions_per_view;
     let shards = args.count.div_ceil(args.shard_rows);
     let bar = indicatif::ProgressBar::new(args.count as u64);
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows, eta {eta}").unwrap());

@@ -54,6 +54,10 @@ pub struct TrainArgs {
     /// Training views: `cosine` (cosine-weighted) or `mixed` (half with μv uniform).
     #[arg(long, default_value = "cosine")]
     pub views: String,
+    /// Light directions per (parameter set, view) in the generated rows (`uplift datagen
+    /// --directions-per-view`); a divisor of --batch.
+    #[arg(long, default_value_t = 1)]
+    pub directions_per_view: usize,
 }
 
 pub fn run(args: TrainArgs) -> Result<(), String> {
@@ -72,10 +76,17 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
     }
     let mut generator = DataGenerator::new(CpuEngine::with_threads(threads)?, mix, args.seed)?;
     generator.views = views;
+    if args.directions_per_view == 0 || args.batch % args.directions_per_view != 0 {
+        return Err(format!("--directions-per-view {}: a divisor of --batch {}", args.directions_per_view, args.batch));
+    }
+    generator.directions_per_view = args.directions_per_view;
     eprintln!("training data from {}", generator.describe());
     let mut command = format!("uplift train --steps {} --batch {} --seed {} --lr {} --lr-end {} --jitter {} --class {}", args.steps, args.batch, args.seed, args.lr, args.lr_end, args.jitter, args.class);
     if views != ViewDistribution::Cosine {
         command += &format!(" --views {}", views.name());
+    }
+    if args.directions_per_view != 1 {
+        command += &format!(" --directions-per-view {}", args.directions_per_view);
     }
     let mut extra = vec![];
     if let Some(init) = &args.init {

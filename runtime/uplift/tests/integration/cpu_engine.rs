@@ -266,7 +266,7 @@ fn grouped_kernels_agree_with_the_scalar_kernels() {
             let geometry: Vec<&[f32]> = (0..batch.geometry.width()).map(|c| batch.geometry.column(c)).collect();
             let inputs: Vec<&[f32]> = (0..batch.inputs.width()).map(|c| batch.inputs.column(c)).collect();
             let mut split_out = Columns::zeros(n, kernel.output_stride);
-            assert!(uplift_kernels::driver::run_grouped_blocks(&g, per_group, n, &geometry, &inputs, split_out.data_mut(), kernel.output_stride), "the grouped form declined");
+            assert!(uplift_kernels::grouped::run_grouped_blocks(&g, per_group, n, &geometry, &inputs, split_out.data_mut(), kernel.output_stride), "the grouped form declined");
             let mut scalar_out = Columns::zeros(n, kernel.output_stride);
             {
                 let mut cols: Vec<&mut [f32]> = scalar_out.data_mut().chunks_exact_mut(n).collect();
