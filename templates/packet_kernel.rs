@@ -126,7 +126,8 @@ pub fn mx_pattern_grouped_packets<S: Simd>(s: S, geom: &[&[f32]], inputs: &[&[f3
                 {{ f.name }}: {{ f.expr }},
 {%- endfor %}
             };
-            let _ = {{ sp.group_fn }}(s, mx_geom, mx_inputs, &mut mx_tape);
+            // The group pass runs once per packet of groups: a function of its own per level.
+            let _ = s.outline(#[inline(always)] || {{ sp.group_fn }}(s, mx_geom, mx_inputs, &mut mx_tape));
         }
         for mx_j in 0..mx_g1 - mx_g0 {
             let mx_group = mx_g0 + mx_j;

@@ -147,7 +147,7 @@ fn every_snapshot_kernel_agrees_on_cpu_and_wgpu() {
 
         let mut cpu = vec![0.0f32; POINTS * k.output_stride];
         (k.batch_with)(&geom, &inputs, &mut cpu, &TextureSet(textures.clone()));
-        let batch = PatternBatch { geometry: Columns::from_rows(&geom, uplift_compiler::kernel::GEOMETRY_STRIDE), inputs: Columns::from_rows(&inputs, kernel.input_stride), textures };
+        let batch = PatternBatch { geometry: Columns::from_rows(&geom, uplift_compiler::kernel::GEOMETRY_STRIDE), inputs: Columns::from_rows(&inputs, kernel.input_stride), textures, points_per_group: 1 };
         let gpu = engine.run_pattern(&kernel, &batch).unwrap_or_else(|e| panic!("{}: {e}", k.name)).to_rows();
         assert_eq!(gpu.len(), cpu.len(), "{}: output length", k.name);
 

@@ -2656,7 +2656,8 @@ pub fn mx_pattern_grouped_packets<S: Simd>(s: S, geom: &[&[f32]], inputs: &[&[f3
                 extinction: [mx_xg(10), mx_xg(11), mx_xg(12)],
                 roughness: [mx_xg(13), mx_xg(14)],
             };
-            let _ = mx_pattern_g16(s, mx_geom, mx_inputs, &mut mx_tape);
+            // The group pass runs once per packet of groups: a function of its own per level.
+            let _ = s.outline(#[inline(always)] || mx_pattern_g16(s, mx_geom, mx_inputs, &mut mx_tape));
         }
         for mx_j in 0..mx_g1 - mx_g0 {
             let mx_group = mx_g0 + mx_j;

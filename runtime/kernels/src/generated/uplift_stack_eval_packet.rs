@@ -5671,7 +5671,8 @@ pub fn mx_pattern_grouped_packets<S: Simd>(s: S, geom: &[&[f32]], inputs: &[&[f3
                 subcutaneous_weight: mx_xg(26),
                 subcutaneous_roughness: mx_xg(27),
             };
-            let _ = mx_pattern_g37(s, mx_geom, mx_inputs, &mut mx_tape);
+            // The group pass runs once per packet of groups: a function of its own per level.
+            let _ = s.outline(#[inline(always)] || mx_pattern_g37(s, mx_geom, mx_inputs, &mut mx_tape));
         }
         for mx_j in 0..mx_g1 - mx_g0 {
             let mx_group = mx_g0 + mx_j;
