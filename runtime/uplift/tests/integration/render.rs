@@ -206,7 +206,9 @@ fn furnace_estimator_matches_the_albedo_kernel() {
         }
     }
     let exact = exact_albedo(&shading, &points, &wv).unwrap();
-    let est = estimated_albedo(&shading, &points, &wv, 4096, 3).unwrap();
+    // 16,384 paths per pair: the estimate's error falls as 1/√N (measured worst 0.0131 at
+    // 4,096, 0.0076 at 16,384 with the stack's lobe ids from node paths).
+    let est = estimated_albedo(&shading, &points, &wv, 16384, 3).unwrap();
     let mut worst = 0.0f32;
     for (a, b) in exact.iter().zip(&est) {
         for c in 0..3 {
