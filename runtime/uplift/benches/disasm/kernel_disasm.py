@@ -14,7 +14,12 @@ remainder and fallbacks, so the table gives the width most of its float arithmet
 Static counts are what one pass over the code holds, not what a run executes: branches skipped
 for a whole packet (guarded calls, masked ifs no lane takes) are counted too.
 
-Usage: python3 runtime/uplift/benches/disasm/kernel_disasm.py [--no-build | --binary PATH] KERNEL...
+`--functions` adds, per packet level, one row per function (its role read from the name: the
+split kernel's group pass, outlined once per packet of groups; the grouped batch loop with the
+point pass inlined; the unsplit batch loop; an outlined lobe), so that a split kernel's cost per
+point is the point pass's row plus the group pass's divided by the points per group.
+
+Usage: python3 runtime/uplift/benches/disasm/kernel_disasm.py [--no-build | --binary PATH] [--functions] KERNEL...
        (KERNEL: a shipped kernel module, e.g. bsdf_conductor_eval uplift_stack_eval)
 """
 import os
@@ -124,6 +129,40 @@ def count(kernel, funcs):
     return rows, lanes
 
 
+def role(name):
+    """What a packet kernel's function is, from its demangled name."""
+    if "outline" in name and re.search(r"_g\d+<", name):
+        return "group pass: outlined callee"
+    if "grouped_packets" in name and "outline" in name:
+        return "group pass"
+    if "grouped" in name:
+        return "grouped batch loop + point pass"
+    if "outline" in name:
+        return "unsplit kernel: outlined callee"
+    return "unsplit batch loop"
+
+
+def function_rows(kernel, funcs, level_name):
+    packet_module = f"{kernel}_packet"
+    out = []
+    for name, body in funcs:
+        if packet_module not in name:
+            continue
+        level, width = level_of(name)
+        if level != level_name:
+            continue
+        r = defaultdict(int)
+        for mnemonic, operands in body:
+            r["instructions"] += 1
+            for cls, rx in CLASSES.items():
+                if rx.match(mnemonic):
+                    r[cls] += 1
+            if "(%rsp)" in operands or "(%rbp)" in operands:
+                r["stack accesses"] += 1
+        out.append((role(name), width, r))
+    return out
+
+
 def main():
     global BINARY
     argv = sys.argv[1:]
@@ -160,6 +199,20 @@ def main():
             else:
                 cells = [f"{r[c]} ({r[c] / w:.1f}/lane)" for c in cols]
                 print(f"| {level} | {r['functions']} | {w} | " + " | ".join(cells) + " |")
+        if "--functions" in argv:
+            for level in sorted(l for l in rows if not l.startswith("scalar writer")):
+                print(f"\n{kernel}, {level}, per function:\n")
+                print("| function | " + " | ".join(cols) + " |")
+                print("|---|" + "---|" * len(cols))
+                frows = function_rows(kernel, funcs, level)
+                for rl, w, r in sorted(frows, key=lambda x: -x[2]["instructions"]):
+                    print(f"| {rl} | " + " | ".join(f"{r[c]} ({r[c] / w:.1f}/lane)" for c in cols) + " |")
+                point = [r for rl, _, r in frows if rl.startswith("grouped batch loop")]
+                group = [r for rl, _, r in frows if rl.startswith("group pass")]
+                if point:
+                    w = lanes[level]
+                    per = {c: sum(r[c] for r in point) / w + sum(r[c] for r in group) / (w * 16) for c in cols}
+                    print("| **split, per point at 16 points per group** (point pass per lane + group pass / (lanes · 16)) | " + " | ".join(f"{per[c]:.1f}" for c in cols) + " |")
 
 
 if __name__ == "__main__":
