@@ -11,7 +11,7 @@ pub fn poly<S: Simd>(s: S, x: S::F) -> S::F {
     let _e7 = _e4.mul_add(x, -s.splat(2.0f32));
     let _e8 = (x * x);
     let _e10 = x.mul_add(x, s.splat(1.0f32));
-    let _e11 = (_e7 / _e10);
+    let _e11 = (_e7 * (_e10).rcp());
     return _e11;
 }
 
@@ -115,7 +115,7 @@ pub fn calls<S: Simd>(s: S, a_3: S::F, v: [S::F; 3]) -> S::F {
     let _e12 = (_e9 + _e11);
     let _e13 = { let x = a_3; x.abs() };
     let _e15 = (_e13 + s.splat(1.0f32));
-    let _e16 = { let x = _e15; s.splat(1.0) / x.sqrt() };
+    let _e16 = { let x = _e15; x.rsqrt() };
     let _e17 = (_e12 + _e16);
     let _e18 = { let x = a_3; x.map(f32::sin) };
     let _e19 = (_e17 + _e18);

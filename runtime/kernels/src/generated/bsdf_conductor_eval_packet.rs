@@ -190,7 +190,7 @@ pub fn mx_normalize_or<S: Simd>(s: S, v: [S::F; 3], fallback: [S::F; 3]) -> [S::
     let _e6 = _e2.lt(s.splat(1e30f32));
     let _e7 = (_e4 & _e6);
     let _e10 = _e2.max(s.splat(1e-30f32)).min(s.splat(1e30f32));
-    let _e11 = { let x = _e10; s.splat(1.0) / x.sqrt() };
+    let _e11 = { let x = _e10; x.rsqrt() };
     let _e12 = uplift_simd::vector::mul::<S, 3>(v, [_e11; 3]);
     let _e13 = uplift_simd::vector::select_all::<S, 3>(_e7, _e12, fallback);
     return _e13;
@@ -241,7 +241,7 @@ pub fn mx_frame_new<S: Simd>(s: S, normal: [S::F; 3], tangent: [S::F; 3], wv_1: 
     let _e18 = _e15.select(s.splat(1.0f32), s.splat(-1.0f32));
     let _e19 = _e12[2];
     let _e20 = (_e18 + _e19);
-    let _e22 = (s.splat(-1.0f32) / _e20);
+    let _e22 = (s.splat(-1.0f32) * (_e20).rcp());
     let _e23 = _e12[0];
     let _e24 = _e12[1];
     let _e25 = (_e23 * _e24);
@@ -337,7 +337,7 @@ pub fn mx_fresnel_conductor_normal<S: Simd>(s: S, n: [S::F; 3], k: [S::F; 3]) ->
     let _e18 = uplift_simd::vector::add::<S, 3>(_e17, _e2);
     let _e20 = [s.splat(1e-30f32); 3];
     let _e21 = uplift_simd::vector::zip::<S, 3>(_e18, _e20, |x, y| x.max(y));
-    let _e22 = uplift_simd::vector::div::<S, 3>(_e10, _e21);
+    let _e22 = uplift_simd::vector::zip::<S, 3>(_e10, _e21, |x, y| x * y.rcp());
     return _e22;
 }
 
@@ -348,7 +348,7 @@ pub fn mx_thin_film_cos<S: Simd>(s: S, cos_theta: S::F, eta2_: S::F) -> S::F {
     let _e5 = (_e4 * _e4);
     let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
     let _e8 = (eta2_ * eta2_);
-    let _e9 = (_e7 / _e8);
+    let _e9 = (_e7 * (_e8).rcp());
     let _e11 = (s.splat(1.0f32) - _e9);
     let _e13 = { let (x, y) = (_e11, s.splat(0.0f32)); x.max(y) };
     let _e14 = { let x = _e13; x.sqrt() };
@@ -384,7 +384,7 @@ pub fn mx_fresnel_conductor_polarized<S: Simd>(s: S, cos_theta_1: S::F, n_1: [S:
     let _e33 = uplift_simd::vector::add::<S, 3>(_e21, _e31);
     let _e35 = [s.splat(1e-30f32); 3];
     let _e36 = uplift_simd::vector::zip::<S, 3>(_e33, _e35, |x, y| x.max(y));
-    let _e37 = uplift_simd::vector::div::<S, 3>(_e32, _e36);
+    let _e37 = uplift_simd::vector::zip::<S, 3>(_e32, _e36, |x, y| x * y.rcp());
     let _e38 = uplift_simd::vector::mul::<S, 3>([_e6; 3], _e19);
     let _e39 = (_e8 * _e8);
     let _e40 = [_e39; 3];
@@ -395,7 +395,7 @@ pub fn mx_fresnel_conductor_polarized<S: Simd>(s: S, cos_theta_1: S::F, n_1: [S:
     let _e45 = uplift_simd::vector::add::<S, 3>(_e41, _e42);
     let _e47 = [s.splat(1e-30f32); 3];
     let _e48 = uplift_simd::vector::zip::<S, 3>(_e45, _e47, |x, y| x.max(y));
-    let _e49 = uplift_simd::vector::div::<S, 3>(_e44, _e48);
+    let _e49 = uplift_simd::vector::zip::<S, 3>(_e44, _e48, |x, y| x * y.rcp());
     let _e50 = mx_polarized { p: _e49, s_: _e37 };
     return _e50;
 }
@@ -408,7 +408,7 @@ pub fn mx_fast_atan2_<S: Simd>(s: S, y: S::F, x: S::F) -> S::F {
     let _e3 = { let x = y; x.abs() };
     let _e4 = { let (x, y) = (_e2, _e3); x.max(y) };
     let _e5 = { let (x, y) = (_e2, _e3); x.min(y) };
-    let _e6 = (_e5 / _e4);
+    let _e6 = (_e5 * (_e4).rcp());
     let _e8 = _e4.le(s.splat(0.0f32));
     let _e10 = _e8.select(s.splat(0.0f32), _e6);
     let _e11 = (_e10 * _e10);
@@ -469,7 +469,7 @@ pub fn mx_fast_atan2_vec3_<S: Simd>(s: S, y_1: [S::F; 3], x_1: [S::F; 3]) -> [S:
 pub fn mx_fresnel_conductor_phase_polarized<S: Simd>(s: S, cos_theta_2: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3]) -> mx_polarized<S> {
     let _e5 = [s.splat(1e-6f32); 3];
     let _e6 = uplift_simd::vector::zip::<S, 3>(eta2_1, _e5, |x, y| x.max(y));
-    let _e7 = uplift_simd::vector::div::<S, 3>(kappa2_, _e6);
+    let _e7 = uplift_simd::vector::zip::<S, 3>(kappa2_, _e6, |x, y| x * y.rcp());
     let _e8 = (cos_theta_2 * cos_theta_2);
     let _e10 = (-cos_theta_2).mul_add(cos_theta_2, s.splat(1.0f32));
     let _e11 = uplift_simd::vector::mul::<S, 3>(_e6, _e6);
@@ -558,7 +558,7 @@ pub fn mx_fresnel_dielectric_polarized<S: Simd>(s: S, cos_theta_3: S::F, eta: S:
     let _e17 = (-_e15).mul_add(_e4, _e12);
     let _e18 = _e15.mul_add(_e4, _e12);
     let _e20 = { let (x, y) = (_e18, s.splat(1e-30f32)); x.max(y) };
-    let _e21 = (_e17 / _e20);
+    let _e21 = (_e17 * (_e20).rcp());
     let _e22 = (_e5 * _e11);
     let _e23 = (_e7 * _e7);
     let _e24 = _e5.mul_add(_e11, _e23);
@@ -567,7 +567,7 @@ pub fn mx_fresnel_dielectric_polarized<S: Simd>(s: S, cos_theta_3: S::F, eta: S:
     let _e27 = (_e21 * _e26);
     let _e28 = _e16.mul_add(_e7, _e24);
     let _e30 = { let (x, y) = (_e28, s.splat(1e-30f32)); x.max(y) };
-    let _e31 = (_e27 / _e30);
+    let _e31 = (_e27 * (_e30).rcp());
     let _e32 = [_e31, _e21];
     return _e32;
 }
@@ -715,7 +715,7 @@ pub fn mx_eval_sensitivity<S: Simd>(s: S, opd: S::F, shift: [S::F; 3]) -> [S::F;
     xyz[0] = _e52;
     let _e53 = xyz;
     let _e55 = [s.splat(1.0685e-7f32); 3];
-    let _e56 = uplift_simd::vector::div::<S, 3>(_e53, _e55);
+    let _e56 = uplift_simd::vector::zip::<S, 3>(_e53, _e55, |x, y| x * y.rcp());
     return _e56;
 }
 
@@ -730,7 +730,7 @@ pub fn mx_airy_polarization<S: Simd>(s: S, r12_: S::F, r23_: [S::F; 3], phi_1: [
     let _e11 = uplift_simd::vector::sub::<S, 3>(_e9, _e10);
     let _e13 = [s.splat(1e-30f32); 3];
     let _e14 = uplift_simd::vector::zip::<S, 3>(_e11, _e13, |x, y| x.max(y));
-    let _e15 = uplift_simd::vector::div::<S, 3>(_e7, _e14);
+    let _e15 = uplift_simd::vector::zip::<S, 3>(_e7, _e14, |x, y| x * y.rcp());
     let _e16 = uplift_simd::vector::mul::<S, 3>([r12_; 3], r23_);
     let _e18 = [s.splat(0.0f32); 3];
     let _e19 = uplift_simd::vector::zip::<S, 3>(_e16, _e18, |x, y| x.max(y));
@@ -761,7 +761,7 @@ pub fn mx_airy_reflectance<S: Simd>(s: S, cos_theta_4: S::F, cos_t: S::F, eta2_2
     let _e7 = (eta2_2 * eta2_2);
     let _e9 = eta2_2.mul_add(eta2_2, s.splat(1.0f32));
     let _e10 = { let x = _e9; x.sqrt() };
-    let _e12 = (s.splat(1.0f32) / _e10);
+    let _e12 = (s.splat(1.0f32) * (_e10).rcp());
     let _e14 = cos_theta_4.lt(_e12);
     let _e16 = _e14.select(s.splat(0.0f32), s.splat(3.1415927f32));
     let _e18 = (s.splat(2.0f32) * eta2_2);
@@ -806,9 +806,9 @@ pub fn mx_fresnel_airy_conductor<S: Simd>(s: S, cos_theta_5: S::F, n_2: [S::F; 3
     let _e6 = { let (x, y) = (film_ior, s.splat(1.0f32)); x.max(y) };
     let _e7 = mx_thin_film_cos(s, cos_theta_5, _e6);
     let _e8 = [_e6; 3];
-    let _e9 = uplift_simd::vector::div::<S, 3>(n_2, _e8);
+    let _e9 = uplift_simd::vector::zip::<S, 3>(n_2, _e8, |x, y| x * y.rcp());
     let _e10 = [_e6; 3];
-    let _e11 = uplift_simd::vector::div::<S, 3>(k_2, _e10);
+    let _e11 = uplift_simd::vector::zip::<S, 3>(k_2, _e10, |x, y| x * y.rcp());
     let _e12 = mx_fresnel_conductor_polarized(s, _e7, _e9, _e11);
     let _e13 = s.outline(#[inline(always)] || mx_fresnel_conductor_phase_polarized(s, _e7, _e6, n_2, k_2));
     let _e14 = mx_airy_reflectance(s, cos_theta_5, _e7, _e6, thickness_1, _e12, _e13);
@@ -924,7 +924,7 @@ pub fn mx_ggx_energy_compensation<S: Simd>(s: S, mu_1: S::F, abar_1: S::F, favg:
     let _e5 = { let (x, y) = (_e3, s.splat(0.0001f32)); x.max(y) };
     let _e7 = [s.splat(1.0f32); 3];
     let _e9 = (s.splat(1.0f32) - _e5);
-    let _e10 = (_e9 / _e5);
+    let _e10 = (_e9 * (_e5).rcp());
     let _e11 = uplift_simd::vector::mul::<S, 3>(favg, [_e10; 3]);
     let _e12 = uplift_simd::vector::add::<S, 3>(_e7, _e11);
     return _e12;
@@ -999,7 +999,7 @@ pub fn mx_fresnel_conductor<S: Simd>(s: S, cos_theta_6: S::F, n_4: [S::F; 3], k_
     let _e49 = uplift_simd::vector::sub::<S, 3>(_e48, _e36);
     let _e50 = uplift_simd::vector::mul::<S, 3>(_e47, _e49);
     let _e51 = uplift_simd::vector::mul::<S, 3>(_e40, _e44);
-    let _e52 = uplift_simd::vector::div::<S, 3>(_e50, _e51);
+    let _e52 = uplift_simd::vector::zip::<S, 3>(_e50, _e51, |x, y| x * y.rcp());
     return _e52;
 }
 
@@ -1045,7 +1045,7 @@ pub fn mx_ggx_d<S: Simd>(s: S, h: [S::F; 3], a_1: [S::F; 2]) -> S::F {
     let _e2 = a_1[0];
     let _e3 = a_1[1];
     let _e4 = (_e2 * _e3);
-    let _e6 = (s.splat(1.0f32) / _e4);
+    let _e6 = (s.splat(1.0f32) * (_e4).rcp());
     let _e7 = h[0];
     let _e8 = a_1[1];
     let _e9 = (_e7 * _e8);
@@ -1063,7 +1063,7 @@ pub fn mx_ggx_d<S: Simd>(s: S, h: [S::F; 3], a_1: [S::F; 2]) -> S::F {
     let _e21 = _e18.mul_add(_e19, _e17);
     let _e23 = (s.splat(3.1415927f32) * _e21);
     let _e24 = (_e23 * _e21);
-    let _e25 = (_e6 / _e24);
+    let _e25 = (_e6 * (_e24).rcp());
     return _e25;
 }
 
@@ -1082,7 +1082,7 @@ pub fn mx_ggx_reflection<S: Simd>(s: S, v_5: [S::F; 3], l_1: [S::F; 3], h_1: [S:
     let _e16 = (s.splat(2.0f32) * _e14);
     let _e17 = if (!(l_1[2].le(s.splat(0.0f32)))).any() { mx_ggx_d(s, h_1, a_2) } else { s.splat(0.0) };
     let _e18 = (_e17 * _e9);
-    let _e19 = (_e18 / _e16);
+    let _e19 = (_e18 * (_e16).rcp());
     let _e20 = l_1[2];
     let _e22 = _e20.le(s.splat(0.0f32));
     let _e24 = _e22.select(s.splat(0.0f32), _e19);
@@ -1322,7 +1322,7 @@ pub fn mx_fast_log2_<S: Simd>(s: S, x_7: S::F) -> S::F {
     let _e34 = (_e32 - s.splat(1.0f32));
     let _e35 = m_5;
     let _e37 = (_e35 + s.splat(1.0f32));
-    let _e38 = (_e34 / _e37);
+    let _e38 = (_e34 * (_e37).rcp());
     let _e39 = (_e38 * _e38);
     let _e41 = (s.splat(2.0f32) * _e38);
     let _e43 = (_e39 * s.splat(0.11111111f32));
@@ -1383,7 +1383,7 @@ pub fn mx_lobe_sampled<S: Simd>(s: S, cl_4: mx_closure<S>, throughput: [S::F; 3]
     let _e4 = if (c.gt(s.splat(1e-30f32))).any() { mx_race_uniform(s, cl_4) } else { s.splat(0.0) };
     let _e5 = if (c.gt(s.splat(1e-30f32))).any() { mx_fast_log2_(s, _e4) } else { s.splat(0.0) };
     let _e7 = (s.splat(-0.6931472f32) * _e5);
-    let _e9 = (_e7 / c);
+    let _e9 = (_e7 * (c).rcp());
     let _e11 = c.gt(s.splat(1e-30f32));
     let _e12 = _e11.select(_e9, s.splat(3e38f32));
     let _e14 = [s.splat(0.0f32); 3];
@@ -1457,7 +1457,7 @@ pub fn mx_ggx_pdf<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2])
     let _e7 = if (!((uplift_simd::vector::dot::<S, 3>(v_9, h_4).le(s.splat(0.0f32)) | h_4[2].le(s.splat(0.0f32))))).any() { mx_ggx_smith_s(s, v_9, a_4) } else { s.splat(0.0) };
     let _e8 = (_e5 + _e7);
     let _e10 = (s.splat(2.0f32) * _e8);
-    let _e11 = (_e6 / _e10);
+    let _e11 = (_e6 * (_e10).rcp());
     let _e12 = uplift_simd::vector::dot::<S, 3>(v_9, h_4);
     let _e14 = _e12.le(s.splat(0.0f32));
     let _e15 = h_4[2];
@@ -1657,7 +1657,7 @@ pub fn mx_fresnel_conductor_p2<S: Simd>(s: S, cos_theta_6: S::F, n_4: [S::F; 3],
     let _e49 = uplift_simd::vector::sub::<S, 3>(_e48, _e36);
     let _e50 = uplift_simd::vector::mul::<S, 3>(_e47, _e49);
     let _e51 = uplift_simd::vector::mul::<S, 3>(_e40, _e44);
-    let _e52 = uplift_simd::vector::div::<S, 3>(_e50, _e51);
+    let _e52 = uplift_simd::vector::zip::<S, 3>(_e50, _e51, |x, y| x * y.rcp());
     return _e52;
 }
 
@@ -1690,7 +1690,7 @@ pub fn mx_thin_film_cos_p3<S: Simd>(s: S, cos_theta: S::F, eta2_: S::F, tp: upli
     let _e5 = (_e4 * _e4);
     let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
     let _e8 = tp.f(s, 0);
-    let _e9 = (_e7 / _e8);
+    let _e9 = (_e7 * (_e8).rcp());
     let _e11 = (s.splat(1.0f32) - _e9);
     let _e13 = { let (x, y) = (_e11, s.splat(0.0f32)); x.max(y) };
     let _e14 = { let x = _e13; x.sqrt() };
@@ -1733,7 +1733,7 @@ pub fn mx_fresnel_conductor_polarized_p4<S: Simd>(s: S, cos_theta_1: S::F, n_1: 
     let _e33 = uplift_simd::vector::add::<S, 3>(_e21, _e31);
     let _e35 = [s.splat(1e-30f32); 3];
     let _e36 = uplift_simd::vector::zip::<S, 3>(_e33, _e35, |x, y| x.max(y));
-    let _e37 = uplift_simd::vector::div::<S, 3>(_e32, _e36);
+    let _e37 = uplift_simd::vector::zip::<S, 3>(_e32, _e36, |x, y| x * y.rcp());
     let _e38 = uplift_simd::vector::mul::<S, 3>([_e6; 3], _e19);
     let _e39 = (_e8 * _e8);
     let _e40 = [_e39; 3];
@@ -1744,7 +1744,7 @@ pub fn mx_fresnel_conductor_polarized_p4<S: Simd>(s: S, cos_theta_1: S::F, n_1: 
     let _e45 = uplift_simd::vector::add::<S, 3>(_e41, _e42);
     let _e47 = [s.splat(1e-30f32); 3];
     let _e48 = uplift_simd::vector::zip::<S, 3>(_e45, _e47, |x, y| x.max(y));
-    let _e49 = uplift_simd::vector::div::<S, 3>(_e44, _e48);
+    let _e49 = uplift_simd::vector::zip::<S, 3>(_e44, _e48, |x, y| x * y.rcp());
     let _e50 = mx_polarized { p: _e49, s_: _e37 };
     return _e50;
 }
@@ -1839,7 +1839,7 @@ pub fn mx_fresnel_conductor_phase_polarized_g5<S: Simd>(s: S, cos_theta_2: S::F,
     assert!(tg.len() >= 21 * S::LANES, "the tape is shorter than the pass's slots");
     let _e5 = [s.splat(1e-6f32); 3];
     let _e6 = uplift_simd::vector::zip::<S, 3>(eta2_1, _e5, |x, y| x.max(y));
-    let _e7 = uplift_simd::vector::div::<S, 3>(kappa2_, _e6);
+    let _e7 = uplift_simd::vector::zip::<S, 3>(kappa2_, _e6, |x, y| x * y.rcp());
     let _e11 = uplift_simd::vector::mul::<S, 3>(_e6, _e6);
     let _e13 = [s.splat(1.0f32); 3];
     let _e14 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
@@ -1911,7 +1911,7 @@ pub fn mx_fresnel_dielectric_polarized_p6<S: Simd>(s: S, cos_theta_3: S::F, eta:
     let _e17 = (-_e15).mul_add(_e4, _e12);
     let _e18 = _e15.mul_add(_e4, _e12);
     let _e20 = { let (x, y) = (_e18, s.splat(1e-30f32)); x.max(y) };
-    let _e21 = (_e17 / _e20);
+    let _e21 = (_e17 * (_e20).rcp());
     let _e22 = (_e5 * _e11);
     let _e23 = (_e7 * _e7);
     let _e24 = _e5.mul_add(_e11, _e23);
@@ -1920,7 +1920,7 @@ pub fn mx_fresnel_dielectric_polarized_p6<S: Simd>(s: S, cos_theta_3: S::F, eta:
     let _e27 = (_e21 * _e26);
     let _e28 = _e16.mul_add(_e7, _e24);
     let _e30 = { let (x, y) = (_e28, s.splat(1e-30f32)); x.max(y) };
-    let _e31 = (_e27 / _e30);
+    let _e31 = (_e27 * (_e30).rcp());
     let _e32 = [_e31, _e21];
     return _e32;
 }
@@ -1986,7 +1986,7 @@ pub fn mx_airy_reflectance_g7<S: Simd>(s: S, cos_theta_4: S::F, cos_t: S::F, eta
     let _e7 = (eta2_2 * eta2_2);
     let _e9 = eta2_2.mul_add(eta2_2, s.splat(1.0f32));
     let _e10 = { let x = _e9; x.sqrt() };
-    let _e12 = (s.splat(1.0f32) / _e10);
+    let _e12 = (s.splat(1.0f32) * (_e10).rcp());
     uplift_simd::tape::put(s, tg, 0, _e12);
     let _e18 = (s.splat(2.0f32) * eta2_2);
     uplift_simd::tape::put(s, tg, 1, _e18);
@@ -2023,12 +2023,12 @@ pub fn mx_fresnel_airy_conductor_g8<S: Simd>(s: S, cos_theta_5: S::F, n_2: [S::F
     uplift_simd::tape::put(s, tg, 0, _e6);
     let _e7 = mx_thin_film_cos_g3(s, cos_theta_5, _e6, &mut tg[7 * S::LANES..]);
     let _e8 = [_e6; 3];
-    let _e9 = uplift_simd::vector::div::<S, 3>(n_2, _e8);
+    let _e9 = uplift_simd::vector::zip::<S, 3>(n_2, _e8, |x, y| x * y.rcp());
     uplift_simd::tape::put(s, tg, 1, _e9[0]);
     uplift_simd::tape::put(s, tg, 2, _e9[1]);
     uplift_simd::tape::put(s, tg, 3, _e9[2]);
     let _e10 = [_e6; 3];
-    let _e11 = uplift_simd::vector::div::<S, 3>(k_2, _e10);
+    let _e11 = uplift_simd::vector::zip::<S, 3>(k_2, _e10, |x, y| x * y.rcp());
     uplift_simd::tape::put(s, tg, 4, _e11[0]);
     uplift_simd::tape::put(s, tg, 5, _e11[1]);
     uplift_simd::tape::put(s, tg, 6, _e11[2]);
@@ -2126,7 +2126,7 @@ pub fn mx_ggx_d_p11<S: Simd>(s: S, h: [S::F; 3], a_1: [S::F; 2], tp: uplift_simd
     let _e21 = _e18.mul_add(_e19, _e17);
     let _e23 = (s.splat(3.1415927f32) * _e21);
     let _e24 = (_e23 * _e21);
-    let _e25 = (_e6 / _e24);
+    let _e25 = (_e6 * (_e24).rcp());
     return _e25;
 }
 
@@ -2137,7 +2137,7 @@ pub fn mx_ggx_d_g11<S: Simd>(s: S, h: [S::F; 3], a_1: [S::F; 2], tg: &mut [f32])
     let _e2 = a_1[0];
     let _e3 = a_1[1];
     let _e4 = (_e2 * _e3);
-    let _e6 = (s.splat(1.0f32) / _e4);
+    let _e6 = (s.splat(1.0f32) * (_e4).rcp());
     uplift_simd::tape::put(s, tg, 0, _e6);
     let _e8 = a_1[1];
     let _e12 = a_1[0];
@@ -2160,7 +2160,7 @@ pub fn mx_ggx_reflection_p12<S: Simd>(s: S, v_5: [S::F; 3], l_1: [S::F; 3], h_1:
     let _e16 = (s.splat(2.0f32) * _e14);
     let _e17 = if (!(l_1[2].le(s.splat(0.0f32)))).any() { mx_ggx_d_p11(s, h_1, a_2, tp.at::<S>(4)) } else { s.splat(0.0) };
     let _e18 = (_e17 * _e9);
-    let _e19 = (_e18 / _e16);
+    let _e19 = (_e18 * (_e16).rcp());
     let _e20 = l_1[2];
     let _e22 = _e20.le(s.splat(0.0f32));
     let _e24 = _e22.select(s.splat(0.0f32), _e19);
@@ -2188,7 +2188,7 @@ pub fn mx_ggx_pdf_p13<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F;
     let _e3 = v_9[2];
     let _e6 = if (!((uplift_simd::vector::dot::<S, 3>(v_9, h_4).le(s.splat(0.0f32)) | h_4[2].le(s.splat(0.0f32))))).any() { mx_ggx_d_p11(s, h_4, a_4, tp.at::<S>(1)) } else { s.splat(0.0) };
     let _e10 = tp.f(s, 0);
-    let _e11 = (_e6 / _e10);
+    let _e11 = (_e6 * (_e10).rcp());
     let _e12 = uplift_simd::vector::dot::<S, 3>(v_9, h_4);
     let _e14 = _e12.le(s.splat(0.0f32));
     let _e15 = h_4[2];

@@ -217,7 +217,7 @@ pub fn mx_normalize_or<S: Simd>(s: S, v: [S::F; 3], fallback: [S::F; 3]) -> [S::
     let _e6 = _e2.lt(s.splat(1e30f32));
     let _e7 = (_e4 & _e6);
     let _e10 = _e2.max(s.splat(1e-30f32)).min(s.splat(1e30f32));
-    let _e11 = { let x = _e10; s.splat(1.0) / x.sqrt() };
+    let _e11 = { let x = _e10; x.rsqrt() };
     let _e12 = uplift_simd::vector::mul::<S, 3>(v, [_e11; 3]);
     let _e13 = uplift_simd::vector::select_all::<S, 3>(_e7, _e12, fallback);
     return _e13;
@@ -265,12 +265,12 @@ pub fn mx_artistic_ior<S: Simd>(s: S, reflectivity: [S::F; 3], edge_color: [S::F
     let _e10 = uplift_simd::vector::sub::<S, 3>(_e9, _e6);
     let _e12 = [s.splat(1.0f32); 3];
     let _e13 = uplift_simd::vector::add::<S, 3>(_e12, _e6);
-    let _e14 = uplift_simd::vector::div::<S, 3>(_e10, _e13);
+    let _e14 = uplift_simd::vector::zip::<S, 3>(_e10, _e13, |x, y| x * y.rcp());
     let _e16 = [s.splat(1.0f32); 3];
     let _e17 = uplift_simd::vector::add::<S, 3>(_e16, _e7);
     let _e19 = [s.splat(1.0f32); 3];
     let _e20 = uplift_simd::vector::sub::<S, 3>(_e19, _e7);
-    let _e21 = uplift_simd::vector::div::<S, 3>(_e17, _e20);
+    let _e21 = uplift_simd::vector::zip::<S, 3>(_e17, _e20, |x, y| x * y.rcp());
     let _e22 = uplift_simd::vector::mix::<S, 3>(s, _e21, _e14, edge_color);
     let _e24 = [s.splat(1.0f32); 3];
     let _e25 = uplift_simd::vector::add::<S, 3>(_e22, _e24);
@@ -282,7 +282,7 @@ pub fn mx_artistic_ior<S: Simd>(s: S, reflectivity: [S::F; 3], edge_color: [S::F
     let _e32 = uplift_simd::vector::sub::<S, 3>(_e30, _e31);
     let _e34 = [s.splat(1.0f32); 3];
     let _e35 = uplift_simd::vector::sub::<S, 3>(_e34, _e6);
-    let _e36 = uplift_simd::vector::div::<S, 3>(_e32, _e35);
+    let _e36 = uplift_simd::vector::zip::<S, 3>(_e32, _e35, |x, y| x * y.rcp());
     let _e38 = [s.splat(0.0f32); 3];
     let _e39 = uplift_simd::vector::zip::<S, 3>(_e36, _e38, |x, y| x.max(y));
     let _e40 = uplift_simd::vector::map::<S, 3>(_e39, |x| x.sqrt());
@@ -318,7 +318,7 @@ pub fn mx_frame_new<S: Simd>(s: S, normal: [S::F; 3], tangent: [S::F; 3], wv_1: 
     let _e18 = _e15.select(s.splat(1.0f32), s.splat(-1.0f32));
     let _e19 = _e12[2];
     let _e20 = (_e18 + _e19);
-    let _e22 = (s.splat(-1.0f32) / _e20);
+    let _e22 = (s.splat(-1.0f32) * (_e20).rcp());
     let _e23 = _e12[0];
     let _e24 = _e12[1];
     let _e25 = (_e23 * _e24);
@@ -369,7 +369,7 @@ pub fn mx_sheen_zeltner_ltc<S: Simd>(s: S, x: S::F, y: S::F) -> [S::F; 2] {
     let _e14 = (s.splat(2.60994f32) * x);
     let _e15 = (_e14 * y);
     let _e16 = _e14.mul_add(y, _e12);
-    let _e17 = (_e7 / _e16);
+    let _e17 = (_e7 * (_e16).rcp());
     let _e19 = (s.splat(1.0f32) - x);
     let _e21 = { let (x, y) = (_e19, s.splat(0.0f32)); x.max(y) };
     let _e22 = { let x = _e21; x.sqrt() };
@@ -386,7 +386,7 @@ pub fn mx_sheen_zeltner_ltc<S: Simd>(s: S, x: S::F, y: S::F) -> [S::F; 2] {
     let _e38 = (s.splat(1.34174f32) * y);
     let _e39 = (_e38 * y);
     let _e40 = _e38.mul_add(y, _e36);
-    let _e41 = (_e28 / _e40);
+    let _e41 = (_e28 * (_e40).rcp());
     let _e42 = [_e17, _e41];
     return _e42;
 }
@@ -438,7 +438,7 @@ pub fn mx_sheen_zeltner_albedo<S: Simd>(s: S, x_3: S::F, y_1: S::F) -> S::F {
     let _e8 = (s.splat(1.32227f32) + y_1);
     let _e9 = (y_1 * _e8);
     let _e11 = y_1.mul_add(_e8, s.splat(0.0379424f32));
-    let _e12 = (_e6 / _e11);
+    let _e12 = (_e6 * (_e11).rcp());
     let _e14 = (s.splat(0.95943f32) * y_1);
     let _e15 = (_e14 * y_1);
     let _e17 = (-_e14).mul_add(y_1, s.splat(1.7932f32));
@@ -448,7 +448,7 @@ pub fn mx_sheen_zeltner_albedo<S: Simd>(s: S, x_3: S::F, y_1: S::F) -> S::F {
     let _e23 = y_1.mul_add(_e20, s.splat(-0.193854f32));
     let _e24 = (y_1 * _e23);
     let _e26 = (s.splat(0.046391f32) + y_1);
-    let _e27 = (_e24 / _e26);
+    let _e27 = (_e24 * (_e26).rcp());
     let _e29 = (s.splat(0.119681f32) * y_1);
     let _e31 = s.splat(0.119681f32).mul_add(y_1, s.splat(-0.0207818f32));
     let _e32 = (_e31 * y_1);
@@ -457,14 +457,14 @@ pub fn mx_sheen_zeltner_albedo<S: Simd>(s: S, x_3: S::F, y_1: S::F) -> S::F {
     let _e37 = (s.splat(-1.92021f32) + y_1);
     let _e38 = (y_1 * _e37);
     let _e40 = y_1.mul_add(_e37, s.splat(1.26264f32));
-    let _e41 = (_e35 / _e40);
+    let _e41 = (_e35 * (_e40).rcp());
     let _e42 = (x_3 - _e27);
-    let _e43 = (_e42 / _e12);
+    let _e43 = (_e42 * (_e12).rcp());
     let _e45 = (s.splat(-0.5f32) * _e43);
     let _e46 = (_e45 * _e43);
     let _e47 = mx_fast_exp(s, _e46);
     let _e49 = (_e12 * s.splat(2.5066283f32));
-    let _e50 = (_e47 / _e49);
+    let _e50 = (_e47 * (_e49).rcp());
     let _e51 = (_e50 + _e41);
     return _e51;
 }
@@ -681,7 +681,7 @@ pub fn mx_fast_log2_<S: Simd>(s: S, x_6: S::F) -> S::F {
     let _e34 = (_e32 - s.splat(1.0f32));
     let _e35 = m;
     let _e37 = (_e35 + s.splat(1.0f32));
-    let _e38 = (_e34 / _e37);
+    let _e38 = (_e34 * (_e37).rcp());
     let _e39 = (_e38 * _e38);
     let _e41 = (s.splat(2.0f32) * _e38);
     let _e43 = (_e39 * s.splat(0.11111111f32));
@@ -742,7 +742,7 @@ pub fn mx_lobe_sampled<S: Simd>(s: S, cl_2: mx_closure<S>, throughput: [S::F; 3]
     let _e4 = if (c.gt(s.splat(1e-30f32))).any() { mx_race_uniform(s, cl_2) } else { s.splat(0.0) };
     let _e5 = if (c.gt(s.splat(1e-30f32))).any() { mx_fast_log2_(s, _e4) } else { s.splat(0.0) };
     let _e7 = (s.splat(-0.6931472f32) * _e5);
-    let _e9 = (_e7 / c);
+    let _e9 = (_e7 * (c).rcp());
     let _e11 = c.gt(s.splat(1e-30f32));
     let _e12 = _e11.select(_e9, s.splat(3e38f32));
     let _e14 = [s.splat(0.0f32); 3];
@@ -795,7 +795,7 @@ pub fn mx_sheen_zeltner_density<S: Simd>(s: S, l_ltc: [S::F; 3], ltc: [S::F; 2])
     let _e14 = uplift_simd::vector::dot::<S, 3>(_e13, _e13);
     let _e16 = { let (x, y) = (_e14, s.splat(1e-30f32)); x.max(y) };
     let _e17 = ltc[0];
-    let _e18 = (_e17 / _e16);
+    let _e18 = (_e17 * (_e16).rcp());
     let _e19 = _e13[2];
     let _e21 = { let (x, y) = (_e19, s.splat(0.0f32)); x.max(y) };
     let _e23 = (_e21 * s.splat(0.31830987f32));
@@ -830,7 +830,7 @@ pub fn mx_fast_pow<S: Simd>(s: S, x_7: S::F, q: S::F) -> S::F {
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_sheen_conty_kulla_d<S: Simd>(s: S, cos_h: S::F, r: S::F) -> S::F {
     let _e3 = { let (x, y) = (r, s.splat(0.005f32)); x.max(y) };
-    let _e5 = (s.splat(1.0f32) / _e3);
+    let _e5 = (s.splat(1.0f32) * (_e3).rcp());
     let _e6 = (cos_h * cos_h);
     let _e8 = (-cos_h).mul_add(cos_h, s.splat(1.0f32));
     let _e10 = { let (x, y) = (_e8, s.splat(0.0f32)); x.max(y) };
@@ -838,7 +838,7 @@ pub fn mx_sheen_conty_kulla_d<S: Simd>(s: S, cos_h: S::F, r: S::F) -> S::F {
     let _e14 = (s.splat(0.5f32) * _e5);
     let _e15 = mx_fast_pow(s, _e10, _e14);
     let _e16 = (_e12 * _e15);
-    let _e18 = (_e16 / s.splat(6.2831855f32));
+    let _e18 = (_e16 * (s.splat(6.2831855f32)).rcp());
     return _e18;
 }
 
@@ -901,7 +901,7 @@ pub fn mx_sheen_bsdf<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color: [S
         let _e42 = mx_albedo_sheen_conty_kulla(s, _e16, roughness_1);
         let _e44 = { let (x, y) = (_e42, s.splat(0.0f32)); x.max(y) };
         let _e46 = { let (x, y) = (_e44, s.splat(1.0f32)); x.max(y) };
-        let _e48 = (s.splat(1.0f32) / _e46);
+        let _e48 = (s.splat(1.0f32) * (_e46).rcp());
         norm = _m2.select(_e48, norm);
         let _e49 = norm;
         let _e50 = (_e44 * _e49);
@@ -937,7 +937,7 @@ pub fn mx_sheen_bsdf<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color: [S
             let _e73 = mx_sample_cosine(s, _e72);
             let _e74 = _e32[0];
             let _e76 = { let (x, y) = (_e74, s.splat(1e-20f32)); x.max(y) };
-            let _e78 = (s.splat(1.0f32) / _e76);
+            let _e78 = (s.splat(1.0f32) * (_e76).rcp());
             let _e79 = _e73[0];
             let _e80 = _e32[1];
             let _e81 = _e73[2];
@@ -1014,7 +1014,7 @@ pub fn mx_sheen_bsdf<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color: [S
         let _e146 = (_e139 * _e16);
         let _e147 = (-_e139).mul_add(_e16, _e145);
         let _e149 = (s.splat(4.0f32) * _e147);
-        let _e150 = (_e144 / _e149);
+        let _e150 = (_e144 * (_e149).rcp());
         let _e151 = _e117[2];
         let _e153 = _e151.le(s.splat(0.0f32));
         let _e155 = _e153.select(s.splat(0.0f32), _e150);
@@ -1095,13 +1095,13 @@ pub fn mx_fresnel_dielectric<S: Simd>(s: S, cos_theta: S::F, eta: S::F) -> S::F 
     let _e13 = (_e12 + _e4);
     let _e14 = (_e12 - _e4);
     let _e16 = { let (x, y) = (_e13, s.splat(1e-30f32)); x.max(y) };
-    let _e17 = (_e14 / _e16);
+    let _e17 = (_e14 * (_e16).rcp());
     let _e18 = (_e4 * _e13);
     let _e20 = _e4.mul_add(_e13, -s.splat(1.0f32));
     let _e21 = (_e4 * _e14);
     let _e23 = _e4.mul_add(_e14, s.splat(1.0f32));
     let _e25 = { let (x, y) = (_e23, s.splat(1e-30f32)); x.max(y) };
-    let _e26 = (_e20 / _e25);
+    let _e26 = (_e20 * (_e25).rcp());
     let _e28 = (s.splat(0.5f32) * _e17);
     let _e29 = (_e28 * _e17);
     let _e30 = (_e26 * _e26);
@@ -1121,7 +1121,7 @@ pub fn mx_thin_film_cos<S: Simd>(s: S, cos_theta_1: S::F, eta2_: S::F) -> S::F {
     let _e5 = (_e4 * _e4);
     let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
     let _e8 = (eta2_ * eta2_);
-    let _e9 = (_e7 / _e8);
+    let _e9 = (_e7 * (_e8).rcp());
     let _e11 = (s.splat(1.0f32) - _e9);
     let _e13 = { let (x, y) = (_e11, s.splat(0.0f32)); x.max(y) };
     let _e14 = { let x = _e13; x.sqrt() };
@@ -1157,7 +1157,7 @@ pub fn mx_fresnel_conductor_polarized<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S:
     let _e33 = uplift_simd::vector::add::<S, 3>(_e21, _e31);
     let _e35 = [s.splat(1e-30f32); 3];
     let _e36 = uplift_simd::vector::zip::<S, 3>(_e33, _e35, |x, y| x.max(y));
-    let _e37 = uplift_simd::vector::div::<S, 3>(_e32, _e36);
+    let _e37 = uplift_simd::vector::zip::<S, 3>(_e32, _e36, |x, y| x * y.rcp());
     let _e38 = uplift_simd::vector::mul::<S, 3>([_e6; 3], _e19);
     let _e39 = (_e8 * _e8);
     let _e40 = [_e39; 3];
@@ -1168,7 +1168,7 @@ pub fn mx_fresnel_conductor_polarized<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S:
     let _e45 = uplift_simd::vector::add::<S, 3>(_e41, _e42);
     let _e47 = [s.splat(1e-30f32); 3];
     let _e48 = uplift_simd::vector::zip::<S, 3>(_e45, _e47, |x, y| x.max(y));
-    let _e49 = uplift_simd::vector::div::<S, 3>(_e44, _e48);
+    let _e49 = uplift_simd::vector::zip::<S, 3>(_e44, _e48, |x, y| x * y.rcp());
     let _e50 = mx_polarized { p: _e49, s_: _e37 };
     return _e50;
 }
@@ -1181,7 +1181,7 @@ pub fn mx_fast_atan2_<S: Simd>(s: S, y_4: S::F, x_8: S::F) -> S::F {
     let _e3 = { let x = y_4; x.abs() };
     let _e4 = { let (x, y) = (_e2, _e3); x.max(y) };
     let _e5 = { let (x, y) = (_e2, _e3); x.min(y) };
-    let _e6 = (_e5 / _e4);
+    let _e6 = (_e5 * (_e4).rcp());
     let _e8 = _e4.le(s.splat(0.0f32));
     let _e10 = _e8.select(s.splat(0.0f32), _e6);
     let _e11 = (_e10 * _e10);
@@ -1242,7 +1242,7 @@ pub fn mx_fast_atan2_vec3_<S: Simd>(s: S, y_5: [S::F; 3], x_9: [S::F; 3]) -> [S:
 pub fn mx_fresnel_conductor_phase_polarized<S: Simd>(s: S, cos_theta_3: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3]) -> mx_polarized<S> {
     let _e5 = [s.splat(1e-6f32); 3];
     let _e6 = uplift_simd::vector::zip::<S, 3>(eta2_1, _e5, |x, y| x.max(y));
-    let _e7 = uplift_simd::vector::div::<S, 3>(kappa2_, _e6);
+    let _e7 = uplift_simd::vector::zip::<S, 3>(kappa2_, _e6, |x, y| x * y.rcp());
     let _e8 = (cos_theta_3 * cos_theta_3);
     let _e10 = (-cos_theta_3).mul_add(cos_theta_3, s.splat(1.0f32));
     let _e11 = uplift_simd::vector::mul::<S, 3>(_e6, _e6);
@@ -1331,7 +1331,7 @@ pub fn mx_fresnel_dielectric_polarized<S: Simd>(s: S, cos_theta_4: S::F, eta_1: 
     let _e17 = (-_e15).mul_add(_e4, _e12);
     let _e18 = _e15.mul_add(_e4, _e12);
     let _e20 = { let (x, y) = (_e18, s.splat(1e-30f32)); x.max(y) };
-    let _e21 = (_e17 / _e20);
+    let _e21 = (_e17 * (_e20).rcp());
     let _e22 = (_e5 * _e11);
     let _e23 = (_e7 * _e7);
     let _e24 = _e5.mul_add(_e11, _e23);
@@ -1340,7 +1340,7 @@ pub fn mx_fresnel_dielectric_polarized<S: Simd>(s: S, cos_theta_4: S::F, eta_1: 
     let _e27 = (_e21 * _e26);
     let _e28 = _e16.mul_add(_e7, _e24);
     let _e30 = { let (x, y) = (_e28, s.splat(1e-30f32)); x.max(y) };
-    let _e31 = (_e27 / _e30);
+    let _e31 = (_e27 * (_e30).rcp());
     let _e32 = [_e31, _e21];
     return _e32;
 }
@@ -1404,7 +1404,7 @@ pub fn mx_eval_sensitivity<S: Simd>(s: S, opd: S::F, shift: [S::F; 3]) -> [S::F;
     xyz[0] = _e52;
     let _e53 = xyz;
     let _e55 = [s.splat(1.0685e-7f32); 3];
-    let _e56 = uplift_simd::vector::div::<S, 3>(_e53, _e55);
+    let _e56 = uplift_simd::vector::zip::<S, 3>(_e53, _e55, |x, y| x * y.rcp());
     return _e56;
 }
 
@@ -1419,7 +1419,7 @@ pub fn mx_airy_polarization<S: Simd>(s: S, r12_: S::F, r23_: [S::F; 3], phi_1: [
     let _e11 = uplift_simd::vector::sub::<S, 3>(_e9, _e10);
     let _e13 = [s.splat(1e-30f32); 3];
     let _e14 = uplift_simd::vector::zip::<S, 3>(_e11, _e13, |x, y| x.max(y));
-    let _e15 = uplift_simd::vector::div::<S, 3>(_e7, _e14);
+    let _e15 = uplift_simd::vector::zip::<S, 3>(_e7, _e14, |x, y| x * y.rcp());
     let _e16 = uplift_simd::vector::mul::<S, 3>([r12_; 3], r23_);
     let _e18 = [s.splat(0.0f32); 3];
     let _e19 = uplift_simd::vector::zip::<S, 3>(_e16, _e18, |x, y| x.max(y));
@@ -1450,7 +1450,7 @@ pub fn mx_airy_reflectance<S: Simd>(s: S, cos_theta_5: S::F, cos_t: S::F, eta2_2
     let _e7 = (eta2_2 * eta2_2);
     let _e9 = eta2_2.mul_add(eta2_2, s.splat(1.0f32));
     let _e10 = { let x = _e9; x.sqrt() };
-    let _e12 = (s.splat(1.0f32) / _e10);
+    let _e12 = (s.splat(1.0f32) * (_e10).rcp());
     let _e14 = cos_theta_5.lt(_e12);
     let _e16 = _e14.select(s.splat(0.0f32), s.splat(3.1415927f32));
     let _e18 = (s.splat(2.0f32) * eta2_2);
@@ -1495,9 +1495,9 @@ pub fn mx_fresnel_airy_conductor<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3
     let _e6 = { let (x, y) = (film_ior, s.splat(1.0f32)); x.max(y) };
     let _e7 = mx_thin_film_cos(s, cos_theta_6, _e6);
     let _e8 = [_e6; 3];
-    let _e9 = uplift_simd::vector::div::<S, 3>(n_2, _e8);
+    let _e9 = uplift_simd::vector::zip::<S, 3>(n_2, _e8, |x, y| x * y.rcp());
     let _e10 = [_e6; 3];
-    let _e11 = uplift_simd::vector::div::<S, 3>(k_1, _e10);
+    let _e11 = uplift_simd::vector::zip::<S, 3>(k_1, _e10, |x, y| x * y.rcp());
     let _e12 = mx_fresnel_conductor_polarized(s, _e7, _e9, _e11);
     let _e13 = s.outline(#[inline(always)] || mx_fresnel_conductor_phase_polarized(s, _e7, _e6, n_2, k_1));
     let _e14 = mx_airy_reflectance(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13);
@@ -1520,7 +1520,7 @@ pub fn mx_ggx_energy_compensation<S: Simd>(s: S, mu_2: S::F, abar_1: S::F, favg:
     let _e5 = { let (x, y) = (_e3, s.splat(0.0001f32)); x.max(y) };
     let _e7 = [s.splat(1.0f32); 3];
     let _e9 = (s.splat(1.0f32) - _e5);
-    let _e10 = (_e9 / _e5);
+    let _e10 = (_e9 * (_e5).rcp());
     let _e11 = uplift_simd::vector::mul::<S, 3>(favg, [_e10; 3]);
     let _e12 = uplift_simd::vector::add::<S, 3>(_e7, _e11);
     return _e12;
@@ -1553,7 +1553,7 @@ pub fn mx_albedo_ggx_dielectric<S: Simd>(s: S, mu_3: S::F, abar_2: S::F, eta_2: 
     let _e12 = (eta_2 - s.splat(1.0f32));
     let _e13 = { let x = _e12; x.abs() };
     let _e15 = (eta_2 + s.splat(1.0f32));
-    let _e16 = (_e13 / _e15);
+    let _e16 = (_e13 * (_e15).rcp());
     let _e17 = mx_table_log_coordinate(s, mu_3);
     let _e18 = mx_table_log_coordinate(s, abar_2);
     let _e19 = mx_table_2d_index(s, _e17, _e18);
@@ -1806,7 +1806,7 @@ pub fn mx_ggx_d<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2]) -> S::F {
     let _e2 = a_2[0];
     let _e3 = a_2[1];
     let _e4 = (_e2 * _e3);
-    let _e6 = (s.splat(1.0f32) / _e4);
+    let _e6 = (s.splat(1.0f32) * (_e4).rcp());
     let _e7 = h_2[0];
     let _e8 = a_2[1];
     let _e9 = (_e7 * _e8);
@@ -1824,7 +1824,7 @@ pub fn mx_ggx_d<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2]) -> S::F {
     let _e21 = _e18.mul_add(_e19, _e17);
     let _e23 = (s.splat(3.1415927f32) * _e21);
     let _e24 = (_e23 * _e21);
-    let _e25 = (_e6 / _e24);
+    let _e25 = (_e6 * (_e24).rcp());
     return _e25;
 }
 
@@ -1843,7 +1843,7 @@ pub fn mx_ggx_reflection<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3: [S:
     let _e16 = (s.splat(2.0f32) * _e14);
     let _e17 = if (!(l_4[2].le(s.splat(0.0f32)))).any() { mx_ggx_d(s, h_3, a_3) } else { s.splat(0.0) };
     let _e18 = (_e17 * _e9);
-    let _e19 = (_e18 / _e16);
+    let _e19 = (_e18 * (_e16).rcp());
     let _e20 = l_4[2];
     let _e22 = _e20.le(s.splat(0.0f32));
     let _e24 = _e22.select(s.splat(0.0f32), _e19);
@@ -1859,7 +1859,7 @@ pub fn mx_ggx_pdf<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2])
     let _e7 = if (!((uplift_simd::vector::dot::<S, 3>(v_9, h_4).le(s.splat(0.0f32)) | h_4[2].le(s.splat(0.0f32))))).any() { mx_ggx_smith_s(s, v_9, a_4) } else { s.splat(0.0) };
     let _e8 = (_e5 + _e7);
     let _e10 = (s.splat(2.0f32) * _e8);
-    let _e11 = (_e6 / _e10);
+    let _e11 = (_e6 * (_e10).rcp());
     let _e12 = uplift_simd::vector::dot::<S, 3>(v_9, h_4);
     let _e14 = _e12.le(s.splat(0.0f32));
     let _e15 = h_4[2];
@@ -1987,7 +1987,7 @@ pub fn mx_fresnel_conductor_normal<S: Simd>(s: S, n_4: [S::F; 3], k_3: [S::F; 3]
     let _e18 = uplift_simd::vector::add::<S, 3>(_e17, _e2);
     let _e20 = [s.splat(1e-30f32); 3];
     let _e21 = uplift_simd::vector::zip::<S, 3>(_e18, _e20, |x, y| x.max(y));
-    let _e22 = uplift_simd::vector::div::<S, 3>(_e10, _e21);
+    let _e22 = uplift_simd::vector::zip::<S, 3>(_e10, _e21, |x, y| x * y.rcp());
     return _e22;
 }
 
@@ -2033,7 +2033,7 @@ pub fn mx_fresnel_conductor<S: Simd>(s: S, cos_theta_7: S::F, n_5: [S::F; 3], k_
     let _e49 = uplift_simd::vector::sub::<S, 3>(_e48, _e36);
     let _e50 = uplift_simd::vector::mul::<S, 3>(_e47, _e49);
     let _e51 = uplift_simd::vector::mul::<S, 3>(_e40, _e44);
-    let _e52 = uplift_simd::vector::div::<S, 3>(_e50, _e51);
+    let _e52 = uplift_simd::vector::zip::<S, 3>(_e50, _e51, |x, y| x * y.rcp());
     return _e52;
 }
 
@@ -2210,11 +2210,11 @@ pub fn mx_lobe_combine<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S
     let _m1 = _e7;
     if _m1.any() {
         let _e9 = a_5[3];
-        let _e10 = (_e9 / wa);
+        let _e10 = (_e9 * (wa).rcp());
         let _e12 = wa.gt(s.splat(1e-30f32));
         let _e13 = _e12.select(_e10, s.splat(3e38f32));
         let _e15 = b[3];
-        let _e16 = (_e15 / wb);
+        let _e16 = (_e15 * (wb).rcp());
         let _e18 = wb.gt(s.splat(1e-30f32));
         let _e19 = _e18.select(_e16, s.splat(3e38f32));
         let _e20 = _e19.lt(_e13);
@@ -2438,7 +2438,7 @@ pub fn mx_sheen_conty_kulla_d_p3<S: Simd>(s: S, cos_h: S::F, r: S::F, tp: uplift
     let _e14 = tp.f(s, 1);
     let _e15 = mx_fast_pow_p2(s, _e10, _e14, tp.at::<S>(2));
     let _e16 = (_e12 * _e15);
-    let _e18 = (_e16 / s.splat(6.2831855f32));
+    let _e18 = (_e16 * (s.splat(6.2831855f32)).rcp());
     return _e18;
 }
 
@@ -2447,7 +2447,7 @@ pub fn mx_sheen_conty_kulla_d_p3<S: Simd>(s: S, cos_h: S::F, r: S::F, tp: uplift
 pub fn mx_sheen_conty_kulla_d_g3<S: Simd>(s: S, cos_h: S::F, r: S::F, tg: &mut [f32]) -> S::F {
     assert!(tg.len() >= 3 * S::LANES, "the tape is shorter than the pass's slots");
     let _e3 = { let (x, y) = (r, s.splat(0.005f32)); x.max(y) };
-    let _e5 = (s.splat(1.0f32) / _e3);
+    let _e5 = (s.splat(1.0f32) * (_e3).rcp());
     let _e12 = (s.splat(2.0f32) + _e5);
     uplift_simd::tape::put(s, tg, 0, _e12);
     let _e14 = (s.splat(0.5f32) * _e5);
@@ -2555,7 +2555,7 @@ pub fn mx_sheen_bsdf_p5<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color:
         let _e146 = (_e139 * _e16);
         let _e147 = (-_e139).mul_add(_e16, _e145);
         let _e149 = (s.splat(4.0f32) * _e147);
-        let _e150 = (_e144 / _e149);
+        let _e150 = (_e144 * (_e149).rcp());
         let _e151 = _e117[2];
         let _e153 = _e151.le(s.splat(0.0f32));
         let _e155 = _e153.select(s.splat(0.0f32), _e150);
@@ -2644,7 +2644,7 @@ pub fn mx_sheen_bsdf_g5<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color:
         let _e42 = mx_albedo_sheen_conty_kulla(s, _e16, roughness_1);
         let _e44 = { let (x, y) = (_e42, s.splat(0.0f32)); x.max(y) };
         let _e46 = { let (x, y) = (_e44, s.splat(1.0f32)); x.max(y) };
-        let _e48 = (s.splat(1.0f32) / _e46);
+        let _e48 = (s.splat(1.0f32) * (_e46).rcp());
         norm = _m2.select(_e48, norm);
         let _e49 = norm;
         let _e50 = (_e44 * _e49);
@@ -2695,7 +2695,7 @@ pub fn mx_sheen_bsdf_g5<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color:
             let _e73 = mx_sample_cosine(s, _e72);
             let _e74 = _e32[0];
             let _e76 = { let (x, y) = (_e74, s.splat(1e-20f32)); x.max(y) };
-            let _e78 = (s.splat(1.0f32) / _e76);
+            let _e78 = (s.splat(1.0f32) * (_e76).rcp());
             let _e79 = _e73[0];
             let _e80 = _e32[1];
             let _e81 = _e73[2];
@@ -2800,13 +2800,13 @@ pub fn mx_fresnel_dielectric_p6<S: Simd>(s: S, cos_theta: S::F, eta: S::F, tp: u
     let _e13 = (_e12 + _e4);
     let _e14 = (_e12 - _e4);
     let _e16 = { let (x, y) = (_e13, s.splat(1e-30f32)); x.max(y) };
-    let _e17 = (_e14 / _e16);
+    let _e17 = (_e14 * (_e16).rcp());
     let _e18 = (_e4 * _e13);
     let _e20 = _e4.mul_add(_e13, -s.splat(1.0f32));
     let _e21 = (_e4 * _e14);
     let _e23 = _e4.mul_add(_e14, s.splat(1.0f32));
     let _e25 = { let (x, y) = (_e23, s.splat(1e-30f32)); x.max(y) };
-    let _e26 = (_e20 / _e25);
+    let _e26 = (_e20 * (_e25).rcp());
     let _e28 = (s.splat(0.5f32) * _e17);
     let _e29 = (_e28 * _e17);
     let _e30 = (_e26 * _e26);
@@ -2838,7 +2838,7 @@ pub fn mx_thin_film_cos_p7<S: Simd>(s: S, cos_theta_1: S::F, eta2_: S::F, tp: up
     let _e5 = (_e4 * _e4);
     let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
     let _e8 = tp.f(s, 0);
-    let _e9 = (_e7 / _e8);
+    let _e9 = (_e7 * (_e8).rcp());
     let _e11 = (s.splat(1.0f32) - _e9);
     let _e13 = { let (x, y) = (_e11, s.splat(0.0f32)); x.max(y) };
     let _e14 = { let x = _e13; x.sqrt() };
@@ -2881,7 +2881,7 @@ pub fn mx_fresnel_conductor_polarized_p8<S: Simd>(s: S, cos_theta_2: S::F, n_1: 
     let _e33 = uplift_simd::vector::add::<S, 3>(_e21, _e31);
     let _e35 = [s.splat(1e-30f32); 3];
     let _e36 = uplift_simd::vector::zip::<S, 3>(_e33, _e35, |x, y| x.max(y));
-    let _e37 = uplift_simd::vector::div::<S, 3>(_e32, _e36);
+    let _e37 = uplift_simd::vector::zip::<S, 3>(_e32, _e36, |x, y| x * y.rcp());
     let _e38 = uplift_simd::vector::mul::<S, 3>([_e6; 3], _e19);
     let _e39 = (_e8 * _e8);
     let _e40 = [_e39; 3];
@@ -2892,7 +2892,7 @@ pub fn mx_fresnel_conductor_polarized_p8<S: Simd>(s: S, cos_theta_2: S::F, n_1: 
     let _e45 = uplift_simd::vector::add::<S, 3>(_e41, _e42);
     let _e47 = [s.splat(1e-30f32); 3];
     let _e48 = uplift_simd::vector::zip::<S, 3>(_e45, _e47, |x, y| x.max(y));
-    let _e49 = uplift_simd::vector::div::<S, 3>(_e44, _e48);
+    let _e49 = uplift_simd::vector::zip::<S, 3>(_e44, _e48, |x, y| x * y.rcp());
     let _e50 = mx_polarized { p: _e49, s_: _e37 };
     return _e50;
 }
@@ -2987,7 +2987,7 @@ pub fn mx_fresnel_conductor_phase_polarized_g9<S: Simd>(s: S, cos_theta_3: S::F,
     assert!(tg.len() >= 21 * S::LANES, "the tape is shorter than the pass's slots");
     let _e5 = [s.splat(1e-6f32); 3];
     let _e6 = uplift_simd::vector::zip::<S, 3>(eta2_1, _e5, |x, y| x.max(y));
-    let _e7 = uplift_simd::vector::div::<S, 3>(kappa2_, _e6);
+    let _e7 = uplift_simd::vector::zip::<S, 3>(kappa2_, _e6, |x, y| x * y.rcp());
     let _e11 = uplift_simd::vector::mul::<S, 3>(_e6, _e6);
     let _e13 = [s.splat(1.0f32); 3];
     let _e14 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
@@ -3059,7 +3059,7 @@ pub fn mx_fresnel_dielectric_polarized_p10<S: Simd>(s: S, cos_theta_4: S::F, eta
     let _e17 = (-_e15).mul_add(_e4, _e12);
     let _e18 = _e15.mul_add(_e4, _e12);
     let _e20 = { let (x, y) = (_e18, s.splat(1e-30f32)); x.max(y) };
-    let _e21 = (_e17 / _e20);
+    let _e21 = (_e17 * (_e20).rcp());
     let _e22 = (_e5 * _e11);
     let _e23 = (_e7 * _e7);
     let _e24 = _e5.mul_add(_e11, _e23);
@@ -3068,7 +3068,7 @@ pub fn mx_fresnel_dielectric_polarized_p10<S: Simd>(s: S, cos_theta_4: S::F, eta
     let _e27 = (_e21 * _e26);
     let _e28 = _e16.mul_add(_e7, _e24);
     let _e30 = { let (x, y) = (_e28, s.splat(1e-30f32)); x.max(y) };
-    let _e31 = (_e27 / _e30);
+    let _e31 = (_e27 * (_e30).rcp());
     let _e32 = [_e31, _e21];
     return _e32;
 }
@@ -3134,7 +3134,7 @@ pub fn mx_airy_reflectance_g11<S: Simd>(s: S, cos_theta_5: S::F, cos_t: S::F, et
     let _e7 = (eta2_2 * eta2_2);
     let _e9 = eta2_2.mul_add(eta2_2, s.splat(1.0f32));
     let _e10 = { let x = _e9; x.sqrt() };
-    let _e12 = (s.splat(1.0f32) / _e10);
+    let _e12 = (s.splat(1.0f32) * (_e10).rcp());
     uplift_simd::tape::put(s, tg, 0, _e12);
     let _e18 = (s.splat(2.0f32) * eta2_2);
     uplift_simd::tape::put(s, tg, 1, _e18);
@@ -3171,12 +3171,12 @@ pub fn mx_fresnel_airy_conductor_g12<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::
     uplift_simd::tape::put(s, tg, 0, _e6);
     let _e7 = mx_thin_film_cos_g7(s, cos_theta_6, _e6, &mut tg[7 * S::LANES..]);
     let _e8 = [_e6; 3];
-    let _e9 = uplift_simd::vector::div::<S, 3>(n_2, _e8);
+    let _e9 = uplift_simd::vector::zip::<S, 3>(n_2, _e8, |x, y| x * y.rcp());
     uplift_simd::tape::put(s, tg, 1, _e9[0]);
     uplift_simd::tape::put(s, tg, 2, _e9[1]);
     uplift_simd::tape::put(s, tg, 3, _e9[2]);
     let _e10 = [_e6; 3];
-    let _e11 = uplift_simd::vector::div::<S, 3>(k_1, _e10);
+    let _e11 = uplift_simd::vector::zip::<S, 3>(k_1, _e10, |x, y| x * y.rcp());
     uplift_simd::tape::put(s, tg, 4, _e11[0]);
     uplift_simd::tape::put(s, tg, 5, _e11[1]);
     uplift_simd::tape::put(s, tg, 6, _e11[2]);
@@ -3252,7 +3252,7 @@ pub fn mx_ggx_d_p14<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tp: uplift_si
     let _e21 = _e18.mul_add(_e19, _e17);
     let _e23 = (s.splat(3.1415927f32) * _e21);
     let _e24 = (_e23 * _e21);
-    let _e25 = (_e6 / _e24);
+    let _e25 = (_e6 * (_e24).rcp());
     return _e25;
 }
 
@@ -3263,7 +3263,7 @@ pub fn mx_ggx_d_g14<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tg: &mut [f32
     let _e2 = a_2[0];
     let _e3 = a_2[1];
     let _e4 = (_e2 * _e3);
-    let _e6 = (s.splat(1.0f32) / _e4);
+    let _e6 = (s.splat(1.0f32) * (_e4).rcp());
     uplift_simd::tape::put(s, tg, 0, _e6);
     let _e8 = a_2[1];
     let _e12 = a_2[0];
@@ -3286,7 +3286,7 @@ pub fn mx_ggx_reflection_p15<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3:
     let _e16 = (s.splat(2.0f32) * _e14);
     let _e17 = if (!(l_4[2].le(s.splat(0.0f32)))).any() { mx_ggx_d_p14(s, h_3, a_3, tp.at::<S>(4)) } else { s.splat(0.0) };
     let _e18 = (_e17 * _e9);
-    let _e19 = (_e18 / _e16);
+    let _e19 = (_e18 * (_e16).rcp());
     let _e20 = l_4[2];
     let _e22 = _e20.le(s.splat(0.0f32));
     let _e24 = _e22.select(s.splat(0.0f32), _e19);
@@ -3314,7 +3314,7 @@ pub fn mx_ggx_pdf_p16<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F;
     let _e3 = v_9[2];
     let _e6 = if (!((uplift_simd::vector::dot::<S, 3>(v_9, h_4).le(s.splat(0.0f32)) | h_4[2].le(s.splat(0.0f32))))).any() { mx_ggx_d_p14(s, h_4, a_4, tp.at::<S>(1)) } else { s.splat(0.0) };
     let _e10 = tp.f(s, 0);
-    let _e11 = (_e6 / _e10);
+    let _e11 = (_e6 * (_e10).rcp());
     let _e12 = uplift_simd::vector::dot::<S, 3>(v_9, h_4);
     let _e14 = _e12.le(s.splat(0.0f32));
     let _e15 = h_4[2];
@@ -3634,7 +3634,7 @@ pub fn mx_fresnel_conductor_p18<S: Simd>(s: S, cos_theta_7: S::F, n_5: [S::F; 3]
     let _e49 = uplift_simd::vector::sub::<S, 3>(_e48, _e36);
     let _e50 = uplift_simd::vector::mul::<S, 3>(_e47, _e49);
     let _e51 = uplift_simd::vector::mul::<S, 3>(_e40, _e44);
-    let _e52 = uplift_simd::vector::div::<S, 3>(_e50, _e51);
+    let _e52 = uplift_simd::vector::zip::<S, 3>(_e50, _e51, |x, y| x * y.rcp());
     return _e52;
 }
 
@@ -3686,7 +3686,7 @@ pub fn mx_fresnel_conductor_polarized_p19<S: Simd>(s: S, cos_theta_2: S::F, n_1:
     let _e33 = uplift_simd::vector::add::<S, 3>(_e21, _e31);
     let _e35 = [s.splat(1e-30f32); 3];
     let _e36 = uplift_simd::vector::zip::<S, 3>(_e33, _e35, |x, y| x.max(y));
-    let _e37 = uplift_simd::vector::div::<S, 3>(_e32, _e36);
+    let _e37 = uplift_simd::vector::zip::<S, 3>(_e32, _e36, |x, y| x * y.rcp());
     let _e38 = uplift_simd::vector::mul::<S, 3>([_e6; 3], _e19);
     let _e39 = (_e8 * _e8);
     let _e40 = [_e39; 3];
@@ -3697,7 +3697,7 @@ pub fn mx_fresnel_conductor_polarized_p19<S: Simd>(s: S, cos_theta_2: S::F, n_1:
     let _e45 = uplift_simd::vector::add::<S, 3>(_e41, _e42);
     let _e47 = [s.splat(1e-30f32); 3];
     let _e48 = uplift_simd::vector::zip::<S, 3>(_e45, _e47, |x, y| x.max(y));
-    let _e49 = uplift_simd::vector::div::<S, 3>(_e44, _e48);
+    let _e49 = uplift_simd::vector::zip::<S, 3>(_e44, _e48, |x, y| x * y.rcp());
     let _e50 = mx_polarized { p: _e49, s_: _e37 };
     return _e50;
 }
@@ -3792,7 +3792,7 @@ pub fn mx_fresnel_conductor_phase_polarized_g20<S: Simd>(s: S, cos_theta_3: S::F
     assert!(tg.len() >= 21 * S::LANES, "the tape is shorter than the pass's slots");
     let _e5 = [s.splat(1e-6f32); 3];
     let _e6 = uplift_simd::vector::zip::<S, 3>(eta2_1, _e5, |x, y| x.max(y));
-    let _e7 = uplift_simd::vector::div::<S, 3>(kappa2_, _e6);
+    let _e7 = uplift_simd::vector::zip::<S, 3>(kappa2_, _e6, |x, y| x * y.rcp());
     let _e11 = uplift_simd::vector::mul::<S, 3>(_e6, _e6);
     let _e13 = [s.splat(1.0f32); 3];
     let _e14 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
@@ -3869,12 +3869,12 @@ pub fn mx_fresnel_airy_conductor_g21<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::
     uplift_simd::tape::put(s, tg, 0, _e6);
     let _e7 = mx_thin_film_cos_g7(s, cos_theta_6, _e6, &mut tg[7 * S::LANES..]);
     let _e8 = [_e6; 3];
-    let _e9 = uplift_simd::vector::div::<S, 3>(n_2, _e8);
+    let _e9 = uplift_simd::vector::zip::<S, 3>(n_2, _e8, |x, y| x * y.rcp());
     uplift_simd::tape::put(s, tg, 1, _e9[0]);
     uplift_simd::tape::put(s, tg, 2, _e9[1]);
     uplift_simd::tape::put(s, tg, 3, _e9[2]);
     let _e10 = [_e6; 3];
-    let _e11 = uplift_simd::vector::div::<S, 3>(k_1, _e10);
+    let _e11 = uplift_simd::vector::zip::<S, 3>(k_1, _e10, |x, y| x * y.rcp());
     uplift_simd::tape::put(s, tg, 4, _e11[0]);
     uplift_simd::tape::put(s, tg, 5, _e11[1]);
     uplift_simd::tape::put(s, tg, 6, _e11[2]);
@@ -3972,7 +3972,7 @@ pub fn mx_ggx_d_p24<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tp: uplift_si
     let _e21 = _e18.mul_add(_e19, _e17);
     let _e23 = (s.splat(3.1415927f32) * _e21);
     let _e24 = (_e23 * _e21);
-    let _e25 = (_e6 / _e24);
+    let _e25 = (_e6 * (_e24).rcp());
     return _e25;
 }
 
@@ -3983,7 +3983,7 @@ pub fn mx_ggx_d_g24<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tg: &mut [f32
     let _e2 = a_2[0];
     let _e3 = a_2[1];
     let _e4 = (_e2 * _e3);
-    let _e6 = (s.splat(1.0f32) / _e4);
+    let _e6 = (s.splat(1.0f32) * (_e4).rcp());
     uplift_simd::tape::put(s, tg, 0, _e6);
     let _e8 = a_2[1];
     let _e12 = a_2[0];
@@ -4006,7 +4006,7 @@ pub fn mx_ggx_reflection_p25<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3:
     let _e16 = (s.splat(2.0f32) * _e14);
     let _e17 = if (!(l_4[2].le(s.splat(0.0f32)))).any() { mx_ggx_d_p24(s, h_3, a_3, tp.at::<S>(4)) } else { s.splat(0.0) };
     let _e18 = (_e17 * _e9);
-    let _e19 = (_e18 / _e16);
+    let _e19 = (_e18 * (_e16).rcp());
     let _e20 = l_4[2];
     let _e22 = _e20.le(s.splat(0.0f32));
     let _e24 = _e22.select(s.splat(0.0f32), _e19);
@@ -4034,7 +4034,7 @@ pub fn mx_ggx_pdf_p26<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F;
     let _e3 = v_9[2];
     let _e6 = if (!((uplift_simd::vector::dot::<S, 3>(v_9, h_4).le(s.splat(0.0f32)) | h_4[2].le(s.splat(0.0f32))))).any() { mx_ggx_d_p24(s, h_4, a_4, tp.at::<S>(1)) } else { s.splat(0.0) };
     let _e10 = tp.f(s, 0);
-    let _e11 = (_e6 / _e10);
+    let _e11 = (_e6 * (_e10).rcp());
     let _e12 = uplift_simd::vector::dot::<S, 3>(v_9, h_4);
     let _e14 = _e12.le(s.splat(0.0f32));
     let _e15 = h_4[2];
@@ -4334,11 +4334,11 @@ pub fn mx_lobe_combine_p29<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], w
     let _m1 = _e7;
     if _m1.any() {
         let _e9 = a_5[3];
-        let _e10 = (_e9 / wa);
+        let _e10 = (_e9 * (wa).rcp());
         let _e12 = tp.m(s, 1);
         let _e13 = _e12.select(_e10, s.splat(3e38f32));
         let _e15 = b[3];
-        let _e16 = (_e15 / wb);
+        let _e16 = (_e15 * (wb).rcp());
         let _e18 = tp.m(s, 2);
         let _e19 = _e18.select(_e16, s.splat(3e38f32));
         let _e20 = _e19.lt(_e13);
@@ -4798,7 +4798,7 @@ pub fn mx_sheen_bsdf_p33<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color
         let _e146 = (_e139 * _e16);
         let _e147 = (-_e139).mul_add(_e16, _e145);
         let _e149 = (s.splat(4.0f32) * _e147);
-        let _e150 = (_e144 / _e149);
+        let _e150 = (_e144 * (_e149).rcp());
         let _e151 = _e117[2];
         let _e153 = _e151.le(s.splat(0.0f32));
         let _e155 = _e153.select(s.splat(0.0f32), _e150);
@@ -4887,7 +4887,7 @@ pub fn mx_sheen_bsdf_g33<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color
         let _e42 = mx_albedo_sheen_conty_kulla(s, _e16, roughness_1);
         let _e44 = { let (x, y) = (_e42, s.splat(0.0f32)); x.max(y) };
         let _e46 = { let (x, y) = (_e44, s.splat(1.0f32)); x.max(y) };
-        let _e48 = (s.splat(1.0f32) / _e46);
+        let _e48 = (s.splat(1.0f32) * (_e46).rcp());
         norm = _m2.select(_e48, norm);
         let _e49 = norm;
         let _e50 = (_e44 * _e49);
@@ -4938,7 +4938,7 @@ pub fn mx_sheen_bsdf_g33<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color
             let _e73 = mx_sample_cosine(s, _e72);
             let _e74 = _e32[0];
             let _e76 = { let (x, y) = (_e74, s.splat(1e-20f32)); x.max(y) };
-            let _e78 = (s.splat(1.0f32) / _e76);
+            let _e78 = (s.splat(1.0f32) * (_e76).rcp());
             let _e79 = _e73[0];
             let _e80 = _e32[1];
             let _e81 = _e73[2];
@@ -5296,11 +5296,11 @@ pub fn mx_lobe_combine_p35<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], w
     let _m1 = _e7;
     if _m1.any() {
         let _e9 = a_5[3];
-        let _e10 = (_e9 / wa);
+        let _e10 = (_e9 * (wa).rcp());
         let _e12 = tp.m(s, 1);
         let _e13 = _e12.select(_e10, s.splat(3e38f32));
         let _e15 = b[3];
-        let _e16 = (_e15 / wb);
+        let _e16 = (_e15 * (wb).rcp());
         let _e18 = tp.m(s, 2);
         let _e19 = _e18.select(_e16, s.splat(3e38f32));
         let _e20 = _e19.lt(_e13);

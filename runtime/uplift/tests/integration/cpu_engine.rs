@@ -218,7 +218,7 @@ fn packet_kernels_agree_with_the_scalar_kernels() {
 /// Every shipped kernel with a dependence-split form (issue 24, `uplift_compiler::packet_split`):
 /// its grouped batch entry — group pass, tape, point pass — against the scalar writer's kernel
 /// (the oracle) on the same points, to 1e-4 relative (floor 1e-6; a sample kernel's pdf and
-/// response 1e-3, see below), for groups of 4, 16 and 19
+/// response 2e-3, see below), for groups of 4, 16 and 19
 /// points (19: each group's last packet partial) and a group count that leaves the group
 /// pass's last packet partial. Lanes diverge in both passes: each group has its own random
 /// material, view and frame (weights drawn from [0, 1), views on the whole sphere, so groups
@@ -275,9 +275,10 @@ fn grouped_kernels_agree_with_the_scalar_kernels() {
             let mut worst = 0.0f32;
             // A sample kernel's pdf and response are evaluated at the direction it drew, and a
             // near-specular lobe amplifies that direction's last-bit differences (fused
-            // multiply-adds): measured up to 4.3e-4 relative where the pdf exceeds 100. Its
+            // multiply-adds, divisions as x·rcp(y) within WGSL's 2.5 ulp): measured up to
+            // 1.1e-3 relative where the pdf exceeds 1,000 (the clearcoat's α 0.01). Its
             // direction (the first three columns) keeps 1e-4.
-            let relative = |column: usize| if shipped.context == Some("sample") && column >= 3 { 1e-3 } else { 1e-4 };
+            let relative = |column: usize| if shipped.context == Some("sample") && column >= 3 { 2e-3 } else { 1e-4 };
             for (k, (x, y)) in split_out.data().iter().zip(scalar_out.data()).enumerate() {
                 let allowed = (relative(k / n) * x.abs().max(y.abs())).max(1e-6);
                 let err = (x - y).abs();
