@@ -122,15 +122,17 @@ macro_rules! cpu_batch_fn {
 
 /// The [`BatchFn`] of a kernel shipped in packet form too (`$packet`, a module holding a
 /// `templates/packet_kernel.rs` file; `$scalar`, a `static` holding the scalar kernel's
-/// [`cpu_batch_fn!`]): the packet kernel at this machine's SIMD level (AVX-512 or AVX2), the
-/// scalar kernel on other machines. Packet kernels read no textures. Columns of length 1 are uniform (`run_column_blocks`
+/// [`cpu_batch_fn!`]): the packet kernel on an AVX-512 machine, the scalar kernel on others —
+/// the packet kernels' AVX2 code runs at 0.25× of the scalar kernel (conductor eval, measured on
+/// a Xeon with `UPLIFT_SIMD=avx2`; issue 24's note), so AVX2 machines keep the scalar one.
+/// Packet kernels read no textures. Columns of length 1 are uniform (`run_column_blocks`
 /// with `takes_uniform`): the packet kernel splats them, the scalar fallback gets them repeated.
 /// The caller has `BatchFn` and `TextureSet` in scope.
 #[macro_export]
 macro_rules! packet_batch_fn {
     ($packet:ident, $scalar:ident) => {{
         fn batch<'t>(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut [f32]], tex: &TextureSet<'t>) {
-            if !$packet::mx_pattern_batch_simd(geom, inputs, outputs) {
+            if !(::uplift_simd::Level::current() == ::uplift_simd::Level::Avx512 && $packet::mx_pattern_batch_simd(geom, inputs, outputs)) {
                 let n = outputs.first().map_or(0, |o| o.len());
                 let (mut gb, mut xb) = (Vec::new(), Vec::new());
                 let geom = $crate::driver::expand_uniform(geom, n, &mut gb);

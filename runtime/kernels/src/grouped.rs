@@ -6,6 +6,14 @@
 use crate::driver::BLOCK;
 use rayon::prelude::*;
 
+/// Whether the CPU engine should run grouped batches through the split kernels on this
+/// machine: on AVX-512. Their AVX2 code runs below the scalar kernels (measured on a Xeon with
+/// `UPLIFT_SIMD=avx2`: conductor eval 0.92×, `uplift_stack` eval 0.79×; issue 24's note), so an
+/// AVX2 machine keeps the scalar kernels; [`run_grouped_blocks`] still runs there (tests).
+pub fn preferred() -> bool {
+    uplift_simd::Level::current() == uplift_simd::Level::Avx512
+}
+
 /// Runs a kernel's grouped form (`grouped`, [`crate::shipped::Grouped`]) over `n` points in
 /// groups of `k`: the columns in `grouped.point_columns` and the outputs hold one value per
 /// point; every other column holds one per point too, equal within each group (the caller's

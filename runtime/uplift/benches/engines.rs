@@ -279,10 +279,10 @@ fn main() {
                 all.run_prepared_into(&prepared, &b, &mut out).unwrap();
             });
             let form = match &prepared {
-                CpuKernel::Builtin(k) if k.grouped.is_some() && o.per_view >= uplift_engines::cpu_engine::GROUPED_MIN_POINTS && uplift_simd::Level::current() != uplift_simd::Level::Scalar => {
+                CpuKernel::Builtin(k) if k.grouped.is_some() && o.per_view >= uplift_engines::cpu_engine::GROUPED_MIN_POINTS && uplift_kernels::grouped::preferred() => {
                     format!("dependence-split packet kernel, {} points per view, {}", o.per_view, uplift_simd::Level::current().name())
                 }
-                CpuKernel::Builtin(k) if k.is_packet() && uplift_simd::Level::current() != uplift_simd::Level::Scalar => format!("packet kernel, {}", uplift_simd::Level::current().name()),
+                CpuKernel::Builtin(k) if k.is_packet() && uplift_simd::Level::current() == uplift_simd::Level::Avx512 => format!("packet kernel, {}", uplift_simd::Level::current().name()),
                 _ => "scalar kernel".to_string(),
             };
             println!("cpu  in-process   1 thread : {}  ({form})", mega(cpu1));

@@ -163,8 +163,10 @@ fn shipped_kernels_run_in_process_and_agree_with_wgpu() {
 /// relative (floor 1e-6). Lanes diverge: directions lie on the whole sphere (half below the
 /// horizon), inputs documented as 0 — the lobe weights — are drawn from [0, 1). An odd number of
 /// points leaves a partial last packet. On an AVX-512 machine the test runs itself again with
-/// `UPLIFT_SIMD=avx2`, so both hardware levels are checked; a machine without either runs the
-/// scalar kernel for both (the packet kernel declines) and says so.
+/// `UPLIFT_SIMD=avx2`; there the shipped kernel is the scalar one (AVX2 machines keep it:
+/// `packet_batch_fn!`), and the packet writer's AVX2 code is checked by
+/// tests/rs_compile/tests/packet_vs_scalar.rs and the grouped test below. A machine without
+/// either runs the scalar kernel for both and says so.
 #[test]
 fn packet_kernels_agree_with_the_scalar_kernels() {
     const N: usize = 4099;
@@ -287,7 +289,7 @@ fn grouped_kernels_agree_with_the_scalar_kernels() {
             }
             assert!(split_out.data().iter().any(|v| *v != split_out.data()[0]), "{}: constant output", shipped.name);
             // Through the engine: the same bits, where it takes the grouped form.
-            if per_group >= uplift_engines::cpu_engine::GROUPED_MIN_POINTS {
+            if per_group >= uplift_engines::cpu_engine::GROUPED_MIN_POINTS && uplift_kernels::grouped::preferred() {
                 batch.points_per_group = per_group;
                 let prepared = engine.prepare(&kernel).unwrap();
                 let via_engine = engine.run_prepared(&prepared, &batch).unwrap();
