@@ -8,14 +8,10 @@
 //! several draws of its other arguments and of the directions, and its result compared with
 //! `mx_bsdf_empty()` (`equivalent`: as every operator and kernel output sees it). A lobe that differs anywhere (a conductor stays opaque at
 //! weight 0: its throughput is 0, not 1) or that the interpreter cannot run is not folded. The
-//! verdict is memoised per function.
+//! verdict is memoised per function, in the library it is about.
 
 use crate::const_eval::{Const, ConstEvaluator};
-use std::collections::HashMap;
-use std::sync::Mutex;
-
-/// Verdicts per library function name.
-static VERDICTS: Mutex<Option<HashMap<String, bool>>> = Mutex::new(None);
+use crate::node_library::NodeLibrary;
 
 /// `MX_CONTEXT_SAMPLE` (closure.wgsl).
 const SAMPLE: i32 = 2;
@@ -67,14 +63,16 @@ fn closure(context: i32, k: usize) -> Const {
     Const::Struct(vec![Const::I32(context), unit(wv), unit(wl), u, Const::U32(k as u32)])
 }
 
-/// Whether library function `function` (parameters `params`: name and WGSL type, the closure
-/// struct first, the weight at `weight`) returns the empty BSDF at weight 0 (module doc).
-pub fn vanishes_at_zero_weight(evaluator: &ConstEvaluator, function: &str, params: &[(String, String)], weight: usize) -> bool {
-    if let Some(&v) = VERDICTS.lock().unwrap().get_or_insert_with(HashMap::new).get(function) {
+/// Whether `library`'s function `function` (parameters `params`: name and WGSL type, the
+/// closure struct first, the weight at `weight`) returns the empty BSDF at weight 0 (module
+/// doc); `false` where the library has no interpreter.
+pub fn vanishes_at_zero_weight(library: &NodeLibrary, function: &str, params: &[(String, String)], weight: usize) -> bool {
+    let Some(evaluator) = &library.evaluator else { return false };
+    if let Some(&v) = library.zero_weight_verdicts.lock().unwrap().get(function) {
         return v;
     }
     let verdict = check(evaluator, function, params, weight);
-    VERDICTS.lock().unwrap().get_or_insert_with(HashMap::new).insert(function.to_string(), verdict);
+    library.zero_weight_verdicts.lock().unwrap().insert(function.to_string(), verdict);
     verdict
 }
 

@@ -766,13 +766,9 @@ impl<'a> GraphBuilder<'a> {
         // (closure_fold.rs): the empty BSDF, and the lobe leaves the kernel.
         if let (true, false, Some(w), [out]) = (closure, geometry, weight_arg, nd.outputs.as_slice()) {
             let dead = matches!(&self.graph.values[args[w]].kind, ValueKind::Constant(Literal::Floats(f)) if f.len() == 1 && !(f[0] > 0.0));
-            if dead && out.ty.is_closure() {
-                if let Some(evaluator) = &self.lib.evaluator {
-                    // The weight's position among the function's parameters (the closure first).
-                    if crate::closure_fold::vanishes_at_zero_weight(evaluator, &fname, &sig.params, w + 1) {
-                        return self.zero(&out.ty, pos, origin).map(NodeResult::Single);
-                    }
-                }
+            // The weight's position among the function's parameters (the closure first).
+            if dead && out.ty.is_closure() && crate::closure_fold::vanishes_at_zero_weight(self.lib, &fname, &sig.params, w + 1) {
+                return self.zero(&out.ty, pos, origin).map(NodeResult::Single);
             }
         }
         let ty = nd.node_type();

@@ -128,6 +128,9 @@ pub struct NodeLibrary {
     /// The values of the library's albedo-table array (`mx_albedo_table_data`), which GPU
     /// kernels receive as a storage buffer.
     pub albedo_table_data: Option<std::sync::Arc<[f32]>>,
+    /// `closure_fold` verdicts on this library's lobes (whether one at weight 0 is the empty
+    /// BSDF), by function name, computed on first use (a clone of the library shares them).
+    pub(crate) zero_weight_verdicts: std::sync::Arc<std::sync::Mutex<HashMap<String, bool>>>,
 }
 
 /// What a node's authored element says, for matching.
@@ -159,7 +162,7 @@ impl NodeLibrary {
             }
         };
         let albedo_table_data = wgsl.items.get(TABLE_DATA).and_then(|i| const_f32_array(&i.text)).map(std::sync::Arc::from);
-        let mut lib = NodeLibrary { defs, wgsl, diagnostics, signatures: HashMap::new(), evaluator, albedo_table_data };
+        let mut lib = NodeLibrary { defs, wgsl, diagnostics, signatures: HashMap::new(), evaluator, albedo_table_data, zero_weight_verdicts: Default::default() };
         let checked: HashMap<String, Result<(), String>> = lib
             .defs
             .nodedefs

@@ -341,10 +341,9 @@ impl FunctionWriter<'_> {
                     touches |= self.region_contents(reject, out);
                 }
                 Statement::Switch { cases, .. } => cases.iter().for_each(|c| touches |= self.region_contents(&c.body, out)),
-                Statement::Loop { body, continuing, break_if } => {
+                Statement::Loop { body, continuing, .. } => {
                     touches |= self.region_contents(body, out);
                     touches |= self.region_contents(continuing, out);
-                    let _ = break_if;
                 }
                 _ => {}
             }
