@@ -64,11 +64,31 @@ impl Compiler {
         self
     }
 
-    /// Reads and checks a document: every diagnostic from reading, resolving and building all
-    /// of its outputs (closure outputs are resolved too, not lowered).
+    /// Reads and checks a document by building exactly what `compile` builds: its pattern
+    /// outputs (one kernel), and each BSDF, surfaceshader or material output on its own in the
+    /// eval closure context (lowered and validated like any kernel). Returns every diagnostic,
+    /// each once, in the order found.
     pub fn check_file(&self, path: &Path) -> Vec<Diagnostic> {
-        let c = self.compile_file(path, &OutputSelection::AllNumeric);
-        c.diagnostics
+        let (doc, read_diags) = mtlx::read_file(path);
+        let source = path.display().to_string();
+        let closures: Vec<String> = if has_errors(&read_diags) {
+            Vec::new()
+        } else {
+            document_outputs(&doc).into_iter().filter(|o| crate::wgsl_types::is_scattering(&o.ty)).map(|o| o.name).collect()
+        };
+        let mut diagnostics = self.compile_document_in(doc.clone(), read_diags, &source, &OutputSelection::AllNumeric, None).diagnostics;
+        if !closures.is_empty() {
+            // A document of materials has no pattern output, and that is no news.
+            diagnostics.retain(|d| d.is_error() || !d.message.starts_with("nothing to compile"));
+        }
+        for name in closures {
+            for d in self.compile_document_in(doc.clone(), Vec::new(), &source, &OutputSelection::Named(vec![name]), Some(ClosureContext::Eval)).diagnostics {
+                if !diagnostics.iter().any(|e| e.to_string() == d.to_string()) {
+                    diagnostics.push(d);
+                }
+            }
+        }
+        diagnostics
     }
 
     pub fn compile_file(&self, path: &Path, selection: &OutputSelection) -> Compilation {
@@ -97,7 +117,7 @@ impl Compiler {
         let all = document_outputs(&doc);
         let wanted = |o: &OutputRef| match context {
             None => o.ty.is_numeric(),
-            Some(_) => crate::wgsl_types::wgsl_type(&o.ty, false) == Some("BSDF"),
+            Some(_) => crate::wgsl_types::is_scattering(&o.ty),
         };
         let chosen: Vec<OutputRef> = match selection {
             OutputSelection::AllNumeric => all.iter().filter(|o| wanted(o)).cloned().collect(),

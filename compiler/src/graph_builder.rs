@@ -46,6 +46,19 @@ struct Scope {
     path: String,
 }
 
+/// Application nodes whose value the host supplies for each evaluation (MaterialX's
+/// `application` nodegroup, and nprlib's `viewdirection`): nodedef, the geomprop that names the
+/// same value (`defaultgeomprop="Vworld"`), the kernel's interface input that carries it, and its
+/// default (the nodedef's output default; one component: float, three: vector3). `time` is in
+/// seconds (its nodedef's `fps` input is deprecated and unused), `frame` the frame number,
+/// `viewdirection` the direction from the viewer to the shading point in world space (the
+/// `space` input of the node is not applied: the host supplies world space).
+pub const APPLICATION_INPUTS: &[(&str, Option<&str>, &str, &[f32])] = &[
+    ("ND_time_float", None, "time", &[0.0]),
+    ("ND_frame_float", None, "frame", &[1.0]),
+    ("ND_viewdirection_vector3", Some("Vworld"), "viewdirection", &[0.0, 0.0, 1.0]),
+];
+
 /// An output the caller asks for: a document-level `<output>` or a compound nodegraph's.
 #[derive(Clone, Debug)]
 pub struct OutputRef {
@@ -101,7 +114,7 @@ pub fn document_outputs(doc: &Document) -> Vec<OutputRef> {
     for &n in doc.children(root) {
         let ne = doc.get(n);
         let ty = DataType::from_name(ne.attr("type").unwrap_or(""));
-        let closure = crate::wgsl_types::wgsl_type(&ty, false) == Some("BSDF");
+        let closure = crate::wgsl_types::is_scattering(&ty);
         if mtlx::schema::is_node_category(&ne.category) && !consumed.contains(ne.name()) && (ty.is_numeric() || ty == DataType::Multioutput || closure) {
             let outs: Vec<ElementId> = doc.children_of(n, "output").collect();
             if ty == DataType::Multioutput {
@@ -485,6 +498,21 @@ impl<'a> GraphBuilder<'a> {
         Ok(h)
     }
 
+    /// The interface input `name` (`default` unless the caller sets it) that stands for an
+    /// application node's value (APPLICATION_INPUTS) or a named geometry stream; one per
+    /// kernel, however many nodes read it.
+    fn application_input(&mut self, name: &str, ty: &DataType, default: &[f32], pos: &SourcePos) -> H {
+        let key = (usize::MAX, name.to_string());
+        if let Some(&h) = self.kernel_inputs.get(&key) {
+            return h;
+        }
+        let index = self.graph.inputs.len();
+        self.graph.inputs.push(InterfaceInput { name: name.to_string(), ty: ty.clone(), default: default.to_vec(), pos: pos.clone() });
+        let h = self.add(ValueKind::Input(index), ty.clone(), name.to_string(), pos.clone());
+        self.kernel_inputs.insert(key, h);
+        h
+    }
+
     // ---- textures ------------------------------------------------------------------------
 
     /// Nearest value of `attr` on `el` or its ancestors.
@@ -651,6 +679,33 @@ impl<'a> GraphBuilder<'a> {
                 };
             }
         }
+        // Application nodes (`time`, `frame`, `viewdirection`): the host's value, an interface
+        // input of the kernel.
+        if let Some(&(_, _, name, default)) = APPLICATION_INPUTS.iter().find(|(def, ..)| *def == nd.name) {
+            let ty = if default.len() == 3 { DataType::Vector3 } else { DataType::Float };
+            return Ok(NodeResult::Single(self.application_input(name, &ty, default, &pos)));
+        }
+        // Named geometry streams (`geompropvalue`, `geomcolor`): per-point values the caller
+        // supplies, as interface inputs named after the stream.
+        if ty.is_numeric() && matches!(nd.node.as_str(), "geompropvalue" | "geomcolor") {
+            let authored = |name: &str| inputs.iter().map(|&i| doc.get(i)).find(|ie| ie.name() == name).and_then(|ie| ie.attr("value").map(str::to_string));
+            let (stream, default) = if nd.node == "geomcolor" {
+                let index = authored("index").or_else(|| nd.input("index").and_then(|p| p.value.clone())).unwrap_or_else(|| "0".into());
+                (format!("geomcolor{}", index.trim()), nd.outputs.first().and_then(|o| o.value.clone()))
+            } else {
+                // (A `geomprop` attribute: a 1.37 document's form, as upgraded from 1.36's `attrname`.)
+                let Some(name) = authored("geomprop").or_else(|| e.attr("geomprop").map(str::to_string)).filter(|n| !n.trim().is_empty()) else {
+                    return Err(self.error(&pos, format!("geompropvalue `{}` names no `geomprop`", e.name())));
+                };
+                (name.trim().to_string(), authored("default").or_else(|| nd.input("default").and_then(|p| p.value.clone())))
+            };
+            let default = match default.as_deref().map(|d| Literal::parse(&ty, d)) {
+                Some(Ok(v)) => v.components(),
+                Some(Err(m)) => return Err(self.error(&pos, m)),
+                None => vec![0.0; ty.components().unwrap_or(1)],
+            };
+            return Ok(NodeResult::Single(self.application_input(&stream, &ty, &default, &pos)));
+        }
         // Nodegraph implementation: inline.
         let graph_ref = self.local.graphs.get(&nd.name).map(|g| (true, *g)).or_else(|| self.lib.defs.graphs.get(&nd.name).map(|g| (false, *g)));
         if let Some((is_local, g)) = graph_ref {
@@ -688,6 +743,10 @@ impl<'a> GraphBuilder<'a> {
 
     fn port_default(&mut self, p: &PortDef, origin: &str) -> Result<H, Fail> {
         if let Some(g) = &p.defaultgeomprop {
+            if let Some(&(_, _, name, default)) = APPLICATION_INPUTS.iter().find(|(_, alias, ..)| *alias == Some(g.as_str())) {
+                let ty = if default.len() == 3 { DataType::Vector3 } else { DataType::Float };
+                return Ok(self.application_input(name, &ty, default, &p.pos));
+            }
             let Some(gp) = GeomProp::from_name(g) else {
                 return Err(self.error(&p.pos, format!("unknown defaultgeomprop `{g}`")));
             };

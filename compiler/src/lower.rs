@@ -8,7 +8,7 @@ use crate::const_eval::ConstEvaluator;
 use crate::naga_import;
 use crate::node_library::{NodeLibrary, TABLE_ACCESSOR, TABLE_DATA};
 use crate::wgsl_items::ItemKind;
-use crate::wgsl_types::{constant_expr, wgsl_type};
+use crate::wgsl_types::{constant_expr, has_emission, is_scattering, wgsl_type};
 use askama::Template;
 use mtlx::DataType;
 use std::collections::HashSet;
@@ -133,10 +133,14 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
         None => graph.outputs.iter().map(|o| (o.name.clone(), o.ty.clone())).collect(),
         Some(c) => {
             match graph.outputs.as_slice() {
-                [one] if one.ty.is_closure() && wgsl_type(&one.ty, false) == Some("BSDF") => {}
+                [one] if one.ty.is_closure() && is_scattering(&one.ty) => {}
                 _ => return Err(LowerError(format!("the {} context needs exactly one BSDF, surfaceshader or material output", c.name()))),
             }
-            c.outputs().into_iter().map(|(n, t)| (n.to_string(), t)).collect()
+            let mut list: Vec<(String, DataType)> = c.outputs().into_iter().map(|(n, t)| (n.to_string(), t)).collect();
+            if has_emission(&graph.outputs[0].ty) {
+                list.push(("emission".to_string(), DataType::Color3));
+            }
+            list
         }
     };
     for (name, ty) in &output_list {
@@ -175,6 +179,8 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
             _ => false,
         };
     }
+    // A surface shader's (or material's) BSDF part, for the context's outputs.
+    let bsdf_of = if context.is_some() && has_emission(&graph.outputs[0].ty) { ".bsdf" } else { "" };
     let passes: &[i32] = match context {
         None => &[],
         Some(ClosureContext::Eval) => &[CONTEXT_EVAL],
@@ -214,15 +220,15 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
         if pass == Some(1) && operand.iter().all(|o| o.len() < 2) {
             // First value of the pdf pass: its context, at the direction the sample pass chose.
             let chosen = pick(&operand, graph.outputs[0].value.index(), 0);
-            body.push(format!("let cl{} = mx_closure_new({}, cl{}.wv, {chosen}.lobe.xyz, cl{}.u);", passes[1], passes[1], passes[0], passes[0]));
+            body.push(format!("let cl{} = mx_closure_new({}, cl{}.wv, {chosen}{bsdf_of}.lobe.xyz, cl{}.u);", passes[1], passes[1], passes[0], passes[0]));
         }
         let rhs = match &v.kind {
             // Strings and filenames exist only at compile time (enum strings are already
             // integers, filenames texture bindings): they have no WGSL expression.
             ValueKind::Constant(lit) => {
                 if let DataType::Closure(name) = &v.ty {
-                    if let Some((ty, _)) = crate::wgsl_types::closure_type(name) {
-                        roots.extend([ty, "mx_bsdf_empty"]);
+                    if let Some((ty, empty)) = crate::wgsl_types::closure_type(name) {
+                        roots.extend([ty, empty.split('(').next().unwrap_or(ty)]);
                     }
                 }
                 operand[h].push(constant_expr(&v.ty, lit).unwrap_or_default());
@@ -269,8 +275,9 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
     let result: Vec<String> = match context {
         None => graph.outputs.iter().map(|o| pick(&operand, o.value.index(), 0)).collect(),
         Some(c) => {
-            let last = pick(&operand, graph.outputs[0].value.index(), passes.len() - 1);
-            match c {
+            let value = pick(&operand, graph.outputs[0].value.index(), passes.len() - 1);
+            let last = format!("{value}{bsdf_of}");
+            let mut result = match c {
                 ClosureContext::Eval | ClosureContext::Albedo => vec![format!("{last}.response"), format!("{last}.throughput")],
                 ClosureContext::Pdf => vec![format!("mx_closure_pdf({last})"), format!("{last}.response"), format!("{last}.throughput")],
                 ClosureContext::Sample => {
@@ -280,7 +287,11 @@ pub fn lower(lib: &NodeLibrary, graph: Graph, source: &str, context: Option<Clos
                     }
                     vec![format!("cl{}.wl", passes[1]), format!("mx_closure_pdf({last})"), format!("{last}.response"), format!("{last}.throughput")]
                 }
+            };
+            if !bsdf_of.is_empty() {
+                result.push(format!("{value}.emission"));
             }
+            result
         }
     };
     let closure_items = lib.wgsl.closure(&roots);

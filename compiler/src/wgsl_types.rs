@@ -23,10 +23,13 @@ pub fn wgsl_type(ty: &DataType, has_enum: bool) -> Option<&'static str> {
 }
 
 /// (WGSL type, WGSL expression of the empty value) of a closure or shader type
-/// (pbrlib/wgsl/closure.wgsl): BSDFs, surface shaders and materials are all `BSDF` values.
+/// (pbrlib/wgsl/closure.wgsl): a BSDF is a `BSDF` value; surface shaders and materials (a
+/// material's value is its front surface shader) are `mx_surfaceshader` values, a BSDF and the
+/// radiance emitted.
 pub fn closure_type(name: &str) -> Option<(&'static str, &'static str)> {
     Some(match name {
-        "BSDF" | "surfaceshader" | "material" => ("BSDF", "mx_bsdf_empty()"),
+        "BSDF" => ("BSDF", "mx_bsdf_empty()"),
+        "surfaceshader" | "material" => ("mx_surfaceshader", "mx_surfaceshader_empty()"),
         "EDF" => ("EDF", "EDF(vec3<f32>(0.0))"),
         "VDF" => ("VDF", "VDF(vec3<f32>(0.0), vec3<f32>(0.0))"),
         "volumeshader" => ("mx_volumeshader", "mx_volumeshader(VDF(vec3<f32>(0.0), vec3<f32>(0.0)))"),
@@ -34,6 +37,18 @@ pub fn closure_type(name: &str) -> Option<(&'static str, &'static str)> {
         "lightshader" => ("mx_lightshader", "mx_lightshader(vec3<f32>(0.0))"),
         _ => return None,
     })
+}
+
+/// Whether a closure kernel can be compiled for a value of type `ty`: it scatters (a BSDF, a
+/// surface shader or a material).
+pub fn is_scattering(ty: &DataType) -> bool {
+    matches!(wgsl_type(ty, false), Some("BSDF" | "mx_surfaceshader"))
+}
+
+/// Whether a value of type `ty` carries emission besides its BSDF (surface shaders, materials):
+/// its closure kernels write an `emission` output too.
+pub fn has_emission(ty: &DataType) -> bool {
+    wgsl_type(ty, false) == Some("mx_surfaceshader")
 }
 
 /// A WGSL float literal that reads back as exactly `x`.

@@ -1,10 +1,10 @@
 //! Conformance over MaterialX's own documents ($UPLIFT_MTLX_DATA/Materials/TestSuite/stdlib
 //! and Materials/Examples): every document either compiles every pattern (non-closure) output
-//! or fails with a positioned, named reason; never a panic. Materials/TestSuite/pbrlib/bsdf:
-//! every BSDF, surfaceshader and material output compiles in the eval closure context (WGSL
-//! re-validated, Rust written). Writes docs/conformance.md. Targets (enforced): at least 80 % of the
-//! stdlib TestSuite documents compile, every pbrlib/bsdf document compiles, and no set falls
-//! below today's counts of compiled documents or rises above today's failures.
+//! or fails with a positioned, named reason; never a panic. Materials/TestSuite/pbrlib: every
+//! BSDF, surfaceshader and material output compiles in the eval closure context (WGSL
+//! re-validated, Rust written). Writes docs/conformance.md. Targets (enforced): at least 90 % of
+//! the stdlib TestSuite documents compile, 98 % of pbrlib's (all but the flake document), and no
+//! set falls below today's counts of compiled documents or rises above today's failures.
 
 use std::fmt::Write;
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -48,7 +48,7 @@ fn check_document(compiler: &Compiler, path: &Path, context: Option<ClosureConte
     }
     let wanted = |ty: &mtlx::DataType| match context {
         None => ty.is_numeric(),
-        Some(_) => uplift_compiler::wgsl_types::wgsl_type(ty, false) == Some("BSDF"),
+        Some(_) => uplift_compiler::wgsl_types::is_scattering(ty),
     };
     let outputs: Vec<_> = document_outputs(&doc).into_iter().filter(|o| wanted(&o.ty)).collect();
     if outputs.is_empty() {
@@ -101,9 +101,9 @@ fn materialx_documents_compile_or_fail_with_a_reason() {
     // floors at today's counts (documents producing a kernel for every output; documents
     // failing) so that any regression fails; raise them when conformance improves.
     for (set, min_ratio, min_compiled, max_failed, context) in [
-        ("Materials/TestSuite/stdlib", 0.8, 57, 12, None),
-        ("Materials/Examples", 0.96, 9, 1, None),
-        ("Materials/TestSuite/pbrlib/bsdf", 1.0, 18, 0, Some(ClosureContext::Eval)),
+        ("Materials/TestSuite/stdlib", 0.9, 63, 6, None),
+        ("Materials/Examples", 1.0, 10, 0, None),
+        ("Materials/TestSuite/pbrlib", 0.98, 50, 1, Some(ClosureContext::Eval)),
     ] {
         let mut files = Vec::new();
         mtlx_files(&data.join(set), &mut files);
@@ -140,7 +140,76 @@ fn materialx_documents_compile_or_fail_with_a_reason() {
         assert!(compiled >= min_compiled, "{set}: {compiled} documents produce every kernel, fewer than the {min_compiled} that did");
         assert!(failed <= max_failed, "{set}: {failed} documents fail, more than the {max_failed} that did");
     }
-    let md = md.replacen("\n\n## ", &format!("\n\n## Summary\n\n{summary}\n## "), 1);
+    let mut md = md.replacen("\n\n## ", &format!("\n\n## Summary\n\n{summary}\n## "), 1);
+    // The "Materials" section is runtime/uplift/tests/integration/materials.rs's (it runs the
+    // engines): kept as it is.
+    let path = root.join("docs/conformance.md");
+    let old = std::fs::read_to_string(&path).unwrap_or_default();
+    if let Some(i) = old.find("\n## Materials\n") {
+        md = format!("{}\n{}", md.trim_end(), &old[i..]);
+    }
     std::fs::create_dir_all(root.join("docs")).unwrap();
-    std::fs::write(root.join("docs/conformance.md"), md).unwrap();
+    std::fs::write(path, md).unwrap();
+}
+
+/// `check` builds what `compile` builds: over every TestSuite and Examples document, the errors
+/// `Compiler::check_file` (the `uplift check` command) reports are exactly those of compiling
+/// the document's pattern outputs (`uplift compile FILE`) and each of its BSDF, surfaceshader and
+/// material outputs in the eval context (`uplift compile FILE --context eval --output NAME`).
+#[test]
+fn check_reports_the_errors_compile_reports() {
+    let Ok(data) = std::env::var("UPLIFT_MTLX_DATA") else {
+        return skip(
+            "UPLIFT_MTLX_DATA is not set (set it to ../shared/data/materialx; .ci/run does)",
+        );
+    };
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(data);
+    let mut compiler = Compiler::builtin();
+    compiler.file_roots = Some(vec![data.clone()]);
+    let mut files = Vec::new();
+    for set in ["Materials/TestSuite", "Materials/Examples"] {
+        mtlx_files(&data.join(set), &mut files);
+    }
+    assert!(files.len() > 150, "only {} documents", files.len());
+    let errors = |d: &[mtlx::Diagnostic]| -> std::collections::BTreeSet<String> {
+        d.iter()
+            .filter(|d| d.is_error())
+            .map(|d| d.to_string())
+            .collect()
+    };
+    let (mut failing, mut closure_outputs) = (0, 0);
+    for f in &files {
+        let checked = errors(&compiler.check_file(f));
+        let (doc, read) = mtlx::read_file(f);
+        let mut compiled = errors(
+            &compiler
+                .compile_file_in(f, &OutputSelection::AllNumeric, None)
+                .diagnostics,
+        );
+        if !read.iter().any(|d| d.is_error()) {
+            for o in document_outputs(&doc)
+                .into_iter()
+                .filter(|o| uplift_compiler::wgsl_types::is_scattering(&o.ty))
+            {
+                closure_outputs += 1;
+                compiled.extend(errors(
+                    &compiler
+                        .compile_file_in(
+                            f,
+                            &OutputSelection::Named(vec![o.name]),
+                            Some(ClosureContext::Eval),
+                        )
+                        .diagnostics,
+                ));
+            }
+        }
+        assert_eq!(
+            checked,
+            compiled,
+            "{}: check and compile report different errors",
+            f.display()
+        );
+        failing += !checked.is_empty() as usize;
+    }
+    eprintln!("{} documents ({closure_outputs} closure outputs): check and compile agree; {failing} have errors", files.len());
 }

@@ -27,11 +27,26 @@ struct BSDF {
     lobe: vec4<f32>,
 }
 
-// Emission, volume, displacement and light shaders: uplift's kernels evaluate surface
-// scattering only; these types exist so that documents using them type-check.
+// An EDF value: the radiance emitted towards cl.wv (emission.wgsl).
 struct EDF {
     radiance: vec3<f32>,
 }
+
+// A surface shader (MaterialX `surfaceshader`, and `material`, whose value is its front surface
+// shader): the BSDF it scatters with, opacity folded in (surface.wgsl), and the radiance it
+// emits towards cl.wv. Closure kernels of such outputs write the BSDF's columns and `emission`.
+struct mx_surfaceshader {
+    bsdf: BSDF,
+    emission: vec3<f32>,
+}
+
+// The empty surface shader (an unconnected surfaceshader input): no scattering, no emission.
+fn mx_surfaceshader_empty() -> mx_surfaceshader {
+    return mx_surfaceshader(mx_bsdf_empty(), vec3<f32>(0.0));
+}
+
+// Volume, displacement and light shaders: uplift's kernels evaluate surfaces; these types
+// exist so that documents using them type-check.
 
 struct VDF {
     absorption: vec3<f32>,

@@ -139,3 +139,42 @@ fn mx_chiang_hair_bsdf(cl: mx_closure, tint_R: vec3<f32>, tint_TT: vec3<f32>, ti
     let r = mx_hair_response(v, l, tint_R, tint_TT, tint_TRT, ior, roughness_R, roughness_TT, roughness_TRT, cuticle_angle, absorption_coefficient);
     return mx_lobe_with_pdf(r, opaque, mx_luminance_rgb(albedo), mx_pdf_cosine(l));
 }
+
+// ND_deon_hair_absorption_from_melanin (d'Eon et al. 2011): σ_a from the melanin concentration
+// and redness, the two pigments' colours being exp(−σ) of their absorption.
+fn mx_deon_hair_absorption_from_melanin(melanin_concentration: f32, melanin_redness: f32, eumelanin_color: vec3<f32>, pheomelanin_color: vec3<f32>) -> vec3<f32> {
+    let melanin = -log(max(1.0 - melanin_concentration, 0.0001));
+    let eu = melanin * (1.0 - melanin_redness);
+    let pheo = melanin * melanin_redness;
+    let sigma_eu = -log(max(eumelanin_color, vec3<f32>(1.0e-30)));
+    let sigma_pheo = -log(max(pheomelanin_color, vec3<f32>(1.0e-30)));
+    return max(eu * sigma_eu + pheo * sigma_pheo, vec3<f32>(0.0));
+}
+
+// ND_chiang_hair_absorption_from_color (Chiang et al. 2016, eq. 9): the absorption that gives
+// `color` after multiple scattering at azimuthal roughness βn.
+fn mx_chiang_hair_absorption_from_color(color: vec3<f32>, azimuthal_roughness: f32) -> vec3<f32> {
+    let b = azimuthal_roughness;
+    let b2 = b * b;
+    let b4 = b2 * b2;
+    let d = 5.969 - 0.215 * b + 2.532 * b2 - 10.73 * b2 * b + 5.574 * b4 + 0.245 * b4 * b;
+    let s = log(clamp(color, vec3<f32>(0.001), vec3<f32>(1.0))) / d;
+    return s * s;
+}
+
+struct mx_chiang_hair_roughness_outputs {
+    roughness_R: vec2<f32>,
+    roughness_TT: vec2<f32>,
+    roughness_TRT: vec2<f32>,
+}
+
+// ND_chiang_hair_roughness (Chiang et al. 2016, eqs. 7–8): longitudinal variance v and
+// azimuthal logistic scale s per lobe, TT and TRT's v scaled by scale² (Marschner et al. 2003).
+fn mx_chiang_hair_roughness(longitudinal: f32, azimuthal: f32, scale_TT: f32, scale_TRT: f32) -> mx_chiang_hair_roughness_outputs {
+    let lr = clamp(longitudinal, 0.001, 1.0);
+    let ar = clamp(azimuthal, 0.001, 1.0);
+    let v0 = 0.726 * lr + 0.812 * lr * lr + 3.7 * pow(lr, 20.0);
+    let v = v0 * v0;
+    let s = 0.265 * ar + 1.194 * ar * ar + 5.372 * pow(ar, 22.0);
+    return mx_chiang_hair_roughness_outputs(vec2<f32>(v, s), vec2<f32>(v * scale_TT * scale_TT, s), vec2<f32>(v * scale_TRT * scale_TRT, s));
+}

@@ -7,9 +7,12 @@
 // "model" is an alias of "object", as in MaterialX's GLSL generator), texcoord (vector2,
 // vector3; only UV set 0 exists, so `index` is ignored).
 //
-// Not implemented here: geomcolor_* and geompropvalue*/geompropvalueuniform_* (they read named
-// geometry streams that mx_geometry does not carry), frame/time (application nodes), bump
-// (a nodegraph).
+// Not functions here: geomcolor_* and geompropvalue_* read named geometry streams, which the
+// compiler makes interface inputs of the kernel (`geomcolor<index>`, and the `geomprop` name,
+// defaulting to the node's `default`): per-point columns the caller supplies. frame and time are
+// interface inputs `time` and `frame` likewise (compiler/src/graph_builder.rs,
+// APPLICATION_INPUTS). geompropvalueuniform_string/filename (compile-time values uplift is not
+// given) are refused at the node; bump is a nodegraph.
 
 struct mx_geometry {
     texcoord: vec2<f32>,
