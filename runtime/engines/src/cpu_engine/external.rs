@@ -4,6 +4,8 @@
 //! cache folder, and runs it as a child process that reads a batch on stdin and writes the
 //! output columns on stdout. Runners are keyed by a fingerprint of everything they are built
 //! from, so a cached one is reused until the kernel, the runner or its dependencies change.
+//! A runner may hold many kernels (`build_bundle`: one cargo build for all of them, the albedo
+//! tables once instead of once per kernel); the runner's first argument picks one.
 
 use super::runner_protocol::{decode_floats, encode_request, Request};
 use crate::batch::{Columns, KernelShape, PatternBatch};
@@ -67,10 +69,12 @@ pub fn default_cache_dir() -> PathBuf {
     std::env::temp_dir().join("uplift-cache")
 }
 
-/// A built runner for one kernel.
+/// A built runner and which of its kernels to run.
 #[derive(Clone, Debug)]
 pub struct ExternalKernel {
     pub exe: PathBuf,
+    /// The kernel's index in its runner (`build_bundle`'s order; 0 for `build`).
+    pub index: usize,
     pub shape: KernelShape,
 }
 
@@ -93,34 +97,69 @@ fn manifest(name: &str) -> String {
 
 /// Builds (or finds in the cache) the runner of the kernel whose generated Rust is `rust`.
 pub fn build(rust: &str, shape: KernelShape, options: &RunnerOptions) -> Result<ExternalKernel, String> {
+    let mut built = build_bundle(&[(rust.to_string(), shape)], None, options)?;
+    Ok(built.remove(0))
+}
+
+/// The runner's `kernels.rs`: one module per kernel (`k{i}.rs`), the shared albedo tables, and
+/// the table of their batch functions and shapes.
+fn kernels_module(count: usize, shared_tables: bool) -> String {
+    let mut s = String::from("// Written by uplift's CPU engine (runtime/engines/src/cpu_engine/external.rs): the runner's kernels.\n");
+    if shared_tables {
+        s.push_str("#[allow(dead_code)]\npub mod albedo_tables {\n    include!(\"albedo_tables.rs\");\n}\n");
+    }
+    s.push_str("use crate::driver::{BatchFn, TextureSet};\n\n");
+    for i in 0..count {
+        s.push_str(&format!("#[allow(clippy::all, dead_code, unused_imports)]\npub mod k{i} {{\n    include!(\"k{i}.rs\");\n}}\n"));
+    }
+    s.push_str("\n/// Kernel `index`'s batch function and (geometry, input, output columns, textures).\npub fn kernel(index: usize) -> Option<(BatchFn, (usize, usize, usize, usize))> {\n    match index {\n");
+    for i in 0..count {
+        s.push_str(&format!("        {i} => Some((cpu_batch_fn!(k{i}), (k{i}::GEOMETRY_COLUMNS, k{i}::INPUT_COLUMNS, k{i}::OUTPUT_COLUMNS, k{i}::TEXTURE_COUNT))),\n"));
+    }
+    s.push_str("        _ => None,\n    }\n}\n");
+    s
+}
+
+/// The module path under which a bundle's kernels find the shared albedo tables (pass it as
+/// `RustOptions::albedo_table_data` when writing them).
+pub const BUNDLE_ALBEDO_TABLES: &str = "crate::kernels::albedo_tables::MX_ALBEDO_TABLE_DATA";
+
+/// Builds (or finds in the cache) one runner holding every kernel of `kernels` (generated Rust
+/// and shape), in order. `albedo_tables` is the source of the `static` the kernels were
+/// written to share ([`BUNDLE_ALBEDO_TABLES`]), if any. One cargo build for all of them.
+pub fn build_bundle(kernels: &[(String, KernelShape)], albedo_tables: Option<&str>, options: &RunnerOptions) -> Result<Vec<ExternalKernel>, String> {
     let variant = match (options.vectorize, options.quick) {
         (_, true) => "-quick",
         (true, false) => "",
         (false, false) => "-novec",
     };
+    let module = kernels_module(kernels.len(), albedo_tables.is_some());
     let mut h = FNV1A_START;
-    for part in [rust, RUNNER_MAIN, DRIVER, PROTOCOL, &manifest(""), &KERNEL_LLVM_ARGS.join(" ")] {
+    for part in kernels.iter().map(|k| k.0.as_str()).chain([albedo_tables.unwrap_or(""), module.as_str(), RUNNER_MAIN, DRIVER, PROTOCOL, &manifest(""), &KERNEL_LLVM_ARGS.join(" ")]) {
         h = fnv1a(h, part.as_bytes());
         h = fnv1a(h, &[0]);
     }
     let name = format!("uplift-kernel-{h:016x}{variant}");
-    let kernels = options.cache_dir.join("kernels");
-    let crate_dir = kernels.join(&name);
-    let target_dir = kernels.join(format!("target{variant}"));
+    let kernels_dir = options.cache_dir.join("kernels");
+    let crate_dir = kernels_dir.join(&name);
+    let target_dir = kernels_dir.join(format!("target{variant}"));
     let exe = target_dir.join("release").join(format!("{name}{}", std::env::consts::EXE_SUFFIX));
-    let kernel = ExternalKernel { exe: exe.clone(), shape };
+    let built: Vec<ExternalKernel> = kernels.iter().enumerate().map(|(index, k)| ExternalKernel { exe: exe.clone(), index, shape: k.1.clone() }).collect();
     if exe.is_file() {
-        return Ok(kernel);
+        return Ok(built);
     }
     let src = crate_dir.join("src");
     std::fs::create_dir_all(&src).map_err(|e| format!("{}: cannot create the kernel runner's folder: {e}", src.display()))?;
-    for (path, text) in [
+    let mut files = vec![
         (crate_dir.join("Cargo.toml"), manifest(&name)),
         (src.join("main.rs"), RUNNER_MAIN.to_string()),
         (src.join("driver.rs"), DRIVER.to_string()),
         (src.join("runner_protocol.rs"), PROTOCOL.to_string()),
-        (src.join("kernel.rs"), rust.to_string()),
-    ] {
+        (src.join("kernels.rs"), module),
+    ];
+    files.extend(kernels.iter().enumerate().map(|(i, k)| (src.join(format!("k{i}.rs")), k.0.clone())));
+    files.extend(albedo_tables.map(|t| (src.join("albedo_tables.rs"), t.to_string())));
+    for (path, text) in files {
         uplift_base::atomic_write::write_atomically(&path, text.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
@@ -145,7 +184,7 @@ pub fn build(rust: &str, shape: KernelShape, options: &RunnerOptions) -> Result<
     };
     let describe = |e: std::io::Error| format!("the CPU engine builds kernels it was not built with by running cargo ({}), which failed to start: {e}; install Rust (rustup) or use --engine wgpu", Path::new(&cargo).display());
     // Offline first (the dependencies are usually cached); online when they are not.
-    eprintln!("uplift: building the CPU kernel runner {name} with cargo (once per kernel; cached in {})", kernels.display());
+    eprintln!("uplift: building the CPU kernel runner {name} ({} kernel{}) with cargo (once; cached in {})", kernels.len(), if kernels.len() == 1 { "" } else { "s" }, kernels_dir.display());
     let mut out = run_cargo(true).map_err(describe)?;
     if !out.status.success() {
         out = run_cargo(false).map_err(describe)?;
@@ -163,7 +202,7 @@ pub fn build(rust: &str, shape: KernelShape, options: &RunnerOptions) -> Result<
     if !exe.is_file() {
         return Err(format!("cargo built the kernel runner but {} does not exist", exe.display()));
     }
-    Ok(kernel)
+    Ok(built)
 }
 
 /// The request for `batch` on `threads` threads.
@@ -210,14 +249,14 @@ pub fn run(k: &ExternalKernel, batch: &PatternBatch, threads: usize) -> Result<C
     if n == 0 {
         return Ok(Columns::zeros(0, k.shape.output_columns));
     }
-    let out = exchange(k, &[], request(k, batch, threads))?;
+    let out = exchange(k, &[&k.index.to_string()], request(k, batch, threads))?;
     Columns::from_column_major(n, k.shape.output_columns, decode_floats(&out)?).map_err(|e| format!("the kernel runner's output: {e}"))
 }
 
 /// Evaluations per second of the runner over `batch` on `threads` threads (at least `seconds`
 /// of repeated runs after a warm-up), and the CPU level it dispatched to.
 pub fn bench(k: &ExternalKernel, batch: &PatternBatch, threads: usize, seconds: f64) -> Result<(f64, String), String> {
-    let out = exchange(k, &["bench", &seconds.to_string()], request(k, batch, threads))?;
+    let out = exchange(k, &[&k.index.to_string(), "bench", &seconds.to_string()], request(k, batch, threads))?;
     let text = String::from_utf8_lossy(&out);
     let rate = text.split_whitespace().find_map(|w| w.strip_prefix("evals_per_second=")).and_then(|v| v.parse().ok());
     let level = text.split_once("level=").map(|(_, l)| l.trim().to_string());

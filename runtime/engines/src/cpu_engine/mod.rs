@@ -12,7 +12,7 @@ pub mod runner_protocol;
 use crate::batch::{Columns, KernelShape, PatternBatch, PatternEngine};
 use driver::{TextureImage, TextureSet};
 use external::{ExternalKernel, RunnerOptions};
-use uplift_compiler::backend_rust::write_rust_kernel;
+use uplift_compiler::backend_rust::{write_albedo_table_static, write_rust_kernel, write_rust_kernel_with, RustOptions};
 use uplift_compiler::build_api::kernel_fingerprint;
 use uplift_compiler::kernel::GEOMETRY_STRIDE;
 use uplift_compiler::PatternKernel;
@@ -91,6 +91,20 @@ impl CpuEngine {
     /// one with vectorisation off).
     pub fn prepare_runner(&self, kernel: &PatternKernel, options: &RunnerOptions) -> Result<ExternalKernel, String> {
         external::build(&rust_of(kernel)?, crate::batch::kernel_shape(kernel), options)
+    }
+
+    /// Builds one runner holding every kernel of `kernels` (one cargo build; shipped kernels
+    /// are built too), with `options`. Kernels reading the albedo tables share one copy of
+    /// `albedo_tables` (the library's `NodeLibrary::albedo_table_data`) when it is given. For
+    /// many kernels at once: a conformance run over a folder of documents.
+    pub fn prepare_bundle(&self, kernels: &[&PatternKernel], albedo_tables: Option<&[f32]>, options: &RunnerOptions) -> Result<Vec<CpuKernel>, String> {
+        let rust_options = RustOptions { albedo_table_data: albedo_tables.map(|_| external::BUNDLE_ALBEDO_TABLES.to_string()), ..RustOptions::default() };
+        let sources = kernels
+            .iter()
+            .map(|k| Ok((write_rust_kernel_with(k, &rust_options).map_err(|e| format!("the kernel cannot be written as Rust: {e}"))?, crate::batch::kernel_shape(k))))
+            .collect::<Result<Vec<_>, String>>()?;
+        let tables = albedo_tables.map(|t| write_albedo_table_static("MX_ALBEDO_TABLE_DATA", t));
+        Ok(external::build_bundle(&sources, tables.as_deref(), options)?.into_iter().map(CpuKernel::External).collect())
     }
 
     /// Evaluates a prepared kernel for every point of `batch` (checked against its shape).

@@ -20,6 +20,7 @@ mod enhance;
 mod grazing_views;
 mod kill_resume;
 mod layering;
+mod materials;
 mod neural_decoder;
 mod neural_gradients;
 mod neural_inference;
