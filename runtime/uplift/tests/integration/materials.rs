@@ -280,32 +280,6 @@ fn examples(data: &Path) -> Vec<Material> {
     materials
 }
 
-/// Wilson–Hilferty upper tail of χ² with `df` degrees of freedom.
-fn chi2_p_value(x: f64, df: f64) -> f64 {
-    let z = ((x / df).powf(1.0 / 3.0) - (1.0 - 2.0 / (9.0 * df))) / (2.0 / (9.0 * df)).sqrt();
-    0.5 * erfc(z / std::f64::consts::SQRT_2)
-}
-
-fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t
-        * (-z * z - 1.26551223
-            + t * (1.00002368
-                + t * (0.37409196
-                    + t * (0.09678418
-                        + t * (-0.18628806
-                            + t * (0.27886807
-                                + t * (-1.13520398
-                                    + t * (1.48851587 + t * (-0.82215223 + t * 0.17087277)))))))))
-            .exp();
-    if x >= 0.0 {
-        r
-    } else {
-        2.0 - r
-    }
-}
-
 /// Random numbers for the sample context: u.xy stratified on a `side` × (n / side) grid, u.z
 /// uniform.
 fn stratified_u(n: usize, side: usize, rng: &mut Rng) -> Vec<[f32; 3]> {
@@ -562,25 +536,8 @@ fn check_material(m: &Material, seed: u64) -> Verdict {
                 }
             })
             .collect();
-        let (mut chi2, mut df, mut pool_o, mut pool_e) = (0.0, 0usize, 0.0, 0.0);
-        let mut order: Vec<usize> = (0..expected.len()).filter(|&b| resolved[b]).collect();
-        order.sort_by(|a, b| expected[*a].partial_cmp(&expected[*b]).unwrap());
-        for &b in &order {
-            if expected[b] < 5.0 || pool_e > 0.0 && pool_e < 5.0 {
-                pool_o += observed[b];
-                pool_e += expected[b];
-                if pool_e >= 5.0 {
-                    chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-                    df += 1;
-                    pool_o = 0.0;
-                    pool_e = 0.0;
-                }
-                continue;
-            }
-            chi2 += (observed[b] - expected[b]) * (observed[b] - expected[b]) / expected[b];
-            df += 1;
-        }
-        let pv = chi2_p_value(chi2, (df.max(2) - 1) as f64);
+        let (chi2, df) = common::chi2::pooled(&observed, &expected, (0..expected.len()).filter(|&b| resolved[b]));
+        let pv = common::chi2::p_value(chi2, (df.max(2) - 1) as f64);
         worst_p = worst_p.min(pv);
         assert!(
             pv > 1e-4,

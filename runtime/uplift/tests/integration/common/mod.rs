@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 pub mod bsdf;
+pub mod chi2;
 pub mod cli;
 
 use std::sync::OnceLock;
