@@ -59,6 +59,15 @@ pub const APPLICATION_INPUTS: &[(&str, Option<&str>, &str, &[f32])] = &[
     ("ND_viewdirection_vector3", Some("Vworld"), "viewdirection", &[0.0, 0.0, 1.0]),
 ];
 
+/// The type of an APPLICATION_INPUTS entry's value, from its default's components.
+fn application_type(default: &[f32]) -> DataType {
+    if default.len() == 3 {
+        DataType::Vector3
+    } else {
+        DataType::Float
+    }
+}
+
 /// An output the caller asks for: a document-level `<output>` or a compound nodegraph's.
 #[derive(Clone, Debug)]
 pub struct OutputRef {
@@ -682,7 +691,7 @@ impl<'a> GraphBuilder<'a> {
         // Application nodes (`time`, `frame`, `viewdirection`): the host's value, an interface
         // input of the kernel.
         if let Some(&(_, _, name, default)) = APPLICATION_INPUTS.iter().find(|(def, ..)| *def == nd.name) {
-            let ty = if default.len() == 3 { DataType::Vector3 } else { DataType::Float };
+            let ty = application_type(default);
             return Ok(NodeResult::Single(self.application_input(name, &ty, default, &pos)));
         }
         // Named geometry streams (`geompropvalue`, `geomcolor`): per-point values the caller
@@ -744,7 +753,7 @@ impl<'a> GraphBuilder<'a> {
     fn port_default(&mut self, p: &PortDef, origin: &str) -> Result<H, Fail> {
         if let Some(g) = &p.defaultgeomprop {
             if let Some(&(_, _, name, default)) = APPLICATION_INPUTS.iter().find(|(_, alias, ..)| *alias == Some(g.as_str())) {
-                let ty = if default.len() == 3 { DataType::Vector3 } else { DataType::Float };
+                let ty = application_type(default);
                 return Ok(self.application_input(name, &ty, default, &p.pos));
             }
             let Some(gp) = GeomProp::from_name(g) else {
