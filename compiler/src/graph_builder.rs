@@ -5,6 +5,8 @@
 //! per node output. Identity implementations fold away and equal values are shared (value
 //! numbering). Every error carries the source position of the element at fault.
 
+mod height_to_normal;
+
 use crate::arena::Handle;
 use crate::const_eval::Const;
 use crate::ir::{GeomProp, Graph, GraphOutput, InterfaceInput, TextureBinding, Value, ValueKind};
@@ -358,14 +360,14 @@ impl<'a> GraphBuilder<'a> {
         // At document level MaterialX also lets `nodename` name a nodegraph.
         let graph_target = e.attr("nodegraph").or_else(|| {
             let n = e.attr("nodename")?;
-            let g = doc.child(self.scopes[s].graph, n)?;
+            let g = doc.resolve(el, self.scopes[s].graph, n)?;
             (doc.get(g).category == "nodegraph").then_some(n)
         });
         let h = if let Some(graph_name) = graph_target {
             // A nodegraph nested in this scope, else one at the document's top level.
             let is_graph = |g: &ElementId| doc.get(*g).category == "nodegraph";
-            let nested = doc.child(self.scopes[s].graph, graph_name).filter(is_graph);
-            let Some(g) = nested.or_else(|| doc.child(doc.root(), graph_name).filter(is_graph)) else {
+            let nested = doc.resolve(el, self.scopes[s].graph, graph_name).filter(is_graph);
+            let Some(g) = nested.or_else(|| doc.resolve(el, doc.root(), graph_name).filter(is_graph)) else {
                 return Err(self.error(&pos, format!("dangling reference: no nodegraph named `{graph_name}`")));
             };
             let outs: Vec<ElementId> = doc.children_of(g, "output").collect();
@@ -390,7 +392,7 @@ impl<'a> GraphBuilder<'a> {
             self.resolve_connection(gs, out, None)?
         } else if let Some(node_name) = e.attr("nodename") {
             let graph = self.scopes[s].graph;
-            let Some(node) = doc.child(graph, node_name).filter(|n| mtlx::schema::is_node_category(&doc.get(*n).category)) else {
+            let Some(node) = doc.resolve(el, graph, node_name).filter(|n| mtlx::schema::is_node_category(&doc.get(*n).category)) else {
                 return Err(self.error(&pos, format!("dangling reference: no node named `{node_name}` in this scope")));
             };
             let result = self.build_node(s, node)?;
@@ -578,11 +580,17 @@ impl<'a> GraphBuilder<'a> {
 
     /// The nodedef of node `e`: borrowed from the library (no copy per node), or a copy of the
     /// document's own.
-    fn find_nodedef(&self, e: &mtlx::Element, ty: &DataType, authored: &[(String, DataType)]) -> Result<Cow<'a, NodeDef>, String> {
+    /// References resolve in the node's namespace first (`namespace`), then as written.
+    fn find_nodedef(&self, e: &mtlx::Element, namespace: Option<&str>, ty: &DataType, authored: &[(String, DataType)]) -> Result<Cow<'a, NodeDef>, String> {
         let lib: &'a NodeLibrary = self.lib;
         let found = match e.attr("nodedef") {
-            Some(name) => self.local.nodedef(name).or_else(|| lib.defs.nodedef(name)).ok_or_else(|| format!("missing nodedef `{name}`"))?,
-            None => match_nodedef(&[&self.local, &lib.defs], &NodeQuery { category: &e.category, ty, version: e.attr("version"), inputs: authored })?,
+            Some(name) => self.local.resolve(namespace, name).or_else(|| lib.defs.resolve(namespace, name)).ok_or_else(|| format!("missing nodedef `{name}`"))?,
+            None => {
+                let layers = [&self.local, &lib.defs];
+                let qualified = mtlx::document::qualify(namespace, &e.category);
+                let category = if layers.iter().any(|d| d.has_category(&qualified)) { qualified.as_str() } else { e.category.as_str() };
+                match_nodedef(&layers, &NodeQuery { category, ty, version: e.attr("version"), inputs: authored })?
+            }
         };
         Ok(match lib.defs.nodedef(&found.name) {
             Some(l) if std::ptr::eq(l, found) => Cow::Borrowed(l),
@@ -638,7 +646,7 @@ impl<'a> GraphBuilder<'a> {
                 (ie.name().to_string(), DataType::from_name(ie.attr("type").unwrap_or("")))
             })
             .collect();
-        let nd = match self.find_nodedef(e, &ty, &authored) {
+        let nd = match self.find_nodedef(e, doc.namespace(node), &ty, &authored) {
             Ok(nd) => nd,
             Err(m) => {
                 // Point at an input no nodedef of this category declares, when there is one.
@@ -693,6 +701,13 @@ impl<'a> GraphBuilder<'a> {
         if let Some(&(_, _, name, default)) = APPLICATION_INPUTS.iter().find(|(def, ..)| *def == nd.name) {
             let ty = application_type(default);
             return Ok(NodeResult::Single(self.application_input(name, &ty, default, &pos)));
+        }
+        // `heighttonormal`: differentiated along UV0 (height_to_normal.rs).
+        if nd.node == "heighttonormal" && ty == DataType::Vector3 {
+            let input = |name: &str| bound.iter().find(|(p, _)| p.name == name).map(|(_, h)| *h);
+            if let (Some(height), Some(scale), Some(texcoord)) = (input("in"), input("scale"), input("texcoord")) {
+                return Ok(self.height_to_normal(height, scale, texcoord, &origin, &pos));
+            }
         }
         // Named geometry streams (`geompropvalue`, `geomcolor`): per-point values the caller
         // supplies, as interface inputs named after the stream.

@@ -30,37 +30,37 @@ pub struct Definitions {
 }
 
 impl Definitions {
-    /// Indexes `docs` in order; the first definition of a name wins.
+    /// Indexes `docs` in order; the first definition of a name wins. Names are indexed
+    /// qualified by their namespace (`ns:ND_x`, category `ns:x`); references resolve as
+    /// [`Definitions::resolve`] says.
     pub fn new(docs: Vec<Arc<Document>>) -> Definitions {
         let mut defs = Definitions { documents: docs, ..Default::default() };
         for di in 0..defs.documents.len() {
             let doc = defs.documents[di].clone();
+            for &id in doc.top_level().iter().filter(|&&id| doc.get(id).category == "nodedef") {
+                let nd = NodeDef::from_element(&doc, id);
+                if defs.by_name.contains_key(&nd.name) {
+                    continue;
+                }
+                let i = defs.nodedefs.len();
+                defs.by_name.insert(nd.name.clone(), i);
+                defs.by_category.entry(nd.node.clone()).or_default().push(i);
+                defs.nodedefs.push(nd);
+            }
+        }
+        // Implementations second: their `nodedef` references resolve against every nodedef.
+        for di in 0..defs.documents.len() {
+            let doc = defs.documents[di].clone();
             for &id in doc.top_level() {
                 let e = doc.get(id);
-                match e.category.as_str() {
-                    "nodedef" => {
-                        let nd = NodeDef::from_element(&doc, id);
-                        if defs.by_name.contains_key(&nd.name) {
-                            continue;
-                        }
-                        let i = defs.nodedefs.len();
-                        defs.by_name.insert(nd.name.clone(), i);
-                        defs.by_category.entry(nd.node.clone()).or_default().push(i);
-                        defs.nodedefs.push(nd);
-                    }
-                    "nodegraph" => {
-                        if let Some(nd) = e.attr("nodedef") {
-                            defs.graphs.entry(nd.to_string()).or_insert(GraphRef { doc: di, element: id });
-                        }
-                    }
-                    "implementation" => {
-                        if let (Some(nd), Some(ng)) = (e.attr("nodedef"), e.attr("nodegraph")) {
-                            if let Some(g) = doc.child(doc.root(), ng) {
-                                defs.graphs.entry(nd.to_string()).or_insert(GraphRef { doc: di, element: g });
-                            }
-                        }
-                    }
-                    _ => {}
+                let (nodedef, graph) = match e.category.as_str() {
+                    "nodegraph" => (e.attr("nodedef"), Some(id)),
+                    "implementation" => (e.attr("nodedef"), e.attr("nodegraph").and_then(|ng| doc.resolve(id, doc.root(), ng))),
+                    _ => continue,
+                };
+                if let (Some(nd), Some(g)) = (nodedef, graph) {
+                    let key = defs.resolve(doc.namespace(id), nd).map_or_else(|| nd.to_string(), |x| x.name.clone());
+                    defs.graphs.entry(key).or_insert(GraphRef { doc: di, element: g });
                 }
             }
         }
@@ -68,18 +68,25 @@ impl Definitions {
         defs
     }
 
+    /// The nodedef a reference `name` written in namespace `namespace` means: qualified by that
+    /// namespace first, then as written (MaterialX's `resolveNameReference`).
+    pub fn resolve(&self, namespace: Option<&str>, name: &str) -> Option<&NodeDef> {
+        self.by_name.get(&mtlx::document::qualify(namespace, name)).or_else(|| self.by_name.get(name)).map(|&i| &self.nodedefs[i])
+    }
+
     /// Prepends inherited inputs/outputs (`inherit="ND_parent"`) to each nodedef.
     fn resolve_inheritance(&mut self) {
         for i in 0..self.nodedefs.len() {
             let mut chain = Vec::new();
-            let mut cur = self.nodedefs[i].inherit.clone();
-            while let Some(p) = cur {
-                let Some(&pi) = self.by_name.get(&p) else { break };
+            let mut cur = self.nodedefs[i].inherit.clone().map(|p| (p, i));
+            while let Some((p, from)) = cur {
+                let ns = self.nodedefs[from].namespace.clone();
+                let Some(&pi) = self.by_name.get(&mtlx::document::qualify(ns.as_deref(), &p)).or_else(|| self.by_name.get(&p)) else { break };
                 if chain.contains(&pi) || pi == i {
                     break;
                 }
                 chain.push(pi);
-                cur = self.nodedefs[pi].inherit.clone();
+                cur = self.nodedefs[pi].inherit.clone().map(|p| (p, pi));
             }
             for &pi in chain.iter() {
                 let parent = self.nodedefs[pi].clone();
@@ -182,9 +189,15 @@ impl NodeLibrary {
         }
     }
 
-    /// The WGSL function implementing an atomic nodedef: `ND_x` → `mx_x`.
+    /// The WGSL function implementing an atomic nodedef: `ND_x` → `mx_x`; a namespaced one
+    /// `ns:ND_x` → `mx_ns_x`.
     pub fn function_name(nodedef: &str) -> String {
-        format!("mx_{}", nodedef.strip_prefix("ND_").unwrap_or(nodedef))
+        let (namespace, local) = nodedef.rsplit_once(':').map_or((None, nodedef), |(ns, l)| (Some(ns), l));
+        let local = local.strip_prefix("ND_").unwrap_or(local);
+        match namespace {
+            Some(ns) => format!("mx_{}_{local}", ns.replace(':', "_")),
+            None => format!("mx_{local}"),
+        }
     }
 
     pub fn function(&self, nodedef: &str) -> Option<&WgslItem> {

@@ -147,6 +147,42 @@ impl Document {
         self.children(id).iter().copied().find(|c| self.get(*c).name() == name)
     }
 
+    /// The MaterialX namespace in scope at `id`: its own `namespace` attribute or its nearest
+    /// ancestor's (MaterialX's `Element::getQualifiedName` walk).
+    pub fn namespace(&self, id: ElementId) -> Option<&str> {
+        let mut cur = Some(id);
+        while let Some(c) = cur {
+            let e = self.get(c);
+            if let Some(ns) = e.attr("namespace").filter(|ns| !ns.is_empty()) {
+                return Some(ns);
+            }
+            cur = e.parent;
+        }
+        None
+    }
+
+    /// `name` qualified by the namespace in scope at `id` (`ns:name`), unless it already is.
+    pub fn qualified_name(&self, id: ElementId, name: &str) -> String {
+        qualify(self.namespace(id), name)
+    }
+
+    /// The child of `scope` named `name`, as a reference written on element `at` means it
+    /// (MaterialX's `resolveNameReference`): the name qualified by `at`'s namespace first, then
+    /// as written; and `ns:local` also finds a child `local` declared in namespace `ns` (a
+    /// namespaced definition read in place rather than imported keeps its unqualified name).
+    pub fn resolve(&self, at: ElementId, scope: ElementId, name: &str) -> Option<ElementId> {
+        let qualified = self.qualified_name(at, name);
+        if qualified != name {
+            if let Some(c) = self.child(scope, &qualified) {
+                return Some(c);
+            }
+        }
+        self.child(scope, name).or_else(|| {
+            let (ns, local) = name.split_once(':')?;
+            self.children(scope).iter().copied().find(|&c| self.get(c).name() == local && self.namespace(c) == Some(ns))
+        })
+    }
+
     /// Top-level elements (children of the root).
     pub fn top_level(&self) -> &[ElementId] {
         self.children(self.root)
@@ -192,4 +228,13 @@ pub fn parse_version(v: &str) -> Option<(u32, u32)> {
     let major = it.next()?.parse().ok()?;
     let minor = it.next().unwrap_or("0").parse().ok()?;
     Some((major, minor))
+}
+
+/// `name` qualified by `namespace` as MaterialX qualifies it: `namespace:name`, unless `name`
+/// already carries that prefix.
+pub fn qualify(namespace: Option<&str>, name: &str) -> String {
+    match namespace {
+        Some(ns) if !ns.is_empty() && !name.is_empty() && name.split_once(':').map(|(p, _)| p) != Some(ns) => format!("{ns}:{name}"),
+        _ => name.to_string(),
+    }
 }

@@ -53,20 +53,10 @@ fn read_file_inner(
 fn parse_text(text: &str, path: &Path, diags: &mut Vec<Diagnostic>, stack: &mut Vec<PathBuf>) -> Document {
     let file: Arc<str> = Arc::from(path.display().to_string());
     let opts = || roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
-    // MaterialX's own reader (pugixml) accepts a raw `<` inside attribute values, as in
-    // `value="grid.<UDIM>.png"`; XML does not. When strict parsing fails, retry with such
-    // `<` escaped (columns on those lines then shift by 3 per escape).
-    let escaped: String;
-    let parsed = match roxmltree::Document::parse_with_options(text, opts()) {
-        Ok(x) => Ok((x, text)),
-        Err(e) => {
-            escaped = escape_lt_in_attributes(text);
-            if escaped == text {
-                Err(e)
-            } else {
-                roxmltree::Document::parse_with_options(&escaped, opts()).map(|x| (x, escaped.as_str())).map_err(|_| e)
-            }
-        }
+    let prepared = readable_text(text, &|t| roxmltree::Document::parse_with_options(t, roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() }).map(|_| ()));
+    let parsed = match &prepared {
+        Ok(t) => roxmltree::Document::parse_with_options(t.as_ref(), opts()).map(|x| (x, t.as_ref())),
+        Err(e) => Err(e.clone()),
     };
     let (xml, parsed_text) = match parsed {
         Ok(x) => x,
@@ -145,9 +135,76 @@ fn is_include(node: roxmltree::Node) -> bool {
     node.tag_name().name() == "include"
 }
 
-fn attributes_of(node: roxmltree::Node) -> Vec<(String, String)> {
-    node.attributes().map(|a| (a.name().to_string(), a.value().to_string())).collect()
+/// `prefix:local` as written, for a name in an XML namespace (MaterialX's namespaced names,
+/// read as pugixml reads them: the prefix is part of the name), else the plain name.
+fn prefixed(node: roxmltree::Node, uri: Option<&str>, local: &str) -> String {
+    match uri.and_then(|u| node.lookup_prefix(u)).filter(|p| !p.is_empty()) {
+        Some(prefix) => format!("{prefix}:{local}"),
+        None => local.to_string(),
+    }
 }
+
+/// The element's category: its tag as written (`site_ops:mynoise` stays one name).
+fn tag_of(node: roxmltree::Node) -> String {
+    prefixed(node, node.tag_name().namespace(), node.tag_name().name())
+}
+
+fn attributes_of(node: roxmltree::Node) -> Vec<(String, String)> {
+    node.attributes().map(|a| (prefixed(node, a.namespace(), a.name()), a.value().to_string())).collect()
+}
+
+/// The text to hand roxmltree for MaterialX text that is not strict namespace-aware XML, found
+/// by retrying `parse`: each undeclared prefix (MaterialX's `ns:name` categories, read by
+/// pugixml as plain names) is declared on the root element with a private URI, and a raw `<`
+/// inside attribute values (`value="grid.<UDIM>.png"`, also accepted by pugixml) is escaped.
+/// Declarations go right after `<materialx`, so lines never move (columns on the root's own
+/// line do; so do columns on lines with an escaped `<`, by 3 per escape). Returns the first
+/// error that neither repair explains.
+fn readable_text<'t>(text: &'t str, parse: &dyn Fn(&str) -> Result<(), roxmltree::Error>) -> Result<std::borrow::Cow<'t, str>, roxmltree::Error> {
+    use std::borrow::Cow;
+    let mut current: Cow<'t, str> = Cow::Borrowed(text);
+    let mut first_error: Option<roxmltree::Error> = None;
+    let mut escaped = false;
+    // Each retry repairs one thing; a document cannot need more repairs than it has prefixes.
+    for _ in 0..256 {
+        match parse(current.as_ref()) {
+            Ok(()) => return Ok(current),
+            Err(roxmltree::Error::UnknownNamespace(prefix, pos)) => match declare_prefix(current.as_ref(), &prefix) {
+                Some(t) => current = Cow::Owned(t),
+                None => return Err(first_error.unwrap_or(roxmltree::Error::UnknownNamespace(prefix, pos))),
+            },
+            Err(e) => {
+                let first = first_error.get_or_insert(e).clone();
+                if escaped {
+                    return Err(first);
+                }
+                escaped = true;
+                let t = escape_lt_in_attributes(current.as_ref());
+                if t == current.as_ref() {
+                    return Err(first);
+                }
+                current = Cow::Owned(t);
+            }
+        }
+    }
+    Err(first_error.unwrap_or(roxmltree::Error::NodesLimitReached))
+}
+
+/// `text` with `xmlns:prefix` declared on its `<materialx` root; `None` when there is no such
+/// root or the prefix is already declared there (then the error is real).
+fn declare_prefix(text: &str, prefix: &str) -> Option<String> {
+    let at = text.match_indices("<materialx").map(|(i, _)| i + "<materialx".len()).find(|&i| {
+        text[i..].chars().next().is_some_and(|c| c.is_whitespace() || c == '>' || c == '/')
+    })?;
+    let declaration = format!(" xmlns:{prefix}=\"{PREFIX_URI}{prefix}\"");
+    if text[at..].split('>').next().is_some_and(|tag| tag.contains(declaration.trim_start())) {
+        return None;
+    }
+    Some(format!("{}{declaration}{}", &text[..at], &text[at..]))
+}
+
+/// The URI under which an undeclared MaterialX name prefix is declared for the XML parser.
+const PREFIX_URI: &str = "urn:uplift:materialx-prefix:";
 
 /// Converts `node` and its element descendants under `parent`, in document order, with an
 /// explicit work list: element nesting is input-sized (a document may nest 20,000 nodegraphs),
@@ -170,7 +227,7 @@ fn convert(
             include(node, &pos, path, doc, parent, diags, stack);
             continue;
         }
-        let id = doc.add_child(parent, node.tag_name().name(), attributes_of(node), pos);
+        let id = doc.add_child(parent, tag_of(node), attributes_of(node), pos);
         // Reversed onto the stack, so that the first child is converted (with its subtree) first.
         let children: Vec<_> = node.children().filter(|c| c.is_element()).collect();
         work.extend(children.into_iter().rev().map(|c| (c, id)));
@@ -206,7 +263,10 @@ fn include(
         .filter_map(|k| inc_root.attr(k).map(|v| (k.to_string(), v.to_string())))
         .collect();
     for &child in included.top_level() {
-        let name = included.get(child).name().to_string();
+        // An included element is imported under its qualified name (`ns:name` when its
+        // document or itself declares a namespace), as MaterialX's `importLibrary` does.
+        let written = included.get(child).name().to_string();
+        let name = if written.is_empty() { written } else { included.qualified_name(child, &written) };
         if !name.is_empty() && doc.child(parent, &name).is_some() {
             continue;
         }
@@ -215,6 +275,9 @@ fn include(
             if doc.get(id).attr(k).is_none() {
                 doc.get_mut(id).set_attr(k, v.clone());
             }
+        }
+        if doc.get(id).name() != name {
+            doc.get_mut(id).set_attr("name", name);
         }
     }
 }

@@ -24,8 +24,12 @@ pub struct PortDef {
 /// A `<nodedef>`: the contract of a node (category, ports, version).
 #[derive(Clone, Debug)]
 pub struct NodeDef {
+    /// The nodedef's name, qualified by its namespace (`ns:ND_x`) when it has one.
     pub name: String,
+    /// The node category it defines, qualified likewise (`ns:x`): a node `<ns:x>` matches it.
     pub node: String,
+    /// The MaterialX namespace in scope at the nodedef, against which its `inherit` resolves.
+    pub namespace: Option<String>,
     pub nodegroup: Option<String>,
     pub version: Option<String>,
     pub is_default_version: bool,
@@ -53,8 +57,9 @@ impl NodeDef {
             }
         };
         NodeDef {
-            name: e.name().to_string(),
-            node: e.attr("node").unwrap_or("").to_string(),
+            name: doc.qualified_name(id, e.name()),
+            node: doc.qualified_name(id, e.attr("node").unwrap_or("")),
+            namespace: doc.namespace(id).map(str::to_string),
             nodegroup: e.attr("nodegroup").map(str::to_string),
             version: e.attr("version").map(str::to_string),
             is_default_version: e.attr("isdefaultversion") == Some("true"),

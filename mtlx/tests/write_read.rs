@@ -339,3 +339,51 @@ fn a_missing_file_is_an_error_naming_it() {
     assert!(diags[0].is_error() && diags[0].message.contains("absent.mtlx"), "{:?}", diags[0]);
     assert!(doc.top_level().is_empty());
 }
+
+/// MaterialX's namespaced names read as pugixml reads them: `<site_ops:mynoise>` is one
+/// category (the prefix is never declared as an XML namespace), positions are where the text
+/// puts them, a prefixed attribute keeps its prefix, and the writer writes them back unchanged.
+#[test]
+fn namespaced_names_read_and_write_back() {
+    let text = "<?xml version=\"1.0\"?>\n<materialx version=\"1.39\">\n  <nodegraph name=\"g\">\n    <site_ops:mynoise name=\"mn1\" type=\"color3\" uplift:encoding=\"sqrt\">\n      <input name=\"f\" type=\"float\" value=\"0.3\"/>\n    </site_ops:mynoise>\n    <output name=\"out\" type=\"color3\" nodename=\"mn1\"/>\n  </nodegraph>\n</materialx>\n";
+    let (doc, diags) = read_str(text, "ns.mtlx");
+    assert!(diags.is_empty(), "{diags:?}");
+    let g = doc.top_level()[0];
+    let node = doc.get(doc.children(g)[0]);
+    assert_eq!(node.category, "site_ops:mynoise");
+    assert_eq!(node.attr("uplift:encoding"), Some("sqrt"));
+    assert_eq!((node.pos.line, node.pos.column), (4, 5), "the node's position");
+    let (again, diags) = read_str(&write_string(&doc), "again.mtlx");
+    assert!(diags.is_empty(), "{diags:?}");
+    assert!(again.same_content(&doc), "written and read back:\n{}", write_string(&again));
+    assert!(write_string(&doc).contains("<site_ops:mynoise name=\"mn1\""));
+}
+
+/// An included document's `namespace` qualifies the names it defines (`ns:name`, as
+/// MaterialX's `importLibrary` does), and references resolve as MaterialX resolves them:
+/// qualified by the referencing element's namespace first, then as written.
+#[test]
+fn an_included_namespace_qualifies_its_names() {
+    let dir = TempDir::new("namespace");
+    dir.write("lib.mtlx", "<materialx version=\"1.39\" namespace=\"stdmaterials\">\n  <nodedef name=\"ND_wood\" node=\"wood\"><output name=\"out\" type=\"float\"/></nodedef>\n  <surfacematerial name=\"plastic\" type=\"material\"/>\n</materialx>\n");
+    let main = dir.write(
+        "main.mtlx",
+        "<materialx version=\"1.39\">\n  <xi:include href=\"lib.mtlx\"/>\n  <surfacematerial name=\"plastic\" type=\"material\"/>\n</materialx>\n",
+    );
+    let (doc, diags) = read_file(&main);
+    assert!(diags.is_empty(), "{diags:?}");
+    let names: Vec<&str> = doc.top_level().iter().map(|&c| doc.get(c).name()).collect();
+    assert_eq!(names, ["stdmaterials:ND_wood", "stdmaterials:plastic", "plastic"], "no clash between the namespaced and the global `plastic`");
+    let nd = doc.top_level()[0];
+    assert_eq!(doc.namespace(nd), Some("stdmaterials"));
+    assert_eq!(doc.qualified_name(nd, "ND_wood"), "stdmaterials:ND_wood", "already qualified: not twice");
+    let root = doc.root();
+    assert_eq!(doc.resolve(nd, root, "plastic"), Some(doc.top_level()[1]), "from inside the namespace, the namespaced one");
+    assert_eq!(doc.resolve(root, root, "plastic"), Some(doc.top_level()[2]), "from the global scope, the global one");
+    assert_eq!(doc.resolve(root, root, "stdmaterials:plastic"), Some(doc.top_level()[1]));
+    // A namespaced nodedef read in place keeps its name; `ns:name` still finds it.
+    let (doc, _) = read_str("<materialx version=\"1.39\"><nodedef name=\"ND_s\" node=\"s\" namespace=\"mine\"/></materialx>", "x.mtlx");
+    let root = doc.root();
+    assert_eq!(doc.resolve(root, root, "mine:ND_s"), Some(doc.top_level()[0]));
+    assert_eq!(doc.resolve(root, root, "other:ND_s"), None);
+}
