@@ -9,7 +9,8 @@ use uplift_compiler::kernel::*;
 use uplift_compiler::PatternKernel;
 use wgpu::util::DeviceExt;
 
-/// A device and queue to run kernels on.
+/// A device and queue to run kernels on. A clone shares them (wgpu's handles are shared).
+#[derive(Clone)]
 pub struct WgpuEngine {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,

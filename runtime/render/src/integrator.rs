@@ -3,8 +3,9 @@
 //! direct lighting by environment sampling and BSDF sampling combined with the power heuristic
 //! (or either strategy alone), and a configurable number of bounces.
 //!
-//! The material (f = f_nd + T·c/π, its evaluation and sampling) is `material.rs`; the normal map
-//! replaces each hit's shading frame before it is shaded (surface.rs).
+//! The material is a `SurfaceModel` (surface_model.rs): an enhanced material (f = f_nd + T·c/π,
+//! `material.rs`, its normal map replacing each hit's shading frame, surface.rs) or a MaterialX
+//! material's own closure kernels (mtlx_material.rs), whose emission every hit adds.
 //!
 //! Every random number is a hash of (seed, pixel, pass, depth, dimension), so a render is a
 //! pure function of its inputs, samples are independent (the per-pixel variance is an honest
@@ -14,9 +15,9 @@
 
 use crate::environment::Environment;
 use crate::scene::{dot, Camera, Hit, Scene, Vec3};
-use crate::material;
 use crate::shading::Shading;
-use crate::surface::{SurfaceSample, SurfaceTextures};
+use crate::surface::SurfaceTextures;
+use crate::surface_model::{EnhancedMaterial, SurfaceModel};
 use uplift_base::rng::{mix64, unit_from_key as unit};
 use indicatif::ProgressBar;
 use rayon::prelude::*;
@@ -108,8 +109,13 @@ fn power_heuristic(a: f32, b: f32) -> f32 {
     if a2 + b2 > 0.0 { a2 / (a2 + b2) } else { 0.0 }
 }
 
-/// Renders `scene` lit by `env` with the material (`surface` data, `shading` model).
+/// Renders `scene` lit by `env` with an enhanced material (`surface` data, `shading` model).
 pub fn render(scene: &dyn Scene, env: &Environment, surface: &SurfaceTextures, shading: &Shading, o: &RenderOptions, progress: Option<&ProgressBar>) -> Result<Rendering, String> {
+    render_model(scene, env, &EnhancedMaterial { surface, shading }, o, progress)
+}
+
+/// Renders `scene` lit by `env` with any material model.
+pub fn render_model(scene: &dyn Scene, env: &Environment, model: &dyn SurfaceModel, o: &RenderOptions, progress: Option<&ProgressBar>) -> Result<Rendering, String> {
     if o.width == 0 || o.height == 0 || o.spp == 0 {
         return Err(format!("render: width, height and spp must be at least 1 (got {}×{}, {} spp)", o.width, o.height, o.spp));
     }
@@ -161,7 +167,7 @@ pub fn render(scene: &dyn Scene, env: &Environment, surface: &SurfaceTextures, s
             if shade.is_empty() {
                 break;
             }
-            paths = shade_hits(&shade, env, scene, surface, shading, o, pass, depth, &mut value)?;
+            paths = shade_hits(&shade, env, scene, model, o, pass, depth, &mut value)?;
             if paths.is_empty() {
                 break;
             }
@@ -194,8 +200,7 @@ fn shade_hits(
     shade: &[(PathState, Hit)],
     env: &Environment,
     scene: &dyn Scene,
-    surface: &SurfaceTextures,
-    shading: &Shading,
+    model: &dyn SurfaceModel,
     o: &RenderOptions,
     pass: usize,
     depth: usize,
@@ -207,7 +212,6 @@ fn shade_hits(
         hit: Hit,
         key: u64,
         wv: Vec3,
-        surf: SurfaceSample,
         // Environment sample: local direction, pdf, radiance, visible.
         nee: (Vec3, f32, [f32; 3], bool),
     }
@@ -215,7 +219,7 @@ fn shade_hits(
     let points: Vec<Point> = shade
         .par_iter()
         .filter_map(|(path, hit)| {
-            let hit = &surface.normal_mapped(hit, world_normals);
+            let hit = &model.shading_hit(hit, world_normals);
             let wv = hit.to_local([-path.dir[0], -path.dir[1], -path.dir[2]]);
             if wv[2] <= 1e-5 {
                 return None;
@@ -224,15 +228,23 @@ fn shade_hits(
             let (d, pdf, l) = env.sample([rand(key, pass, depth, 0), rand(key, pass, depth, 1), rand(key, pass, depth, 2)]);
             let local = hit.to_local(d);
             let visible = pdf > 0.0 && local[2] > 1e-5 && dot(d, hit.geometric_normal) > 0.0 && scene.intersect(hit.spawn(d), d).is_none();
-            Some(Point { path: *path, hit: *hit, key, wv, surf: surface.lookup(hit.uv), nee: (if visible { local } else { [0.0, 0.0, 1.0] }, pdf, l, visible) })
+            Some(Point { path: *path, hit: *hit, key, wv, nee: (if visible { local } else { [0.0, 0.0, 1.0] }, pdf, l, visible) })
         })
         .collect();
-    let surf: Vec<SurfaceSample> = points.iter().map(|p| p.surf).collect();
+    let hits: Vec<Hit> = points.iter().map(|p| p.hit).collect();
     let wv: Vec<Vec3> = points.iter().map(|p| p.wv).collect();
     let wl_nee: Vec<Vec3> = points.iter().map(|p| p.nee.0).collect();
-    let (at_nee, select) = material::evaluate(shading, &surf, &wv, &wl_nee)?;
+    let evaluation = model.evaluate(&hits, &wv, &wl_nee)?;
+    let (at_nee, select) = (&evaluation.values, &evaluation.select);
+    // Emitted radiance reaches the eye or the previous hit unweighted: nothing samples the
+    // emitting surfaces as lights.
+    for (p, e) in points.iter().zip(&evaluation.emission) {
+        for c in 0..3 {
+            value[p.path.pixel as usize][c] += p.path.beta[c] * e[c];
+        }
+    }
     if o.strategy != Strategy::Bsdf {
-        for (p, m) in points.iter().zip(&at_nee) {
+        for (p, m) in points.iter().zip(at_nee) {
             let (_, pdf_e, l, visible) = p.nee;
             if !visible {
                 continue;
@@ -245,7 +257,7 @@ fn shade_hits(
     }
     // BSDF sampling continues the paths.
     let u: Vec<[f32; 6]> = points.iter().map(|p| [3, 4, 5, 6, 7, 8].map(|d| rand(p.key, pass, depth, d))).collect();
-    let sampled = material::sample(shading, &surf, &wv, &select, &u)?;
+    let sampled = model.sample(&hits, &wv, select, &u)?;
     let mut next = Vec::with_capacity(points.len());
     for (p, (wl, m)) in points.iter().zip(sampled) {
         if !(m.pdf > 0.0) || wl[2] <= 1e-6 {

@@ -36,8 +36,10 @@ enum Command {
     Fit(cli::fit::FitArgs),
     /// Write a trained decoder's inference code (Rust and WGSL).
     EmitDecoder(cli::emit_decoder::EmitDecoderArgs),
-    /// Render an enhanced material on the preview ball (reference kernels or neural).
+    /// Render an enhanced material (reference kernels or neural) or a MaterialX material.
     Render(cli::render::RenderArgs),
+    /// Render every material of a folder of MaterialX documents; write a gallery page.
+    Gallery(cli::gallery::GalleryArgs),
     /// The per-texel white furnace test of enhanced materials; --filter moves failures aside.
     Furnace(cli::furnace::FurnaceArgs),
     /// Render fitted materials reference vs neural; FLIP per Type in the paper's Table 1 format.
@@ -62,6 +64,7 @@ fn main() -> ExitCode {
         Command::Fit(a) => cli::fit::run(a),
         Command::EmitDecoder(a) => cli::emit_decoder::run(a),
         Command::Render(a) => cli::render::run(a),
+        Command::Gallery(a) => cli::gallery::run(a),
         Command::Furnace(a) => cli::furnace::run(a),
         Command::Flip(a) => cli::flip::run(a),
         Command::Demo(a) => cli::demo::run(a),

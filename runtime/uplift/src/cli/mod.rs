@@ -13,6 +13,7 @@ pub mod eval_fit;
 pub mod fit;
 pub mod flip;
 pub mod furnace;
+pub mod gallery;
 pub mod masks;
 pub mod render;
 pub mod tables;

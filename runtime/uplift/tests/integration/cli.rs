@@ -153,3 +153,63 @@ fn documents_20000_deep_never_crash_the_binary() {
         }
     }
 }
+
+const GLOWING: &str = r#"<?xml version="1.0"?>
+<materialx version="1.39">
+  <oren_nayar_diffuse_bsdf name="white" type="BSDF"><input name="color" type="color3" value="1, 1, 1"/><input name="roughness" type="float" value="0"/></oren_nayar_diffuse_bsdf>
+  <uniform_edf name="glow" type="EDF"><input name="color" type="color3" value="0.5, 0.25, 0"/></uniform_edf>
+  <surface name="shader" type="surfaceshader"><input name="bsdf" type="BSDF" nodename="white"/><input name="edf" type="EDF" nodename="glow"/></surface>
+  <surfacematerial name="Glowing" type="material"><input name="surfaceshader" type="surfaceshader" nodename="shader"/></surfacematerial>
+</materialx>"#;
+
+/// `uplift render FILE.mtlx`: a MaterialX material on the preview ball through its own
+/// kernels (wgpu). Under the unit environment the glowing white Lambertian's centre pixel is
+/// 1 + its emission; `--material` names one, an unknown name lists the document's; material
+/// folder options on a document are refused.
+#[test]
+fn render_draws_a_materialx_material() {
+    let dir = temp_dir("render_mtlx");
+    let doc = dir.join("glowing.mtlx");
+    std::fs::write(&doc, GLOWING).unwrap();
+    let exr = dir.join("ball.exr");
+    let args = ["render", doc.to_str().unwrap(), "--material", "Glowing", "--engine", "wgpu", "--env", "white", "--size", "32", "--spp", "64", "-o", exr.to_str().unwrap()];
+    let (code, _, stderr) = uplift(&args);
+    assert_eq!(code, 0, "{stderr}");
+    let img = uplift_base::exr::read(&exr).unwrap();
+    let centre = |c: &str| img.channel(c).unwrap()[16 * 32 + 16];
+    for (c, want) in [("R", 1.5f32), ("G", 1.25), ("B", 1.0)] {
+        assert!((centre(c) - want).abs() < 0.03, "centre {c} = {}, want {want}", centre(c));
+    }
+    let (code, _, stderr) = uplift(&["render", doc.to_str().unwrap(), "--material", "Nope", "--engine", "wgpu", "-o", exr.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("no material or surface shader `Nope`; the document has: Glowing"), "{stderr}");
+    let (code, _, stderr) = uplift(&["render", doc.to_str().unwrap(), "--neural", "-o", exr.to_str().unwrap()]);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("--neural"), "{stderr}");
+}
+
+/// `uplift gallery`: one PNG per material and index.html naming each; a document that does
+/// not compile is listed with its positioned error and makes the command exit 1 after the
+/// page is written; a second run keeps the images it has.
+#[test]
+fn gallery_renders_every_material_of_a_folder() {
+    let dir = temp_dir("gallery");
+    let docs = dir.join("docs");
+    std::fs::create_dir_all(docs.join("sub")).unwrap();
+    std::fs::write(docs.join("sub/glowing.mtlx"), GLOWING).unwrap();
+    std::fs::write(docs.join("broken.mtlx"), "<materialx version=\"1.39\">\n  <surfacematerial name=\"M\" type=\"material\">\n    <input name=\"surfaceshader\" type=\"surfaceshader\" nodename=\"missing\"/>\n  </surfacematerial>\n</materialx>\n").unwrap();
+    let out = dir.join("gallery");
+    let args = ["gallery", docs.to_str().unwrap(), "-o", out.to_str().unwrap(), "--size", "24", "--spp", "4"];
+    let (code, _, stderr) = uplift(&args);
+    assert_eq!(code, 1, "the broken document fails the gallery: {stderr}");
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.contains("<b>Glowing</b><br>sub/glowing.mtlx") && html.contains("sub_glowing__Glowing.png"), "{html}");
+    assert!(html.contains("<b>M</b><br>broken.mtlx") && html.contains("broken.mtlx:3:5"), "{html}");
+    assert!(html.contains("2 materials") && html.contains("1 failed"), "{html}");
+    let png = out.join("sub_glowing__Glowing.png");
+    let modified = std::fs::metadata(&png).unwrap().modified().unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    let (code, _, _) = uplift(&args);
+    assert_eq!(code, 1);
+    assert_eq!(std::fs::metadata(&png).unwrap().modified().unwrap(), modified, "an existing image is kept");
+}

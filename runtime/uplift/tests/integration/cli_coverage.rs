@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use crate::common::cli::{s, uplift};
 
-const SUBCOMMANDS: [&str; 15] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "fit", "emit-decoder", "render", "furnace", "eval-fit", "demo", "flip"];
+const SUBCOMMANDS: [&str; 16] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "fit", "emit-decoder", "render", "gallery", "furnace", "eval-fit", "demo", "flip"];
 
 #[test]
 fn every_subcommand_has_help_and_rejects_unknown_flags() {
@@ -65,6 +65,9 @@ fn every_subcommand_reports_missing_and_foreign_inputs_with_exit_1() {
         (vec!["emit-decoder", "--decoder", s(&missing_weights), "--rust", s(&decoder_rs)], "missing.safetensors"),
         (vec!["render", s(&missing_dir), "-o", s(&render_png)], "missing_material"),
         (vec!["render", s(&foreign), "-o", s(&render_png)], "not_a_material"),
+        (vec!["render", s(&missing_mtlx), "-o", s(&render_png)], "missing.mtlx"),
+        (vec!["gallery", s(&missing_dir), "-o", s(&out)], "missing_material"),
+        (vec!["gallery", s(&foreign), "-o", s(&out)], "no MaterialX documents"),
         (vec!["furnace", s(&missing_dir)], "missing_material"),
         (vec!["furnace", s(&foreign)], "not_a_material"),
         (vec!["eval-fit", s(&missing_dir)], "missing_material"),

@@ -499,3 +499,55 @@ fn a_plane_normal_map_becomes_the_tangent_space_normal_on_the_ball() {
     // A flat normal map leaves the frame alone.
     assert!(SurfaceTextures::uniform(stack_params(&[]), [0.5; 3], None).normal_mapped(&hit, false).frame == hit.frame);
 }
+
+/// Any MaterialX material renders through its own closure kernels (render/mtlx_material.rs, on
+/// wgpu): a `surface` of a white Lambertian `oren_nayar_diffuse_bsdf` (roughness 0) emitting
+/// `uniform_edf` (0.5, 0.25, 0) under a unit environment is 1 + emission at every pixel the
+/// ball covers — its sample and pdf kernels drawn and weighted by MIS, its emission added.
+#[test]
+fn a_materialx_material_renders_with_its_own_kernels_and_emission() {
+    use uplift_render::integrator::render_model;
+    use uplift_render::mtlx_material::MtlxMaterial;
+    use uplift_render::shading::ShadingEngine;
+    let dir = std::env::temp_dir().join(format!("uplift-render-mtlx-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("glowing.mtlx");
+    std::fs::write(
+        &path,
+        r#"<?xml version="1.0"?>
+<materialx version="1.39">
+  <oren_nayar_diffuse_bsdf name="white" type="BSDF"><input name="color" type="color3" value="1, 1, 1"/><input name="roughness" type="float" value="0"/></oren_nayar_diffuse_bsdf>
+  <uniform_edf name="glow" type="EDF"><input name="color" type="color3" value="0.5, 0.25, 0"/></uniform_edf>
+  <surface name="shader" type="surfaceshader"><input name="bsdf" type="BSDF" nodename="white"/><input name="edf" type="EDF" nodename="glow"/></surface>
+  <surfacematerial name="Glowing" type="material"><input name="surfaceshader" type="surfaceshader" nodename="shader"/></surfacematerial>
+</materialx>"#,
+    )
+    .unwrap();
+    let engine = ShadingEngine::Wgpu(uplift_engines::wgpu_engine::WgpuEngine::new().unwrap());
+    let material = MtlxMaterial::compile(&uplift_compiler::Compiler::builtin(), &path, None, engine).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(material.name, "Glowing", "the document's material is the default");
+    let o = RenderOptions { width: 48, height: 48, spp: 32, bounces: 1, ..Default::default() };
+    let img = render_model(&Sphere::preview(), &Environment::constant([1.0; 3]), &material, &o, None).unwrap();
+    let want = [1.5f32, 1.25, 1.0];
+    let (mut sum, mut n) = ([0.0f64; 3], 0usize);
+    for ((v, var), &cov) in img.radiance.iter().zip(&img.variance).zip(&img.coverage) {
+        if cov == 1.0 {
+            for c in 0..3 {
+                sum[c] += v[c] as f64;
+                assert!((v[c] - want[c]).abs() <= 0.01 + 5.0 * var[c].sqrt(), "pixel {v:?}, σ {:?}", var.map(|x| x.sqrt()));
+            }
+            n += 1;
+        }
+    }
+    assert!(n > 1000, "the ball covers too few pixels ({n})");
+    let mean = sum.map(|s| s / n as f64);
+    eprintln!("glowing Lambertian: {n} pixels, mean {mean:?}");
+    for c in 0..3 {
+        assert!((mean[c] - want[c] as f64).abs() <= 0.005, "mean {mean:?}, want {want:?}");
+    }
+    // A name that is not in the document lists the ones that are.
+    let engine = ShadingEngine::Wgpu(uplift_engines::wgpu_engine::WgpuEngine::new().unwrap());
+    let err = MtlxMaterial::compile(&uplift_compiler::Compiler::builtin(), &path, Some("Nope"), engine).err().unwrap();
+    assert!(err.contains("no material or surface shader `Nope`") && err.contains("Glowing"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
