@@ -208,6 +208,7 @@ pub fn weights_file(state: &TrainState, opts: &TrainOptions, extra: &[(&str, Str
     f.put_mlp("decoder", &state.model.decoder);
     let m = &mut f.metadata;
     m.insert("format".into(), "uplift-neural-material-1".into());
+    m.insert(super::weights::STACK_KEY.into(), uplift_engines::stack_params::signature());
     m.insert("features".into(), "sin_theta_v,mu_v,wl'x,|wl'y|,wl'z,h'x,|h'y|,h'z,c_d (lobes.md 4.1 variant B)".into());
     m.insert("outputs".into(), "f.R,f.G,f.B,T.R,T.G,T.B,R".into());
     m.insert("loss".into(), "Eq.3: 0.95*L1(log1p(mu_l*f)) + 0.04*L1(T) + 0.01*L1(R)".into());
@@ -241,6 +242,7 @@ pub fn read_checkpoint(path: &Path, opts: &TrainOptions) -> Result<TrainState, S
     }
     let encoder = f.mlp("encoder").map_err(at)?;
     let decoder = f.mlp("decoder").map_err(at)?;
+    super::weights::check_stack(&f, &encoder).map_err(at)?;
     Ok(TrainState {
         adam_enc: f.adam("encoder", encoder.params.len()).map_err(at)?,
         adam_dec: f.adam("decoder", decoder.params.len()).map_err(at)?,
@@ -300,6 +302,7 @@ pub fn train_checkpointed(generator: &DataGenerator, opts: &TrainOptions, out: &
             let f = super::weights::TensorFile::read(init)?;
             let at = |e: String| format!("{}: {e}", init.display());
             s.model = NeuralModel { encoder: f.mlp("encoder").map_err(at)?, decoder: f.mlp("decoder").map_err(at)? };
+            super::weights::check_stack(&f, &s.model.encoder).map_err(at)?;
         }
         s
     };

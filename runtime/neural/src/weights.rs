@@ -155,11 +155,34 @@ impl TensorFile {
 /// The decoder the repository ships (`runtime/weights/`).
 pub const SHIPPED_DECODER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../weights/decoder.safetensors");
 
-/// The encoder and decoder of a weights file.
+/// The encoder and decoder of a weights file, checked against this build's stack.
 pub fn load_model(path: &Path) -> Result<crate::model::NeuralModel<f32>, String> {
     let f = TensorFile::read(path)?;
     let at = |e: String| format!("{}: {e}", path.display());
-    Ok(crate::model::NeuralModel { encoder: f.mlp("encoder").map_err(at)?, decoder: f.mlp("decoder").map_err(at)? })
+    let model = crate::model::NeuralModel { encoder: f.mlp("encoder").map_err(at)?, decoder: f.mlp("decoder").map_err(at)? };
+    check_stack(&f, &model.encoder).map_err(at)?;
+    Ok(model)
+}
+
+/// The metadata key of the stack signature (`stack_params::signature`).
+pub const STACK_KEY: &str = "stack";
+
+/// Whether a weights file was trained for this build's `uplift_stack`: its recorded signature
+/// (`stack`), or — in files written before signatures were recorded — its encoder's input
+/// width.
+pub fn check_stack(f: &TensorFile, encoder: &Mlp<f32>) -> Result<(), String> {
+    match f.metadata.get(STACK_KEY) {
+        Some(recorded) => uplift_engines::stack_params::check_signature(recorded),
+        None => {
+            let width = encoder.shape.widths[0];
+            let ours = uplift_engines::stack_params::PARAMETERS;
+            if width == ours {
+                Ok(())
+            } else {
+                Err(format!("it was trained for another uplift_stack: its encoder reads {width} parameters, this stack has {ours} (the file records no stack signature)"))
+            }
+        }
+    }
 }
 
 /// How generated files name the weights: relative to the repository when inside it.
@@ -172,6 +195,27 @@ pub fn source_name(path: &Path) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A weights file records the stack it was trained for; one trained for another stack is
+    /// refused with the difference named, whether it records a signature or (an old file) only
+    /// its encoder's width. The shipped decoder records this build's stack.
+    #[test]
+    fn a_decoder_for_another_stack_is_refused() {
+        let encoder = Mlp::<f32>::new(crate::model::encoder_shape(), 1);
+        let mut f = TensorFile::default();
+        assert!(check_stack(&f, &encoder).is_ok(), "an old file of the right width");
+        f.metadata.insert(STACK_KEY.into(), uplift_engines::stack_params::signature());
+        assert!(check_stack(&f, &encoder).is_ok());
+        f.metadata.insert(STACK_KEY.into(), format!("{} film_ior[1.2,2.0]linear", uplift_engines::stack_params::signature()));
+        let e = check_stack(&f, &encoder).unwrap_err();
+        assert!(e.contains("another uplift_stack") && e.contains("`film_ior[1.2,2.0]linear` is not in this stack"), "{e}");
+        let mut wide = crate::model::encoder_shape();
+        wide.widths[0] += 2;
+        let e = check_stack(&TensorFile::default(), &Mlp::<f32>::new(wide, 1)).unwrap_err();
+        assert!(e.contains(&format!("reads {} parameters", uplift_engines::stack_params::PARAMETERS + 2)), "{e}");
+        let shipped = TensorFile::read(Path::new(SHIPPED_DECODER)).unwrap();
+        assert_eq!(shipped.meta(STACK_KEY).unwrap(), uplift_engines::stack_params::signature());
+    }
 
     #[test]
     fn the_same_file_is_the_same_bytes_and_reads_back() {
