@@ -11,8 +11,7 @@ use crate::pbr_input::{PbrChannel, PbrMaterial, Surface};
 use crate::rules::{self, uniform, EnhancementType, RuleInterface};
 use uplift_base::rng::{hash_str, mix64};
 use uplift_base::atomic_write::write_atomically;
-use uplift_engines::batch::{Columns, Geometry, PatternBatch, TextureData};
-use uplift_engines::cpu_engine::{CpuEngine, CpuKernel};
+use uplift_engines::batch::{Columns, Geometry, PatternBatch, PatternEngine, TextureData};
 use uplift_base::exr::ExrImage;
 use uplift_material::meta::META_FORMAT;
 use uplift_material::{MaskRecord, MaterialFolder, Meta, NormalSpace};
@@ -25,6 +24,9 @@ use uplift_compiler::{Compiler, OutputSelection};
 pub struct EnhanceOptions {
     /// A fixed Type, or `None` to draw one in the paper's proportions.
     pub kind: Option<EnhancementType>,
+    /// User-written rules with their shares (`--rule`, `--rule-share`): when given, each
+    /// material's rule is drawn among them in proportion to the shares, instead of a Type.
+    pub rules: Vec<(RuleInterface, f64)>,
     pub seed: u64,
     /// Bake resolution (width, height); default: the largest input texture, else 256².
     pub resolution: Option<(usize, usize)>,
@@ -36,6 +38,8 @@ pub struct EnhanceOptions {
 #[derive(Clone, Debug)]
 pub struct Enhanced {
     pub kind: EnhancementType,
+    /// The rule's name (`type0_haze`, or a user rule's file stem).
+    pub rule: String,
     pub out_dir: PathBuf,
     pub scalars: Vec<(String, f64)>,
 }
@@ -52,6 +56,24 @@ fn channel_mean(c: &PbrChannel) -> Result<f32, String> {
 fn mean_first(t: &TextureData) -> f32 {
     let n = (t.width * t.height) as f64;
     (t.rgba.chunks(4).map(|p| p[0] as f64).sum::<f64>() / n) as f32
+}
+
+/// The rule for a material: one of the user's rules drawn by their shares when there are any,
+/// else the built-in rule of `choose_type`'s Type.
+pub fn choose_rule(material: &PbrMaterial, options: &EnhanceOptions) -> Result<RuleInterface, String> {
+    if options.rules.is_empty() {
+        return rules::interface(choose_type(material, options)?);
+    }
+    let total: f64 = options.rules.iter().map(|(_, share)| share).sum();
+    let u = uniform(options.seed, hash_str("enhancement rule"), 0) * total;
+    let mut acc = 0.0;
+    for (rule, share) in &options.rules {
+        acc += share;
+        if u < acc {
+            return Ok(rule.clone());
+        }
+    }
+    Ok(options.rules.last().unwrap().0.clone())
 }
 
 /// The Type for a material: the requested one (refused for metals when dielectric-only), or a
@@ -183,8 +205,8 @@ fn mask_seed(seed: u64, kind: MaskKind) -> u64 {
 /// Compiles the rule's pattern outputs as if the rule document sat in `dir` (so its
 /// `masks/*.png` are the material's): the same kernel the runtime ships (`runtime/kernels/src/generated/`).
 pub fn rule_kernel(rule: &RuleInterface, dir: &Path) -> Result<uplift_compiler::PatternKernel, String> {
-    let name = dir.join(rule.kind.file_name()).display().to_string();
-    let (doc, diags) = mtlx::read_str(&rule.kind.standalone_text(), &name);
+    let name = dir.join(rule.file_name()).display().to_string();
+    let (doc, diags) = mtlx::read_str(rule.standalone_text(), &name);
     let outputs: Vec<String> = stack_outputs(&rule.document).into_iter().map(|o| format!("{}/{o}", rules::RULE_GRAPH)).collect();
     let c = Compiler::builtin().compile_document(doc, diags, &name, &OutputSelection::Named(outputs));
     if mtlx::has_errors(&c.diagnostics) {
@@ -214,9 +236,9 @@ pub fn channel_names(output: &str, components: usize, is_color: bool) -> Vec<Str
 }
 
 /// Enhances one material into `out` (replaced if it exists).
-pub fn enhance(material: &PbrMaterial, options: &EnhanceOptions, out: &Path, engine: &CpuEngine) -> Result<Enhanced, String> {
-    let kind = choose_type(material, options)?;
-    let rule = rules::interface(kind)?;
+pub fn enhance(material: &PbrMaterial, options: &EnhanceOptions, out: &Path, engine: &dyn PatternEngine) -> Result<Enhanced, String> {
+    let rule = choose_rule(material, options)?;
+    let kind = rule.kind;
     let scalars = rules::draw_all(&rule.random, options.seed);
     let parent = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
@@ -238,7 +260,7 @@ pub fn enhance(material: &PbrMaterial, options: &EnhanceOptions, out: &Path, eng
         let _ = std::fs::remove_dir_all(&old);
     }
     std::fs::rename(&staging, out).map_err(|e| format!("{}: {e}", out.display()))?;
-    Ok(Enhanced { kind, out_dir: out.to_path_buf(), scalars })
+    Ok(Enhanced { kind, rule: rule.name.clone(), out_dir: out.to_path_buf(), scalars })
 }
 
 fn write_outputs(
@@ -248,7 +270,7 @@ fn write_outputs(
     rule: &RuleInterface,
     scalars: &[(String, f64)],
     dir: &Path,
-    engine: &CpuEngine,
+    engine: &dyn PatternEngine,
 ) -> Result<(), String> {
     // Resolution: the largest texture, unless given.
     let mut size = options.resolution;
@@ -300,13 +322,9 @@ fn bake(
     geometry: &[Geometry],
     w: usize,
     h: usize,
-    engine: &CpuEngine,
+    engine: &dyn PatternEngine,
 ) -> Result<ExrImage, String> {
     let kernel = rule_kernel(rule, dir)?;
-    let prepared = engine.prepare(&kernel)?;
-    if matches!(prepared, CpuKernel::External(_)) {
-        eprintln!("note: rule {} is not among the shipped kernels; it ran in a separately built runner", rule.kind.name());
-    }
     let n = w * h;
     let mut rows = vec![0.0f32; n * kernel.input_stride];
     for input in &kernel.inputs {
@@ -342,7 +360,7 @@ fn bake(
         .map(|t| load_texture(&t.path, t.colorspace.as_deref()))
         .collect::<Result<Vec<_>, _>>()?;
     let batch = PatternBatch { geometry: Geometry::columns(geometry), inputs: Columns::from_rows(&rows, kernel.input_stride), textures, points_per_group: 1 };
-    let out = engine.run_prepared(&prepared, &batch)?;
+    let out = engine.run_pattern(&kernel, &batch)?;
     let mut img = ExrImage::new(w, h);
     for o in &kernel.outputs {
         let components = o.ty.components().unwrap_or(1);
@@ -351,7 +369,7 @@ fn bake(
             img.push(name, out.column(o.offset + c).to_vec())?;
         }
     }
-    img.attributes.push(("uplift_rule".into(), rule.kind.name().into()));
+    img.attributes.push(("uplift_rule".into(), rule.name.clone()));
     Ok(img)
 }
 
@@ -360,7 +378,7 @@ fn meta(material: &PbrMaterial, kind: EnhancementType, seed: u64, scalars: &[(St
     Meta {
         format: META_FORMAT,
         kind: kind.index() as u32,
-        rule: format!("mtlx/rules/{}", kind.file_name()),
+        rule: rule.path.clone(),
         seed,
         source: material.source.clone(),
         name: material.name.clone(),
@@ -379,7 +397,7 @@ fn meta(material: &PbrMaterial, kind: EnhancementType, seed: u64, scalars: &[(St
 /// Enhances every material into `out/<name>/` (names made unique), one seed per material
 /// derived from `options.seed` and its name; finished outputs (a `meta.json` present) are
 /// skipped. Shows a progress bar. Returns (enhanced, skipped) counts.
-pub fn enhance_batch(materials: &[PbrMaterial], options: &EnhanceOptions, out: &Path, engine: &CpuEngine) -> Result<(usize, usize), String> {
+pub fn enhance_batch(materials: &[PbrMaterial], options: &EnhanceOptions, out: &Path, engine: &dyn PatternEngine) -> Result<(usize, usize), String> {
     let bar = indicatif::ProgressBar::new(materials.len() as u64);
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}").map_err(|e| e.to_string())?);
     let mut used: Vec<String> = Vec::new();

@@ -91,7 +91,7 @@ impl EnhancementType {
     /// The rule document without its `xi:include` of the uplift library (which the compiler's
     /// builtin library and every written material hold anyway), readable from any folder.
     pub fn standalone_text(self) -> String {
-        self.rule_text().lines().filter(|l| !l.trim_start().starts_with("<xi:include")).map(|l| format!("{l}\n")).collect()
+        without_includes(self.rule_text())
     }
 
     /// Draws a Type in the paper's proportions (10/20/20/20/10/20 %) from `u` in [0, 1); for a
@@ -132,7 +132,15 @@ pub struct RandomScalar {
 /// What `uplift enhance` needs to know of a rule.
 #[derive(Clone, Debug)]
 pub struct RuleInterface {
+    /// The Type its materials count as: a built-in rule's own, a user rule's `uplift_type`.
     pub kind: EnhancementType,
+    /// The rule's name: its file name without `.mtlx`.
+    pub name: String,
+    /// Where it was read from: `mtlx/rules/<file>` for a built-in rule, the path as given for a
+    /// user's file.
+    pub path: String,
+    /// The rule's text without its `xi:include` lines (`standalone_text`).
+    text: String,
     /// The rule document (the `xi:include` of the uplift library left out: the written
     /// material embeds the library itself).
     pub document: Document,
@@ -141,13 +149,70 @@ pub struct RuleInterface {
     pub masks: Vec<(String, MaskKind)>,
 }
 
-/// Reads a rule's interface. The rules are part of the binary, so an error here is a defect
-/// of a rule document; it still comes back as a message naming the rule and the input.
+impl RuleInterface {
+    /// The rule's text without its `xi:include` lines: readable from any folder, its nodes
+    /// resolved by the builtin library (the uplift nodes included).
+    pub fn standalone_text(&self) -> &str {
+        &self.text
+    }
+
+    /// `<name>.mtlx`.
+    pub fn file_name(&self) -> String {
+        format!("{}.mtlx", self.name)
+    }
+}
+
+/// The text with its `xi:include` lines emptied (lines kept, so positions stay the file's).
+fn without_includes(text: &str) -> String {
+    text.lines().map(|l| if l.trim_start().starts_with("<xi:include") { "\n".to_string() } else { format!("{l}\n") }).collect()
+}
+
+/// Reads a built-in rule's interface. The rules are part of the binary, so an error here is a
+/// defect of a rule document; it still comes back as a message naming the rule and the input.
 pub fn interface(kind: EnhancementType) -> Result<RuleInterface, String> {
     let file = format!("mtlx/rules/{}", kind.file_name());
-    let (document, diags) = mtlx::read_str(&kind.standalone_text(), &file);
+    read_interface(kind.standalone_text(), &file, kind.name(), Some(kind))
+}
+
+/// Reads a user-written rule (`uplift enhance --rule FILE`): a document with an `uplift_rule`
+/// nodegraph that declares the Type its materials count as (`uplift_type="0"` … `"5"`), whose
+/// interface is checked against the stack as every rule's is (`read_interface`). Errors name
+/// the file, line and column.
+pub fn interface_file(path: &std::path::Path) -> Result<RuleInterface, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let name = path.file_stem().map(|s| s.to_string_lossy().to_string()).filter(|s| !s.is_empty()).ok_or_else(|| format!("{}: not a rule file name", path.display()))?;
+    read_interface(without_includes(&text), &path.display().to_string(), &name, None)
+}
+
+/// The outputs every rule bakes: `<input>_out` for each input of `uplift_stack` (from its
+/// parameter table), then the diffuse colour and the shading normal the renderer reads.
+pub fn required_outputs() -> Vec<(String, &'static str)> {
+    let mut out: Vec<(String, &'static str)> = Vec::new();
+    for p in uplift_engines::stack_params::PARAMETER_TABLE.iter() {
+        let name = format!("{}_out", p.input);
+        let ty = match (p.channel.rsplit_once('.').map(|(_, c)| c), p.component) {
+            (Some("R" | "G" | "B"), _) => "color3",
+            (Some("X" | "Y" | "Z"), _) => "vector3",
+            _ => "float",
+        };
+        if !out.iter().any(|(n, _)| *n == name) {
+            out.push((name, ty));
+        }
+    }
+    out.push(("diffuse_color_out".into(), "color3"));
+    out.push(("normal_out".into(), "vector3"));
+    out
+}
+
+/// Reads and checks a rule's interface: the `uplift_rule` nodegraph; its inputs are the PBR
+/// inputs (with their types), random scalars (floats with `uimin`/`uimax`) or masks (filename
+/// inputs naming `masks/dust.png` or `masks/damage.png`); its outputs are every
+/// [`required_outputs`] with its type (plus the optional `bsdf_out`), and no other `*_out`.
+/// `builtin`: the Type of a built-in rule; otherwise the nodegraph's `uplift_type` says it.
+fn read_interface(text: String, file: &str, name: &str, builtin: Option<EnhancementType>) -> Result<RuleInterface, String> {
+    let (document, diags) = mtlx::read_str(&text, file);
     if let Some(d) = diags.iter().find(|d| d.severity == mtlx::Severity::Error) {
-        return Err(format!("{file}: {}", d.message));
+        return Err(d.to_string());
     }
     let graph = document
         .top_level()
@@ -155,13 +220,29 @@ pub fn interface(kind: EnhancementType) -> Result<RuleInterface, String> {
         .copied()
         .find(|&id| document.get(id).category == "nodegraph" && document.get(id).name() == RULE_GRAPH)
         .ok_or_else(|| format!("{file}: no nodegraph `{RULE_GRAPH}`"))?;
+    let at = |id: mtlx::ElementId| {
+        let p = &document.get(id).pos;
+        format!("{file}:{}:{}", p.line, p.column)
+    };
+    let kind = match (builtin, document.get(graph).attr("uplift_type")) {
+        (Some(k), None) => k,
+        (b, Some(t)) => {
+            let k = t.trim().parse::<u32>().ok().and_then(|k| EnhancementType::new(k).ok()).ok_or_else(|| format!("{}: `uplift_type` is `{t}`, not a Type 0 to 5", at(graph)))?;
+            if b.is_some_and(|b| b != k) {
+                return Err(format!("{}: `uplift_type` {t} differs from the built-in rule's Type", at(graph)));
+            }
+            k
+        }
+        (None, None) => return Err(format!("{}: nodegraph `{RULE_GRAPH}` declares no `uplift_type` (the Type, 0 to 5, its materials count as in reports)", at(graph))),
+    };
     let mut random = Vec::new();
     let mut masks = Vec::new();
     for id in document.children_of(graph, "input") {
         let e = document.get(id);
         let name = e.name().to_string();
-        let pos = format!("{file}:{}:{}", e.pos.line, e.pos.column);
-        if e.attr("type") == Some("filename") {
+        let pos = at(id);
+        let ty = e.attr("type").unwrap_or("");
+        if ty == "filename" {
             let value = e.attr("value").unwrap_or("");
             let kind = [MaskKind::Dust, MaskKind::Damage]
                 .into_iter()
@@ -170,7 +251,21 @@ pub fn interface(kind: EnhancementType) -> Result<RuleInterface, String> {
             masks.push((name, kind));
             continue;
         }
-        let (Some(lo), Some(hi)) = (e.attr("uimin"), e.attr("uimax")) else { continue };
+        if let Some((_, want)) = PBR_INPUTS.iter().find(|(p, _)| *p == name) {
+            if ty != *want {
+                return Err(format!("{pos}: PBR input `{name}` is {ty}; uplift gives it as {want}"));
+            }
+            continue;
+        }
+        let (Some(lo), Some(hi)) = (e.attr("uimin"), e.attr("uimax")) else {
+            return Err(format!(
+                "{pos}: input `{name}` is neither a PBR input ({}), a random scalar (a float with uimin and uimax) nor a mask (a filename naming masks/dust.png or masks/damage.png)",
+                PBR_INPUTS.map(|p| p.0).join(", ")
+            ));
+        };
+        if ty != "float" {
+            return Err(format!("{pos}: random scalar `{name}` is {ty}; random scalars are floats"));
+        }
         let number = |s: &str, what: &str| s.trim().parse::<f64>().map_err(|_| format!("{pos}: `{name}` has {what} `{s}`, not a number"));
         let (min, max) = (number(lo, "uimin")?, number(hi, "uimax")?);
         if !(min <= max) {
@@ -182,7 +277,25 @@ pub fn interface(kind: EnhancementType) -> Result<RuleInterface, String> {
         };
         random.push(RandomScalar { name, min, max, distribution });
     }
-    Ok(RuleInterface { kind, document, random, masks })
+    let required = required_outputs();
+    let outputs: Vec<mtlx::ElementId> = document.children_of(graph, "output").collect();
+    for &o in &outputs {
+        let e = document.get(o);
+        let ty = e.attr("type").unwrap_or("");
+        if let Some((_, want)) = required.iter().find(|(n, _)| n == e.name()) {
+            if ty != *want {
+                return Err(format!("{}: output `{}` is {ty}; the stack's input takes {want}", at(o), e.name()));
+            }
+        } else if e.name().ends_with("_out") && !(e.name() == "bsdf_out" && ty == "BSDF") {
+            return Err(format!("{}: output `{}` is not an input of uplift_stack (its outputs: {})", at(o), e.name(), required.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ")));
+        }
+    }
+    for (n, ty) in &required {
+        if !outputs.iter().any(|&o| document.get(o).name() == n) {
+            return Err(format!("{}: nodegraph `{RULE_GRAPH}` has no output `{n}` ({ty})", at(graph)));
+        }
+    }
+    Ok(RuleInterface { kind, name: name.to_string(), path: file.to_string(), text, document, random, masks })
 }
 
 fn parse_distribution(text: &str) -> Option<Distribution> {

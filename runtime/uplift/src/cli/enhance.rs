@@ -1,14 +1,17 @@
 //! `uplift enhance INPUT --type auto|0..5 --seed S -o OUT/`: enhances a PBR material by an
-//! uplift rule (mtlx/rules/). INPUT is a .gltf/.glb or .mtlx file, a folder of conventionally
+//! uplift rule (mtlx/rules/), or by user-written rules (`--rule FILE.mtlx`, repeatable, each
+//! material's rule drawn by `--rule-share`; docs/enhance.md, "Write your own rule"). INPUT is a .gltf/.glb or .mtlx file, a folder of conventionally
 //! named textures, or a folder of those (batch: one output folder per material under OUT,
 //! Types drawn in the paper's proportions, finished outputs skipped on re-run); or give the
 //! textures with --base-color, --roughness, --metalness [--normal]. One material writes
 //! OUT/material.mtlx, OUT/textures/, OUT/masks/*.png, OUT/params.exr and OUT/meta.json.
 
+use uplift_engines::batch::PatternEngine;
 use uplift_engines::cpu_engine::CpuEngine;
+use uplift_engines::wgpu_engine::WgpuEngine;
 use uplift_enhance::pbr_input::{self, PbrMaterial};
 use uplift_enhance::pipeline::{enhance, enhance_batch, EnhanceOptions};
-use uplift_enhance::rules::EnhancementType;
+use uplift_enhance::rules::{self, EnhancementType};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -31,6 +34,17 @@ pub struct EnhanceArgs {
     /// Enhancement Type: `auto` (drawn in the paper's proportions) or 0 to 5.
     #[arg(long = "type", default_value = "auto")]
     pub kind: String,
+    /// A user-written rule (a document with an `uplift_rule` nodegraph); repeatable. Replaces
+    /// the built-in Types.
+    #[arg(long = "rule", conflicts_with = "kind")]
+    pub rules: Vec<PathBuf>,
+    /// The share of each `--rule`, in their order (default: equal shares).
+    #[arg(long = "rule-share", requires = "rules")]
+    pub rule_shares: Vec<f64>,
+    /// The engine the rule's kernel bakes on (cpu: built-in rules run in-process, a user rule in
+    /// a runner built once with cargo; wgpu: no build).
+    #[arg(long, value_enum, default_value_t = super::eval::Engine::Cpu)]
+    pub engine: super::eval::Engine,
     /// Seed of every random choice.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -64,8 +78,19 @@ fn parse_resolution(s: &str) -> Result<(usize, usize), String> {
 }
 
 pub fn run(args: EnhanceArgs) -> Result<(), String> {
+    if !args.rule_shares.is_empty() && args.rule_shares.len() != args.rules.len() {
+        return Err(format!("--rule-share: {} shares for {} rules", args.rule_shares.len(), args.rules.len()));
+    }
+    if let Some(bad) = args.rule_shares.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
+        return Err(format!("--rule-share {bad}: a share must be positive"));
+    }
+    let mut user_rules = Vec::new();
+    for (k, path) in args.rules.iter().enumerate() {
+        user_rules.push((rules::interface_file(path)?, args.rule_shares.get(k).copied().unwrap_or(1.0)));
+    }
     let options = EnhanceOptions {
-        kind: parse_type(&args.kind)?,
+        rules: user_rules,
+        kind: if args.rules.is_empty() { parse_type(&args.kind)? } else { None },
         seed: args.seed,
         resolution: args.resolution.as_deref().map(parse_resolution).transpose()?,
         mask_size: args.mask_size,
@@ -81,12 +106,15 @@ pub fn run(args: EnhanceArgs) -> Result<(), String> {
         }
         _ => return Err("give INPUT, or --base-color, --roughness and --metalness".into()),
     };
-    let engine = CpuEngine::new()?;
+    let engine: Box<dyn PatternEngine> = match args.engine {
+        super::eval::Engine::Cpu => Box::new(CpuEngine::new()?),
+        super::eval::Engine::Wgpu => Box::new(WgpuEngine::new()?),
+    };
     if materials.len() == 1 {
-        let e = enhance(&materials[0], &options, &args.output, &engine)?;
-        eprintln!("wrote {} (Type {}, {})", e.out_dir.display(), e.kind.index(), e.kind.name());
+        let e = enhance(&materials[0], &options, &args.output, engine.as_ref())?;
+        eprintln!("wrote {} (Type {}, {})", e.out_dir.display(), e.kind.index(), e.rule);
     } else {
-        let (done, skipped) = enhance_batch(&materials, &options, &args.output, &engine)?;
+        let (done, skipped) = enhance_batch(&materials, &options, &args.output, engine.as_ref())?;
         eprintln!("enhanced {done} material(s) into {}; {skipped} already finished", args.output.display());
     }
     Ok(())

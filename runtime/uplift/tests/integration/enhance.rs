@@ -639,3 +639,84 @@ fn bad_input_gets_a_clear_error_and_no_output() {
     assert!(text.contains("bad.mtlx:3:") && text.contains("not in the document"), "{text}");
     assert!(!out.exists());
 }
+
+/// A user-written rule from a folder of its own (examples/rules/wet.mtlx, copied): `enhance
+/// --rule` bakes it on wgpu (no runner build), records it in meta.json and params.exr, writes
+/// a material that validates with MaterialX's validator; `fit` and `render` take the folder
+/// like any other. The baked values follow the rule: the coat weight is the drawn wetness and
+/// the diffuse colour is the base colour darkened by its exponent.
+#[test]
+fn a_user_written_rule_runs_through_enhance_fit_and_render() {
+    use crate::common::cli::{repo, s, uplift};
+    let dir = crate::common::cli::temp_dir("enhance", "user_rule");
+    let rules = dir.join("my_rules");
+    std::fs::create_dir_all(&rules).unwrap();
+    let rule = rules.join("wet.mtlx");
+    std::fs::copy(repo().join("examples/rules/wet.mtlx"), &rule).unwrap();
+    let out = dir.join("wet_copper");
+    let run = |args: &[&str]| {
+        let (code, stdout, stderr) = uplift(args);
+        assert_eq!(code, 0, "uplift {args:?}:\n{stderr}");
+        format!("{stdout}{stderr}")
+    };
+    let input = repo().join("examples/pbr_materials.mtlx");
+    let said = run(&["enhance", s(&input), "--rule", s(&rule), "--engine", "wgpu", "--seed", "9", "--resolution", "8x8", "--mask-size", "32", "-o", s(&out)]);
+    assert!(said.contains("enhanced 4 material(s)"), "{said}");
+    let ceramic = out.join("ceramic");
+    let meta: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(ceramic.join("meta.json")).unwrap()).unwrap();
+    assert_eq!(meta["type"], 2, "the rule's uplift_type");
+    assert_eq!(meta["rule"].as_str().unwrap(), s(&rule));
+    let wetness = meta["scalars"]["wetness"].as_f64().unwrap() as f32;
+    let darkening = meta["scalars"]["darkening"].as_f64().unwrap() as f32;
+    assert!((0.4..=1.0).contains(&wetness), "wetness {wetness}");
+    let params = uplift_base::exr::read(&ceramic.join("params.exr")).unwrap();
+    assert!(params.attributes.iter().any(|(k, v)| k == "uplift_rule" && v == "wet"), "{:?}", params.attributes);
+    for &c in params.channel("coat_weight").unwrap() {
+        assert!((c - wetness).abs() < 1e-6, "coat weight {c}, wetness {wetness}");
+    }
+    // The ceramic's base colour is constant (examples/pbr_materials.mtlx, its UsdPreviewSurface's
+    // diffuseColor 0.8, 0.78, 0.72): diffuse = c^(1 + d·w).
+    let base = [0.8f32, 0.78, 0.72];
+    for (k, ch) in ["diffuse_color.R", "diffuse_color.G", "diffuse_color.B"].iter().enumerate() {
+        let want = base[k].powf(1.0 + darkening * wetness);
+        for &v in params.channel(ch).unwrap() {
+            assert!((v - want).abs() < 1e-4 * want.max(1e-3) + 1e-6, "{ch} {v}, want {want}");
+        }
+    }
+    match validate(&ceramic.join("material.mtlx")) {
+        Some(r) => r.unwrap_or_else(|e| panic!("material.mtlx does not validate: {e}")),
+        None => say_validator_skipped(),
+    }
+    run(&["fit", s(&ceramic), "--steps", "10", "--threads", "2"]);
+    let png = dir.join("wet.png");
+    run(&["render", s(&ceramic), "--neural", "-o", s(&png), "--size", "16", "--spp", "2", "--threads", "2"]);
+    assert!(png.is_file());
+}
+
+/// Every way a user rule can break the contract is an error naming the file, line and column:
+/// a missing output, a mistyped one, an output the stack does not have, an input that is none
+/// of the kinds, a missing `uplift_type`; `--rule` with `--type` is refused by the parser.
+#[test]
+fn a_user_rule_that_breaks_the_contract_is_a_positioned_error() {
+    use crate::common::cli::{repo, s, uplift};
+    let dir = crate::common::cli::temp_dir("enhance", "bad_rules");
+    let good = std::fs::read_to_string(repo().join("examples/rules/wet.mtlx")).unwrap();
+    let line_of = |text: &str, needle: &str| text[..text.find(needle).unwrap()].matches('\n').count() + 1;
+    let cases: Vec<(&str, String, String)> = vec![
+        ("missing", good.replace("    <output name=\"coat_ior_out\" type=\"float\" nodename=\"coat_ior\" />\n", ""), format!(":{}:3: nodegraph `uplift_rule` has no output `coat_ior_out` (float)", line_of(&good, "<nodegraph"))),
+        ("mistyped", good.replace("<output name=\"metalness_out\" type=\"float\"", "<output name=\"metalness_out\" type=\"color3\""), format!(":{}:5: output `metalness_out` is color3; the stack's input takes float", line_of(&good, "<output name=\"metalness_out\""))),
+        ("unknown_output", good.replace("<output name=\"bsdf_out\"", "<output name=\"gloss_out\" type=\"float\" nodename=\"coat_weight\" />\n    <output name=\"bsdf_out\""), format!(":{}:5: output `gloss_out` is not an input of uplift_stack", line_of(&good, "<output name=\"bsdf_out\""))),
+        ("unknown_input", good.replace("<input name=\"wetness\" type=\"float\" value=\"0.8\" uimin=\"0.4\" uimax=\"1.0\"", "<input name=\"wetness\" type=\"float\" value=\"0.8\""), format!(":{}:5: input `wetness` is neither a PBR input", line_of(&good, "<input name=\"wetness\""))),
+        ("untyped", good.replace(" uplift_type=\"2\"", ""), format!(":{}:3: nodegraph `uplift_rule` declares no `uplift_type`", line_of(&good, "<nodegraph"))),
+    ];
+    for (name, text, want) in &cases {
+        let path = dir.join(format!("{name}.mtlx"));
+        std::fs::write(&path, text).unwrap();
+        let (code, _, stderr) = uplift(&["enhance", s(&repo().join("examples/pbr_materials.mtlx")), "--rule", s(&path), "--engine", "wgpu", "-o", s(&dir.join("out"))]);
+        assert_eq!(code, 1, "{name}: {stderr}");
+        assert!(stderr.contains(&format!("{}{want}", s(&path))), "{name}: want `{want}` in:\n{stderr}");
+    }
+    assert!(!dir.join("out").exists(), "nothing written for a broken rule");
+    let (code, _, stderr) = uplift(&["enhance", s(&repo().join("examples/pbr_materials.mtlx")), "--rule", s(&repo().join("examples/rules/wet.mtlx")), "--type", "1", "-o", s(&dir.join("out"))]);
+    assert_eq!(code, 2, "{stderr}");
+}

@@ -478,7 +478,7 @@ fn a_plane_normal_map_becomes_the_tangent_space_normal_on_the_ball() {
         surface: Surface::Plane,
     };
     let out = dir.join("bumped");
-    enhance(&material, &EnhanceOptions { kind: Some(EnhancementType::new(0).unwrap()), seed: 3, resolution: Some((8, 8)), mask_size: 64 }, &out, &CpuEngine::new().unwrap()).unwrap();
+    enhance(&material, &EnhanceOptions { kind: Some(EnhancementType::new(0).unwrap()), rules: Vec::new(), seed: 3, resolution: Some((8, 8)), mask_size: 64 }, &out, &CpuEngine::new().unwrap()).unwrap();
     let s = SurfaceTextures::load(&out, false).unwrap();
     assert_eq!(s.normal_space, NormalSpace::Plane);
     let n = s.normal_at([0.5, 0.5]).expect("a baked normal");
