@@ -4,6 +4,7 @@
 //! document.
 
 pub mod masks;
+pub mod glints;
 pub mod gltf_input;
 pub mod material_writer;
 pub mod pbr_input;

@@ -31,6 +31,8 @@ pub struct MaterialSpec<'a> {
     pub scalars: &'a [(String, f64)],
     /// A value per PBR input name ([`PBR_INPUTS`]); inputs not given keep the rule's default.
     pub pbr: &'a [(String, PbrValue)],
+    /// Glints on the stack (`crate::glints`), if any.
+    pub glint: Option<&'a uplift_material::GlintRecord>,
 }
 
 fn attrs(pairs: &[(&str, &str)]) -> Vec<(String, String)> {
@@ -106,6 +108,10 @@ pub fn material_document(spec: &MaterialSpec) -> Result<Document, String> {
                 doc.remove(input);
             }
         }
+    }
+
+    if let Some(g) = spec.glint {
+        crate::glints::insert(&mut doc, graph, g)?;
     }
 
     let surface = doc.add_child(root, "surface", attrs(&[("name", "uplift_surface"), ("type", "surfaceshader")]), pos());

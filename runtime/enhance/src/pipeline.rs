@@ -32,6 +32,8 @@ pub struct EnhanceOptions {
     pub resolution: Option<(usize, usize)>,
     /// Width of the square masks.
     pub mask_size: usize,
+    /// Put glints on the stack (`crate::glints`), their inputs drawn from the seed.
+    pub glints: bool,
 }
 
 /// What was written for one material.
@@ -299,7 +301,8 @@ fn write_outputs(
         masks::generate(*kind, mask_seed(options.seed, *kind), options.mask_size).write_png(&masks_dir.join(format!("{}.png", kind.file_stem())))?;
     }
 
-    let doc = material_document(&MaterialSpec { rule, scalars, pbr: &pbr })?;
+    let glint = if options.glints { Some(crate::glints::draw(mix64(options.seed ^ hash_str("glints")), object_size)?) } else { None };
+    let doc = material_document(&MaterialSpec { rule, scalars, pbr: &pbr, glint: glint.as_ref() })?;
     let path = dir.join("material.mtlx");
     write_atomically(&path, mtlx::write_string(&doc).as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
 
@@ -307,7 +310,7 @@ fn write_outputs(
     let params = bake(rule, scalars, &pbr, dir, &geometry, w, h, engine)?;
     folder.write_params_image(&params)?;
     // meta.json last: its presence marks a finished material.
-    folder.write_meta(&meta(material, kind, options.seed, scalars, (w, h), object_size, rule))
+    folder.write_meta(&Meta { glint, ..meta(material, kind, options.seed, scalars, (w, h), object_size, rule) })
 }
 
 /// Evaluates the rule's kernel at every texel: the PBR inputs read from the written textures
@@ -391,6 +394,7 @@ fn meta(material: &PbrMaterial, kind: EnhancementType, seed: u64, scalars: &[(St
         scalars: scalars.iter().map(|(k, v)| (k.clone(), *v as f32)).collect(),
         masks: rule.masks.iter().map(|(input, k)| (input.clone(), MaskRecord { file: format!("masks/{}.png", k.file_stem()), seed: mask_seed(seed, *k) })).collect(),
         uplift: env!("CARGO_PKG_VERSION").to_string(),
+        glint: None,
     }
 }
 

@@ -60,6 +60,9 @@ impl BuiltinKernel {
 /// shades with, shipped in every closure context.
 pub const UPLIFT_STACK_GRAPH: (&str, &str) = ("runtime/kernels/graphs/bsdf/uplift_stack.mtlx", include_str!("../graphs/bsdf/uplift_stack.mtlx"));
 
+/// The glint pattern graph (source path, text) the renderer evaluates at its hits.
+pub const GLINT_FACTOR_GRAPH: (&str, &str) = ("runtime/kernels/graphs/glint_factor.mtlx", include_str!("../graphs/glint_factor.mtlx"));
+
 pub use crate::generated::BUILTIN_KERNELS;
 
 /// The shipped kernel whose generated Rust has this fingerprint.

@@ -25,4 +25,4 @@ pub mod meta;
 
 pub use fit_record::{EnergyRecord, FitRecord, LossRecord};
 pub use folder::{LatentImage, MaterialFolder, ParamsImage};
-pub use meta::{MaskRecord, Meta, NormalSpace};
+pub use meta::{GlintRecord, MaskRecord, Meta, NormalSpace};

@@ -57,4 +57,26 @@ pub struct Meta {
     pub masks: IndexMap<String, MaskRecord>,
     /// The uplift version that wrote it.
     pub uplift: String,
+    /// Glints on the stack (`uplift enhance --glints`): the `uplift_glint` node's inputs.
+    /// Absent without glints (and in files that predate them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glint: Option<GlintRecord>,
+}
+
+/// The drawn inputs of a material's `uplift_glint` node (mtlx/libraries/uplift, glint.wgsl).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GlintRecord {
+    pub density: f32,
+    pub size: f32,
+    pub angle: f32,
+    pub spread: f32,
+    pub strength: f32,
+    pub seed: f32,
+}
+
+impl GlintRecord {
+    /// (input name, value) in the nodedef's order.
+    pub fn inputs(&self) -> [(&'static str, f32); 6] {
+        [("density", self.density), ("size", self.size), ("angle", self.angle), ("spread", self.spread), ("strength", self.strength), ("seed", self.seed)]
+    }
 }

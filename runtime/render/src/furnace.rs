@@ -102,7 +102,7 @@ pub fn estimated_albedo_with_error(shading: &Shading, points: &[SurfaceSample], 
                 u.push([stratum, unit(k ^ 1), unit(k ^ 2), unit(k ^ 3), unit(k ^ 4), unit(k ^ 5)]);
             }
         }
-        let drawn = material::sample(shading, &p, &v, &s, &u)?;
+        let drawn = material::sample(shading, &p, &v, &s, &u, None)?;
         for (i, (_, m)) in drawn.iter().enumerate() {
             if m.pdf > 0.0 {
                 let r = start + i / directions;

@@ -7,6 +7,7 @@
 pub mod environment;
 pub mod evaluation;
 pub mod furnace;
+pub mod glint;
 pub mod integrator;
 pub mod material;
 pub mod mesh;

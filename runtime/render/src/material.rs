@@ -45,10 +45,24 @@ pub fn combine(v: &LobeValue, diffuse: [f32; 3], select: f32, mu_l: f32) -> Mate
 
 pub use uplift_neural::features::cosine_hemisphere;
 
+/// A modulation of the non-diffuse part's f·cos per point at light directions wl (glints:
+/// f_nd · N, glint.rs); P and the pdf are unchanged (E[N] = 1).
+pub type Modulation<'a> = &'a dyn Fn(&[Vec3]) -> Result<Vec<[f32; 3]>, String>;
+
+fn modulate(lobes: &mut [LobeValue], by: Option<Modulation>, wl: &[Vec3]) -> Result<(), String> {
+    if let Some(m) = by {
+        for (v, n) in lobes.iter_mut().zip(m(wl)?) {
+            v.fcos = [0, 1, 2].map(|c| v.fcos[c] * n[c]);
+        }
+    }
+    Ok(())
+}
+
 /// Evaluates the material at (wv, wl) per point; returns the values and each point's selection
 /// probability P.
-pub fn evaluate(shading: &Shading, points: &[SurfaceSample], wv: &[Vec3], wl: &[Vec3]) -> Result<(Vec<MaterialValue>, Vec<f32>), String> {
-    let lobes = shading.evaluate(points, wv, wl, true)?;
+pub fn evaluate(shading: &Shading, points: &[SurfaceSample], wv: &[Vec3], wl: &[Vec3], by: Option<Modulation>) -> Result<(Vec<MaterialValue>, Vec<f32>), String> {
+    let mut lobes = shading.evaluate(points, wv, wl, true)?;
+    modulate(&mut lobes, by, wl)?;
     let select: Vec<f32> = lobes.iter().zip(points).map(|(v, p)| select_probability(v, p.diffuse)).collect();
     let values = lobes.iter().zip(points).zip(wl).zip(&select).map(|(((v, p), l), &s)| combine(v, p.diffuse, s, l[2])).collect();
     Ok((values, select))
@@ -56,7 +70,7 @@ pub fn evaluate(shading: &Shading, points: &[SurfaceSample], wv: &[Vec3], wl: &[
 
 /// Draws wl per point from the mixture with uniforms u (u[0] picks the strategy, u[1..4] drive
 /// the non-diffuse sampler, u[4..6] the cosine one). A failed sample has pdf 0.
-pub fn sample(shading: &Shading, points: &[SurfaceSample], wv: &[Vec3], select: &[f32], u: &[[f32; 6]]) -> Result<Vec<(Vec3, MaterialValue)>, String> {
+pub fn sample(shading: &Shading, points: &[SurfaceSample], wv: &[Vec3], select: &[f32], u: &[[f32; 6]], by: Option<Modulation>) -> Result<Vec<(Vec3, MaterialValue)>, String> {
     let n = points.len();
     let lobe_rows: Vec<usize> = (0..n).filter(|&k| u[k][0] < select[k]).collect();
     let cos_rows: Vec<usize> = (0..n).filter(|&k| u[k][0] >= select[k]).collect();
@@ -71,6 +85,14 @@ pub fn sample(shading: &Shading, points: &[SurfaceSample], wv: &[Vec3], select: 
     let wl: Vec<Vec3> = cos_rows.iter().map(|&k| cosine_hemisphere(u[k][4], u[k][5])).collect();
     for ((&k, &l), r) in cos_rows.iter().zip(&wl).zip(shading.evaluate(&s, &v, &wl, false)?) {
         drawn[k] = (l, r);
+    }
+    if by.is_some() {
+        let wl: Vec<Vec3> = drawn.iter().map(|d| d.0).collect();
+        let mut lobes: Vec<LobeValue> = drawn.iter().map(|d| d.1).collect();
+        modulate(&mut lobes, by, &wl)?;
+        for (d, l) in drawn.iter_mut().zip(lobes) {
+            d.1 = l;
+        }
     }
     Ok(drawn
         .into_iter()

@@ -58,6 +58,8 @@ pub enum ShadingEngine {
 /// The stack's kernels and, for the neural model, the decoder.
 pub struct Shading {
     engine: ShadingEngine,
+    /// The glint pattern's kernel, prepared on first use (materials with glints).
+    glint: std::sync::OnceLock<Result<crate::glint::GlintKernel, String>>,
     wgpu_decoder: Option<WgpuDecoder>,
     pdf: StackKernel,
     sample: StackKernel,
@@ -87,6 +89,7 @@ impl Shading {
             albedo: StackKernel::new(&engine, ClosureContext::Albedo)?,
             threads: engine.threads(),
             engine: ShadingEngine::Cpu(engine),
+            glint: Default::default(),
             wgpu_decoder: None,
             model,
         })
@@ -105,6 +108,7 @@ impl Shading {
             albedo: StackKernel::on(e, ClosureContext::Albedo)?,
             threads: 1,
             engine: ShadingEngine::Wgpu(engine),
+            glint: Default::default(),
             wgpu_decoder,
             model,
         })
@@ -115,6 +119,12 @@ impl Shading {
             ShadingEngine::Cpu(e) => Engine::Cpu(e),
             ShadingEngine::Wgpu(e) => Engine::Wgpu(e),
         }
+    }
+
+    /// The glint pattern N of `glint` per hit at local directions (glint.rs).
+    pub fn glint_factors(&self, glint: &uplift_material::GlintRecord, hits: &[crate::scene::Hit], wv: &[Vec3], wl: &[Vec3]) -> Result<Vec<[f32; 3]>, String> {
+        let kernel = self.glint.get_or_init(|| crate::glint::GlintKernel::new(&self.engine)).as_ref().map_err(|e| e.clone())?;
+        kernel.factors(&self.engine, glint, hits, wv, wl)
     }
 
     /// Which engine, in words.

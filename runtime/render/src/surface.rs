@@ -31,6 +31,8 @@ pub struct SurfaceTextures {
     /// Baked shading normals per texel (empty: no normal map) and their frame.
     pub normals: Vec<[f32; 3]>,
     pub normal_space: NormalSpace,
+    /// The material's glints (meta.json), applied to its non-diffuse part.
+    pub glint: Option<uplift_material::GlintRecord>,
 }
 
 /// The data at one surface point.
@@ -47,7 +49,7 @@ impl SurfaceTextures {
         let mut values = params.to_vec();
         values.extend_from_slice(&diffuse);
         values.extend_from_slice(&latent.unwrap_or([0.0; LATENT]));
-        SurfaceTextures { width: 1, height: 1, values, has_latents: latent.is_some(), normals: Vec::new(), normal_space: NormalSpace::Plane }
+        SurfaceTextures { width: 1, height: 1, values, has_latents: latent.is_some(), normals: Vec::new(), normal_space: NormalSpace::Plane, glint: None }
     }
 
     /// An enhanced material's folder: params.exr (parameters and diffuse colour) and, if
@@ -73,8 +75,10 @@ impl SurfaceTextures {
                 values[t * TEXEL_VALUES + PARAMETERS + 3..(t + 1) * TEXEL_VALUES].copy_from_slice(&lat.latents[t * LATENT..(t + 1) * LATENT]);
             }
         }
-        let normal_space = folder.read_meta_if_any()?.map_or(NormalSpace::Plane, |m| m.normal_space);
-        Ok(SurfaceTextures { width: w, height: h, values, has_latents: latents, normals: p.normals.unwrap_or_default(), normal_space })
+        let meta = folder.read_meta_if_any()?;
+        let normal_space = meta.as_ref().map_or(NormalSpace::Plane, |m| m.normal_space);
+        let glint = meta.and_then(|m| m.glint);
+        Ok(SurfaceTextures { width: w, height: h, values, has_latents: latents, normals: p.normals.unwrap_or_default(), normal_space, glint })
     }
 
     /// The data of texel `t` (row-major index).

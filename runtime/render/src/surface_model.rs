@@ -32,7 +32,7 @@ pub trait SurfaceModel: Sync {
 }
 
 /// An enhanced material: its per-texel data and the model that shades it (paper Eq. 2,
-/// `material.rs`). It emits nothing.
+/// `material.rs`), with its glints when it has them (glint.rs). It emits nothing.
 pub struct EnhancedMaterial<'a> {
     pub surface: &'a SurfaceTextures,
     pub shading: &'a Shading,
@@ -50,11 +50,15 @@ impl SurfaceModel for EnhancedMaterial<'_> {
     }
 
     fn evaluate(&self, hits: &[Hit], wv: &[Vec3], wl: &[Vec3]) -> Result<Evaluation, String> {
-        let (values, select) = material::evaluate(self.shading, &self.lookups(hits), wv, wl)?;
+        let glints = |wl: &[Vec3]| self.shading.glint_factors(self.surface.glint.as_ref().unwrap(), hits, wv, wl);
+        let by: Option<material::Modulation> = if self.surface.glint.is_some() { Some(&glints) } else { None };
+        let (values, select) = material::evaluate(self.shading, &self.lookups(hits), wv, wl, by)?;
         Ok(Evaluation { values, select, emission: vec![[0.0; 3]; hits.len()] })
     }
 
     fn sample(&self, hits: &[Hit], wv: &[Vec3], select: &[f32], u: &[[f32; 6]]) -> Result<Vec<(Vec3, MaterialValue)>, String> {
-        material::sample(self.shading, &self.lookups(hits), wv, select, u)
+        let glints = |wl: &[Vec3]| self.shading.glint_factors(self.surface.glint.as_ref().unwrap(), hits, wv, wl);
+        let by: Option<material::Modulation> = if self.surface.glint.is_some() { Some(&glints) } else { None };
+        material::sample(self.shading, &self.lookups(hits), wv, select, u, by)
     }
 }

@@ -9,6 +9,9 @@ use crate::KernelShape;
 
 pub mod albedo_table_data;
 #[allow(clippy::all, dead_code, unused_imports)]
+pub mod glint_factor;
+static GLINT_FACTOR_SCALAR: BatchFn = cpu_batch_fn!(glint_factor);
+#[allow(clippy::all, dead_code, unused_imports)]
 pub mod triplanar_mask;
 static TRIPLANAR_MASK_SCALAR: BatchFn = cpu_batch_fn!(triplanar_mask);
 #[allow(clippy::all, dead_code, unused_imports)]
@@ -125,6 +128,7 @@ static UPLIFT_STACK_PDF_SCALAR: BatchFn = cpu_batch_fn!(uplift_stack_pdf);
 
 /// Every shipped kernel.
 pub static BUILTIN_KERNELS: &[BuiltinKernel] = &[
+    BuiltinKernel { name: "glint_factor", source: "runtime/kernels/graphs/glint_factor.mtlx", context: None, fingerprint: 0xab404c233840bf60, shape: KernelShape { input_columns: glint_factor::INPUT_COLUMNS, output_columns: glint_factor::OUTPUT_COLUMNS, texture_count: glint_factor::TEXTURE_COUNT }, batch: GLINT_FACTOR_SCALAR, scalar: None, grouped: None },
     BuiltinKernel { name: "triplanar_mask", source: "runtime/kernels/graphs/triplanar_mask.mtlx", context: None, fingerprint: 0x18af4ce6da209a6, shape: KernelShape { input_columns: triplanar_mask::INPUT_COLUMNS, output_columns: triplanar_mask::OUTPUT_COLUMNS, texture_count: triplanar_mask::TEXTURE_COUNT }, batch: TRIPLANAR_MASK_SCALAR, scalar: None, grouped: None },
     BuiltinKernel { name: "marble", source: "examples/marble.mtlx", context: None, fingerprint: 0x86563119f023ca63, shape: KernelShape { input_columns: marble::INPUT_COLUMNS, output_columns: marble::OUTPUT_COLUMNS, texture_count: marble::TEXTURE_COUNT }, batch: MARBLE_SCALAR, scalar: None, grouped: None },
     BuiltinKernel { name: "type0_haze", source: "mtlx/rules/type0_haze.mtlx", context: None, fingerprint: 0x26e2d45cf9446ad4, shape: KernelShape { input_columns: type0_haze::INPUT_COLUMNS, output_columns: type0_haze::OUTPUT_COLUMNS, texture_count: type0_haze::TEXTURE_COUNT }, batch: TYPE0_HAZE_SCALAR, scalar: None, grouped: None },

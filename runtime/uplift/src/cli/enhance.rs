@@ -45,6 +45,10 @@ pub struct EnhanceArgs {
     /// a runner built once with cargo; wgpu: no build).
     #[arg(long, value_enum, default_value_t = super::eval::Engine::Cpu)]
     pub engine: super::eval::Engine,
+    /// Put glints on the stack (paper §5.3): an `uplift_glint` node whose inputs are drawn per
+    /// material; `render` applies them to the reference and the neural material.
+    #[arg(long)]
+    pub glints: bool,
     /// Seed of every random choice.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -94,6 +98,7 @@ pub fn run(args: EnhanceArgs) -> Result<(), String> {
         seed: args.seed,
         resolution: args.resolution.as_deref().map(parse_resolution).transpose()?,
         mask_size: args.mask_size,
+        glints: args.glints,
     };
     if options.mask_size == 0 || options.mask_size > 8192 {
         return Err(format!("--mask-size {}: 1 to 8192", options.mask_size));

@@ -110,7 +110,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         let dir = materials_dir.join(&m.material.name);
         b.set_message(m.material.name.clone());
         if !MaterialFolder::is_finished(&dir) {
-            let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(dirs.len() as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64) };
+            let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(dirs.len() as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: false };
             enhance(&m.material, &options, &dir, &engine)?;
         }
         dirs.push(dir);

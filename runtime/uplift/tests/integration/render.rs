@@ -478,7 +478,7 @@ fn a_plane_normal_map_becomes_the_tangent_space_normal_on_the_ball() {
         surface: Surface::Plane,
     };
     let out = dir.join("bumped");
-    enhance(&material, &EnhanceOptions { kind: Some(EnhancementType::new(0).unwrap()), rules: Vec::new(), seed: 3, resolution: Some((8, 8)), mask_size: 64 }, &out, &CpuEngine::new().unwrap()).unwrap();
+    enhance(&material, &EnhanceOptions { kind: Some(EnhancementType::new(0).unwrap()), rules: Vec::new(), seed: 3, resolution: Some((8, 8)), mask_size: 64, glints: false }, &out, &CpuEngine::new().unwrap()).unwrap();
     let s = SurfaceTextures::load(&out, false).unwrap();
     assert_eq!(s.normal_space, NormalSpace::Plane);
     let n = s.normal_at([0.5, 0.5]).expect("a baked normal");
@@ -550,4 +550,48 @@ fn a_materialx_material_renders_with_its_own_kernels_and_emission() {
     let err = MtlxMaterial::compile(&uplift_compiler::Compiler::builtin(), &path, Some("Nope"), engine).err().unwrap();
     assert!(err.contains("no material or surface shader `Nope`") && err.contains("Glowing"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Glints at render time (render/glint.rs) on the reference and the neural material alike: under
+/// the unit environment a sparkling conductor keeps the image mean of its glint-free render
+/// (N is energy-neutral: within 3 %) and gains pixel-to-pixel contrast (sparkles: the variance
+/// of neighbouring-pixel differences at least doubles), for both models.
+#[test]
+fn glints_sparkle_on_reference_and_neural_alike() {
+    let p = stack_params(&[("metalness", 1.0), ("core_roughness", 0.05), ("haze_weight", 0.3), ("haze_roughness", 0.2)]);
+    let model = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER)).unwrap();
+    let mut enc = vec![0.0; PARAMETERS];
+    uplift_engines::stack_params::encode_rows(&p, &mut enc);
+    let z = uplift_neural::evaluate::encode(&model, &enc);
+    let latent: [f32; 6] = z[..6].try_into().unwrap();
+    let plain = SurfaceTextures::uniform(p, [0.0; 3], Some(latent));
+    let mut glinty = SurfaceTextures::uniform(p, [0.0; 3], Some(latent));
+    glinty.glint = Some(uplift_material::GlintRecord { density: 0.05, size: 0.005, angle: 0.12, spread: 0.5, strength: 0.7, seed: 3.0 });
+    let o = RenderOptions { width: 64, height: 64, spp: 16, bounces: 1, ..Default::default() };
+    let env = Environment::constant([1.0; 3]);
+    for (name, shading) in [("reference", reference()), ("neural", Shading::new(CpuEngine::new().unwrap(), Model::Neural(model.decoder.clone())).unwrap())] {
+        let a = render(&Sphere::preview(), &env, &plain, &shading, &o, None).unwrap();
+        let b = render(&Sphere::preview(), &env, &glinty, &shading, &o, None).unwrap();
+        let mask = a.object_mask();
+        let mean = |img: &Rendering| img.radiance.iter().zip(&mask).filter(|(_, m)| **m).map(|(v, _)| (v[0] + v[1] + v[2]) as f64).sum::<f64>();
+        let contrast = |img: &Rendering| {
+            let (mut s, mut n) = (0.0f64, 0usize);
+            for y in 0..o.height {
+                for x in 0..o.width - 1 {
+                    let (i, j) = (y * o.width + x, y * o.width + x + 1);
+                    if mask[i] && mask[j] {
+                        let d = (img.radiance[i][1] - img.radiance[j][1]) as f64;
+                        s += d * d;
+                        n += 1;
+                    }
+                }
+            }
+            s / n as f64
+        };
+        let ratio = mean(&b) / mean(&a);
+        let (ca, cb) = (contrast(&a), contrast(&b));
+        eprintln!("{name}: glints keep {ratio:.4} of the image mean; neighbour contrast {ca:.4} → {cb:.4}");
+        assert!((ratio - 1.0).abs() <= 0.03, "{name}: image mean ratio {ratio}");
+        assert!(cb >= 2.0 * ca, "{name}: contrast {ca} → {cb}");
+    }
 }
