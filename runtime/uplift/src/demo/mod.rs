@@ -24,7 +24,7 @@ use uplift_render::shading::{Model, Shading};
 use uplift_render::surface::SurfaceTextures;
 use uplift_base::atomic_write::write_atomically;
 use indicatif::{ProgressBar, ProgressStyle};
-use report::{parse_history, render_html, Report, ReportMaterial};
+use report::{parse_history, render_html, GlintMaterial, Report, ReportMaterial};
 use std::path::{Path, PathBuf};
 
 #[derive(Clone, Debug)]
@@ -170,6 +170,40 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
     }
     b.finish();
 
+    // 4b. Glints: the first material of each of Types 0 and 1 again with glints, on the same
+    // fitted latents (the rule's draws are the same, so params.exr is too).
+    let mut glints = Vec::new();
+    for (index, (m, dir)) in set.iter().zip(&dirs).enumerate().filter(|(_, (m, _))| m.kind.index() <= 1) {
+        if glints.iter().any(|g: &(usize, usize)| g.1 == m.kind.index()) {
+            continue;
+        }
+        glints.push((index, m.kind.index()));
+        let twin = materials_dir.join(format!("{}_glints", m.material.name));
+        if !MaterialFolder::is_finished(&twin) || !MaterialFolder::open(&twin)?.has_fit() {
+            let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(index as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: true };
+            enhance(&m.material, &options, &twin, &engine)?;
+            let (from, to) = (MaterialFolder::open(dir)?, MaterialFolder::open(&twin)?);
+            if from.read_params()?.params != to.read_params()?.params {
+                return Err(format!("{}: the glint twin's parameters differ from {}'s", twin.display(), dir.display()));
+            }
+            to.write_latents(&from.read_latents()?)?;
+            to.write_fit(&from.read_fit()?)?;
+        }
+    }
+    let mut glint_rows = Vec::new();
+    for (index, _) in glints {
+        let name = format!("{}_glints", set[index].material.name);
+        let (eval, images) = evaluate_material(&materials_dir.join(&name), &reference, &neural, &env, &ro, 1.0)?;
+        write_eval_images(&img_dir, &name, &images, (ro.width, ro.height))?;
+        glint_rows.push(GlintMaterial {
+            name: name.clone(),
+            flip_object: eval.flip_object,
+            reference_image: format!("{name}_reference.png"),
+            neural_image: format!("{name}_neural.png"),
+            flip_image: format!("{name}_flip.png"),
+        });
+    }
+
     // 5. Report.
     let evals: Vec<_> = rows.iter().map(|r| r.eval.clone()).collect();
     let table = per_type(&evals);
@@ -184,6 +218,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
     };
     let report = Report {
         materials: rows,
+        glints: glint_rows,
         table,
         history,
         decoder: weights.metadata.get("command").cloned().unwrap_or_else(|| o.decoder.display().to_string()),

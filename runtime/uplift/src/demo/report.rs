@@ -25,12 +25,25 @@ pub struct ReportMaterial {
 /// Everything the page shows.
 pub struct Report {
     pub materials: Vec<ReportMaterial>,
+    /// Materials shown again with glints (`uplift enhance --glints`, paper §5.3), on the same
+    /// fitted latents.
+    pub glints: Vec<GlintMaterial>,
     pub table: Vec<TypeRow>,
     /// The decoder's training history: (step, loss, loss_f, loss_t, loss_r).
     pub history: Vec<[f64; 5]>,
     pub decoder: String,
     pub settings: String,
     pub seconds: f64,
+}
+
+/// A material with glints: its twin's name and the renders.
+#[derive(Clone, Debug)]
+pub struct GlintMaterial {
+    pub name: String,
+    pub flip_object: f64,
+    pub reference_image: String,
+    pub neural_image: String,
+    pub flip_image: String,
 }
 
 fn escape(s: &str) -> String {
@@ -129,6 +142,17 @@ pub fn render_html(r: &Report) -> String {
                 if m.furnace_reference { "pass" } else { "fail" }, if m.furnace_reference { "pass" } else { "fail" },
                 if m.furnace_neural { "pass" } else { "fail" }, if m.furnace_neural { "pass" } else { "fail" }, m.furnace_neural_worst,
                 escape(&m.pbr_image), escape(&m.reference_image), escape(&m.neural_image), escape(&m.flip_image)
+            );
+        }
+        s += "</table>\n";
+    }
+    if !r.glints.is_empty() {
+        s += "<h2>Glints (paper §5.3)</h2>\n<p>Materials above enhanced again with <code>--glints</code>: the same rule draws, plus an energy-neutral sparkle pattern N tied to the surface on the non-diffuse part (f_nd · N). The neural material reuses its twin's fitted latents unchanged: the renderer applies N to the decoder's output as to the reference stack, so glints need no retraining.</p>\n<table class=\"grid\"><tr><th class=\"l\">material</th><th>reference with glints</th><th>neural with glints</th><th>FLIP</th></tr>\n";
+        for g in &r.glints {
+            let _ = writeln!(
+                s,
+                "<tr><td class=\"l\">{}<br>FLIP {:.4}</td><td><img src=\"img/{}\" alt=\"reference with glints\"></td><td><img src=\"img/{}\" alt=\"neural with glints\"></td><td><img src=\"img/{}\" alt=\"FLIP\"></td></tr>",
+                escape(&g.name), g.flip_object, escape(&g.reference_image), escape(&g.neural_image), escape(&g.flip_image)
             );
         }
         s += "</table>\n";

@@ -31,7 +31,8 @@ fn demo_writes_a_report_that_renders_without_broken_images() {
     assert_eq!(s.furnace_neural_passed, 6);
     let html = std::fs::read_to_string(&s.report).unwrap();
     let images: Vec<&str> = html.split("src=\"").skip(1).map(|t| t.split('"').next().unwrap()).collect();
-    assert_eq!(images.len(), 24, "four images per material");
+    assert_eq!(images.len(), 24 + 6, "four images per material, three per glint row (Types 0 and 1)");
+    assert!(html.contains("<h2>Glints (paper §5.3)</h2>"), "no glint section");
     for src in &images {
         let p = out.join("report").join(src);
         assert!(p.is_file(), "{} is missing", p.display());
@@ -43,8 +44,17 @@ fn demo_writes_a_report_that_renders_without_broken_images() {
         let name = std::fs::read_dir(&materials)
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
+            .filter(|n| !n.ends_with("_glints"))
             .find(|n| uplift_material::MaterialFolder::open(&materials.join(n)).unwrap().read_meta().unwrap().kind as usize == row.kind)
             .unwrap();
+        if row.kind <= 1 {
+            // Its glint twin: the same parameters and latents, a different (sparkling) image.
+            let twin = uplift_material::MaterialFolder::open(&materials.join(format!("{name}_glints"))).unwrap();
+            assert!(twin.read_meta().unwrap().glint.is_some(), "{name}_glints records no glints");
+            let plain = std::fs::read(out.join("report/img").join(format!("{name}_reference.png"))).unwrap();
+            let glinty = std::fs::read(out.join("report/img").join(format!("{name}_glints_reference.png"))).unwrap();
+            assert_ne!(plain, glinty, "{name}: glints change nothing in the render");
+        }
         let png = |which: &str| image::open(out.join("report/img").join(format!("{name}_{which}.png"))).unwrap().to_rgb8();
         let (r, n) = (png("reference"), png("neural"));
         let (w, h) = r.dimensions();
@@ -82,8 +92,8 @@ fn demo_writes_a_report_that_renders_without_broken_images() {
         .expect("chromium runs");
     assert!(dom.status.success(), "chromium failed: {}", String::from_utf8_lossy(&dom.stderr));
     let dom = String::from_utf8_lossy(&dom.stdout);
-    assert!(dom.contains("data-images=\"24\""), "the report's load script did not run or saw another image count: {}", &dom[..dom.len().min(400)]);
+    assert!(dom.contains("data-images=\"30\""), "the report's load script did not run or saw another image count: {}", &dom[..dom.len().min(400)]);
     assert!(dom.contains("data-broken-images=\"0\""), "broken images in the report");
-    eprintln!("Chromium loaded the report: 24 images, none broken");
+    eprintln!("Chromium loaded the report: 30 images, none broken");
     let _ = std::fs::remove_dir_all(&out);
 }
