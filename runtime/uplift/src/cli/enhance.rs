@@ -34,8 +34,8 @@ pub struct EnhanceArgs {
     /// Enhancement Type: `auto` (drawn in the paper's proportions) or 0 to 5.
     #[arg(long = "type", default_value = "auto")]
     pub kind: String,
-    /// A user-written rule (a document with an `uplift_rule` nodegraph); repeatable. Replaces
-    /// the built-in Types.
+    /// A user-written rule (a document with an `uplift_rule` nodegraph), or a folder of them
+    /// with their shares in its `shares.json`; repeatable. Replaces the built-in Types.
     #[arg(long = "rule", conflicts_with = "kind")]
     pub rules: Vec<PathBuf>,
     /// The share of each `--rule`, in their order (default: equal shares).
@@ -71,6 +71,43 @@ fn parse_type(s: &str) -> Result<Option<EnhancementType>, String> {
     EnhancementType::new(k).map(Some).map_err(|e| format!("--type {s}: {e}"))
 }
 
+/// The rules of a folder (every `*.mtlx`, in name order) with their shares: from the folder's
+/// `shares.json` (`{"wet.mtlx": 2, "patina.mtlx": 1}`, one positive share per rule file), or
+/// equal without one.
+fn rule_folder(dir: &std::path::Path) -> Result<Vec<(PathBuf, f64)>, String> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| format!("{}: {e}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("mtlx")))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(format!("{}: no rule documents (.mtlx)", dir.display()));
+    }
+    let shares_path = dir.join("shares.json");
+    if !shares_path.is_file() {
+        return Ok(files.into_iter().map(|f| (f, 1.0)).collect());
+    }
+    let text = std::fs::read_to_string(&shares_path).map_err(|e| format!("{}: {e}", shares_path.display()))?;
+    let shares: std::collections::BTreeMap<String, f64> = serde_json::from_str(&text).map_err(|e| format!("{}:{}:{}: {e}", shares_path.display(), e.line(), e.column()))?;
+    for (name, share) in &shares {
+        if !files.iter().any(|f| f.file_name().is_some_and(|n| n.to_string_lossy() == *name)) {
+            return Err(format!("{}: `{name}` is not a rule document of the folder", shares_path.display()));
+        }
+        if !(share.is_finite() && *share > 0.0) {
+            return Err(format!("{}: the share of `{name}` is {share}; shares are positive", shares_path.display()));
+        }
+    }
+    files
+        .into_iter()
+        .map(|f| {
+            let name = f.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+            let share = *shares.get(&name).ok_or_else(|| format!("{}: no share for `{name}`", shares_path.display()))?;
+            Ok((f, share))
+        })
+        .collect()
+}
+
 fn parse_resolution(s: &str) -> Result<(usize, usize), String> {
     let bad = || format!("--resolution {s}: expected WxH, e.g. 512x512, 1 to 8192 per side");
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
@@ -90,7 +127,16 @@ pub fn run(args: EnhanceArgs) -> Result<(), String> {
     }
     let mut user_rules = Vec::new();
     for (k, path) in args.rules.iter().enumerate() {
-        user_rules.push((rules::interface_file(path)?, args.rule_shares.get(k).copied().unwrap_or(1.0)));
+        if path.is_dir() {
+            if !args.rule_shares.is_empty() {
+                return Err(format!("{}: a folder of rules takes its shares from its shares.json, not --rule-share", path.display()));
+            }
+            for (file, share) in rule_folder(path)? {
+                user_rules.push((rules::interface_file(&file)?, share));
+            }
+        } else {
+            user_rules.push((rules::interface_file(path)?, args.rule_shares.get(k).copied().unwrap_or(1.0)));
+        }
     }
     let options = EnhanceOptions {
         rules: user_rules,

@@ -244,10 +244,19 @@ fn the_remaining_subcommands_succeed_through_the_binary() {
     // demo, the main job, at its smallest.
     let demo = dir.join("demo");
     ok(&["demo", "-o", s(&demo), "--per-type", "1", "--texture-size", "16", "--render-size", "24", "--spp", "2", "--fit-steps", "5", "--threads", "2"]);
-    // One material per Type, each fitted, and a report showing each one's four images.
-    let materials: Vec<String> = std::fs::read_dir(demo.join("materials")).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    assert_eq!(materials.len(), 6, "{materials:?}");
+    // One material per Type, each fitted, and a report showing each one's four images; the
+    // first of Types 0 and 1 again with glints (three images: no PBR input of their own).
+    let all: Vec<String> = std::fs::read_dir(demo.join("materials")).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    let (glinty, materials): (Vec<String>, Vec<String>) = all.into_iter().partition(|m| m.ends_with("_glints"));
+    assert_eq!((materials.len(), glinty.len()), (6, 2), "{materials:?} {glinty:?}");
     let report = std::fs::read_to_string(demo.join("report/index.html")).unwrap();
+    for m in &glinty {
+        assert!(demo.join("materials").join(m).join("latent.exr").is_file(), "{m} has no latents");
+        for kind in ["reference", "neural", "flip"] {
+            let img = format!("img/{m}_{kind}.png");
+            assert!(demo.join("report").join(&img).is_file() && report.contains(&img), "the report lacks {img}");
+        }
+    }
     for m in &materials {
         assert!(demo.join("materials").join(m).join("latent.exr").is_file(), "{m} was not fitted");
         for kind in ["pbr", "reference", "neural", "flip"] {

@@ -248,7 +248,10 @@ fn grouped_kernels_agree_with_the_scalar_kernels() {
         for per_group in [4usize, 16, 19] {
             let groups = 37;
             let n = groups * per_group;
-            let mut rng = Rng::new(0x5917 ^ ki as u64 ^ (per_group as u64) << 20);
+            // Seeded by the kernel's name, not its index: shipping another kernel must not
+            // change what this one is tested on.
+            let _ = ki;
+            let mut rng = Rng::new(0x5917 ^ uplift_base::rng::hash_str(shipped.name) ^ (per_group as u64) << 20);
             let group_points = random_points(&mut rng, groups);
             let group_rows = random_inputs(&mut rng, &kernel, groups);
             let point_rows = random_inputs(&mut rng, &kernel, n);
@@ -278,11 +281,15 @@ fn grouped_kernels_agree_with_the_scalar_kernels() {
             // A sample kernel's pdf and response are evaluated at the direction it drew, and a
             // near-specular lobe amplifies that direction's last-bit differences (fused
             // multiply-adds, divisions as x·rcp(y) within WGSL's 2.5 ulp): measured up to
-            // 1.1e-3 relative where the pdf exceeds 1,000 (the clearcoat's α 0.01). Its
-            // direction (the first three columns) keeps 1e-4.
-            let relative = |column: usize| if shipped.context == Some("sample") && column >= 3 { 2e-3 } else { 1e-4 };
+            // 1.1e-3 relative where the pdf exceeds 1,000 and 2.6e-3 where it reaches 2·10⁴
+            // (the clearcoat's α 0.01 at a grazing half vector). Its direction (the first
+            // three columns) keeps 1e-4 relative, or 1e-5 absolute for a unit vector's small
+            // components (a grazing direction's z of 0.001 moved by 1.1e-6).
+            let sample = shipped.context == Some("sample");
+            let relative = |column: usize| if sample && column >= 3 { 5e-3 } else { 1e-4 };
+            let floor = if sample { 1e-5 } else { 1e-6 };
             for (k, (x, y)) in split_out.data().iter().zip(scalar_out.data()).enumerate() {
-                let allowed = (relative(k / n) * x.abs().max(y.abs())).max(1e-6);
+                let allowed = (relative(k / n) * x.abs().max(y.abs())).max(floor);
                 let err = (x - y).abs();
                 assert!(err <= allowed || (x.is_nan() && y.is_nan()), "{} ({}, {per_group} per group): column {} point {}: grouped {x}, scalar {y}", shipped.name, level.name(), k / n, k % n);
                 worst = worst.max(err / allowed);

@@ -720,3 +720,39 @@ fn a_user_rule_that_breaks_the_contract_is_a_positioned_error() {
     let (code, _, stderr) = uplift(&["enhance", s(&repo().join("examples/pbr_materials.mtlx")), "--rule", s(&repo().join("examples/rules/wet.mtlx")), "--type", "1", "-o", s(&dir.join("out"))]);
     assert_eq!(code, 2, "{stderr}");
 }
+
+/// `--rule DIR`: every rule document of the folder, drawn per material by the shares of its
+/// `shares.json`; a share naming no rule of the folder, or JSON that does not parse, is an error
+/// naming the file (and line and column).
+#[test]
+fn a_folder_of_rules_runs_with_its_shares() {
+    use crate::common::cli::{repo, s, uplift};
+    let dir = crate::common::cli::temp_dir("enhance", "rule_folder");
+    let rules = dir.join("rules");
+    std::fs::create_dir_all(&rules).unwrap();
+    let wet = std::fs::read_to_string(repo().join("examples/rules/wet.mtlx")).unwrap();
+    std::fs::write(rules.join("wet.mtlx"), &wet).unwrap();
+    std::fs::write(rules.join("soaked.mtlx"), wet.replace("uimin=\"0.4\" uimax=\"1.0\" doc=\"How wet", "uimin=\"0.95\" uimax=\"1.0\" doc=\"How wet")).unwrap();
+    std::fs::write(rules.join("shares.json"), "{\"wet.mtlx\": 1, \"soaked.mtlx\": 3}").unwrap();
+    let out = dir.join("out");
+    let input = repo().join("examples/pbr_materials.mtlx");
+    let (code, _, stderr) = uplift(&["enhance", s(&input), "--rule", s(&rules), "--engine", "wgpu", "--seed", "4", "--resolution", "4x4", "--mask-size", "16", "-o", s(&out)]);
+    assert_eq!(code, 0, "{stderr}");
+    for m in ["blue_plastic", "ceramic", "copper", "red_cloth"] {
+        let meta: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join(m).join("meta.json")).unwrap()).unwrap();
+        let rule = meta["rule"].as_str().unwrap();
+        let wetness = meta["scalars"]["wetness"].as_f64().unwrap();
+        assert!(rule.ends_with("wet.mtlx") || rule.ends_with("soaked.mtlx"), "{m}: rule {rule}");
+        if rule.ends_with("soaked.mtlx") {
+            assert!(wetness >= 0.95, "{m}: soaked with wetness {wetness}");
+        }
+    }
+    std::fs::write(rules.join("shares.json"), "{\"wet.mtlx\": 1, \"dry.mtlx\": 1}").unwrap();
+    let (code, _, stderr) = uplift(&["enhance", s(&input), "--rule", s(&rules), "--engine", "wgpu", "-o", s(&dir.join("out2"))]);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("shares.json: `dry.mtlx` is not a rule document of the folder"), "{stderr}");
+    std::fs::write(rules.join("shares.json"), "{\"wet.mtlx\": 1,\n \"soaked.mtlx\" 3}").unwrap();
+    let (code, _, stderr) = uplift(&["enhance", s(&input), "--rule", s(&rules), "--engine", "wgpu", "-o", s(&dir.join("out2"))]);
+    assert_eq!(code, 1);
+    assert!(stderr.contains("shares.json:2:"), "{stderr}");
+}
