@@ -105,7 +105,10 @@ fn enhance_killed_and_rerun_ends_as_an_uninterrupted_run() {
     let args_b = args(&b);
     let args_b: Vec<&str> = args_b.iter().map(String::as_str).collect();
     let finished = || {
-        let dirs = std::fs::read_dir(&b).map(|r| r.flatten().map(|e| e.path()).filter(|p| p.join("meta.json").exists()).collect::<Vec<_>>()).unwrap_or_default();
+        // Output folders only: a killed run's staging folder (`.name.staging-PID`) may already
+        // hold its meta.json, but it is no finished output until renamed into place.
+        let output = |p: &std::path::Path| p.file_name().is_some_and(|n| !n.to_string_lossy().starts_with('.'));
+        let dirs = std::fs::read_dir(&b).map(|r| r.flatten().map(|e| e.path()).filter(|p| output(p) && p.join("meta.json").exists()).collect::<Vec<_>>()).unwrap_or_default();
         inodes(dirs.iter().flat_map(|p| [p.join("meta.json"), p.join("params.exr"), p.join("material.mtlx")]))
     };
     kill_loop(&args_b, &kill_delays(71, d, 4, 0.1, 0.9), finished);
