@@ -6,8 +6,8 @@
 // in the shading frame, falls into an angular bin of about `angle` radians (a grid on its
 // stereographic projection, tan(θh/2)). A cell holds a flake facing the bin with probability p
 // (a hash of cell, bin and seed): N = (1 − w) + w · [flake] · c / p, with w = `strength` and c
-// the flake's colour, 1 + spread·(2u − 1) per channel (mean 1: the per-channel stand-in for a
-// wave-optics glint's spectral spread). p = `density` clustered by Perlin noise over the cells,
+// the flake's colour, a hue on a rainbow 1 + spread·cos(2π(t − channel/3)) for a random phase t
+// (each channel's mean 1: the stand-in for a wave-optics glint's spectral spread). p = `density` clustered by Perlin noise over the cells,
 // p = density · (1 + 0.8·noise(cell centre / 16 cells)); dividing by the same p keeps
 // E[N | cell] = 1, so clusters move where sparkles appear, never the mean. The albedo context is unchanged (the
 // expected reflectance); eval and pdf multiply the response; sampling ignores N (unbiased).
@@ -41,11 +41,12 @@ fn uplift_glint_factor(density: f32, size: f32, angle: f32, spread: f32, strengt
     let cluster = mx_perlin_noise_float_3d((vec3<f32>(cell) + vec3<f32>(0.5)) / 16.0);
     let p = clamp(density * (1.0 + 0.8 * clamp(cluster, -1.0, 1.0)), 1.0e-4, 1.0);
     let on = select(0.0, 1.0, uplift_glint_unit(k) < p);
-    let k1 = uplift_glint_hash(k + 1u);
-    let k2 = uplift_glint_hash(k + 2u);
-    let k3 = uplift_glint_hash(k + 3u);
+    // The flake's colour: one random phase t (its "wavelength") drives the three channels
+    // through a rainbow, c = 1 + spread·cos(2π(t − channel/3)); over uniform t each channel's
+    // mean is exactly 1, and a flake is one saturated hue, as a diffraction sparkle is.
+    let t = uplift_glint_unit(uplift_glint_hash(k + 1u));
     let s = clamp(spread, 0.0, 1.0);
-    let c = vec3<f32>(1.0) + s * (2.0 * vec3<f32>(uplift_glint_unit(k1), uplift_glint_unit(k2), uplift_glint_unit(k3)) - vec3<f32>(1.0));
+    let c = vec3<f32>(1.0) + s * cos(6.283185307179586 * (vec3<f32>(t) - vec3<f32>(0.0, 1.0 / 3.0, 2.0 / 3.0)));
     let w = clamp(strength, 0.0, 1.0);
     return vec3<f32>(1.0 - w) + (w * on / p) * c;
 }

@@ -264,16 +264,10 @@ pub fn uplift_glint_factor(density: f32, size: f32, angle: f32, spread: f32, str
     let _e89 = uplift_glint_unit(_e88);
     let on = if _e89 < p_1 { 1.0f32 } else { 0.0f32 };
     let _e94 = k_1;
-    let k1_ = uplift_glint_hash(_e94.wrapping_add(1u32));
-    let _e98 = k_1;
-    let k2_ = uplift_glint_hash(_e98.wrapping_add(2u32));
-    let _e102 = k_1;
-    let k3_ = uplift_glint_hash(_e102.wrapping_add(3u32));
+    let _e97 = uplift_glint_hash(_e94.wrapping_add(1u32));
+    let t_2 = uplift_glint_unit(_e97);
     let s_2 = spread.max(0.0f32).min(1.0f32);
-    let _e111 = uplift_glint_unit(k1_);
-    let _e112 = uplift_glint_unit(k2_);
-    let _e113 = uplift_glint_unit(k3_);
-    let c_1 = Vec3::splat(1.0f32) + s_2 * (2.0f32 * Vec3::new(_e111, _e112, _e113) - Vec3::splat(1.0f32));
+    let c_1 = Vec3::splat(1.0f32) + s_2 * wgsl_cos_vec3(6.2831855f32 * (Vec3::splat(t_2) - Vec3::new(0.0f32, 0.33333334f32, 0.6666667f32)));
     let w_1 = strength.max(0.0f32).min(1.0f32);
     Vec3::splat(1.0f32 - w_1) + w_1 * on / p_1 * c_1
 }
@@ -288,6 +282,11 @@ pub fn mx_uplift_glint_factor_color3_(density_1: f32, size_1: f32, angle_1: f32,
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let v11_ = mx_uplift_glint_factor_color3_(inputs.density, inputs.size, inputs.angle, inputs.spread, inputs.strength, inputs.seed, geom_1.position_object, geom_1.normal_world, geom_1.tangent_world, inputs.wv, inputs.wl);
     MxOutputs { glint_out: v11_ }
+}
+
+#[inline(always)]
+fn wgsl_cos_vec3(a: Vec3) -> Vec3 {
+    Vec3::new(a.x.cos(), a.y.cos(), a.z.cos())
 }
 
 #[inline(always)]
