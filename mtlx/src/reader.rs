@@ -53,10 +53,18 @@ fn read_file_inner(
 fn parse_text(text: &str, path: &Path, diags: &mut Vec<Diagnostic>, stack: &mut Vec<PathBuf>) -> Document {
     let file: Arc<str> = Arc::from(path.display().to_string());
     let opts = || roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
-    let prepared = readable_text(text, &|t| roxmltree::Document::parse_with_options(t, roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() }).map(|_| ()));
-    let parsed = match &prepared {
-        Ok(t) => roxmltree::Document::parse_with_options(t.as_ref(), opts()).map(|x| (x, t.as_ref())),
-        Err(e) => Err(e.clone()),
+    // Strict XML first (one parse); only text it refuses goes through the repairs.
+    let repaired;
+    let parsed = match roxmltree::Document::parse_with_options(text, opts()) {
+        Ok(x) => Ok((x, text)),
+        Err(e) => {
+            let check = |t: &str| roxmltree::Document::parse_with_options(t, roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() }).map(|_| ());
+            repaired = readable_text(text, e, &check);
+            match &repaired {
+                Ok(t) => roxmltree::Document::parse_with_options(t.as_str(), opts()).map(|x| (x, t.as_str())),
+                Err(e) => Err(e.clone()),
+            }
+        }
     };
     let (xml, parsed_text) = match parsed {
         Ok(x) => x,
@@ -153,24 +161,24 @@ fn attributes_of(node: roxmltree::Node) -> Vec<(String, String)> {
     node.attributes().map(|a| (prefixed(node, a.namespace(), a.name()), a.value().to_string())).collect()
 }
 
-/// The text to hand roxmltree for MaterialX text that is not strict namespace-aware XML, found
-/// by retrying `parse`: each undeclared prefix (MaterialX's `ns:name` categories, read by
-/// pugixml as plain names) is declared on the root element with a private URI, and a raw `<`
-/// inside attribute values (`value="grid.<UDIM>.png"`, also accepted by pugixml) is escaped.
-/// Declarations go right after `<materialx`, so lines never move (columns on the root's own
-/// line do; so do columns on lines with an escaped `<`, by 3 per escape). Returns the first
-/// error that neither repair explains.
-fn readable_text<'t>(text: &'t str, parse: &dyn Fn(&str) -> Result<(), roxmltree::Error>) -> Result<std::borrow::Cow<'t, str>, roxmltree::Error> {
-    use std::borrow::Cow;
-    let mut current: Cow<'t, str> = Cow::Borrowed(text);
+/// The text to hand roxmltree for MaterialX text that strict parsing refused with `error`,
+/// found by repairing and retrying `parse`: each undeclared prefix (MaterialX's `ns:name`
+/// categories, read by pugixml as plain names) is declared on the root element with a private
+/// URI, and a raw `<` inside attribute values (`value="grid.<UDIM>.png"`, also accepted by
+/// pugixml) is escaped. Declarations go right after `<materialx`, so lines never move (columns
+/// on the root's own line do; so do columns on lines with an escaped `<`, by 3 per escape).
+/// Returns the first error that neither repair explains.
+fn readable_text(text: &str, error: roxmltree::Error, parse: &dyn Fn(&str) -> Result<(), roxmltree::Error>) -> Result<String, roxmltree::Error> {
+    let mut current = text.to_string();
     let mut first_error: Option<roxmltree::Error> = None;
     let mut escaped = false;
+    let mut result = Err(error);
     // Each retry repairs one thing; a document cannot need more repairs than it has prefixes.
     for _ in 0..256 {
-        match parse(current.as_ref()) {
+        match result {
             Ok(()) => return Ok(current),
-            Err(roxmltree::Error::UnknownNamespace(prefix, pos)) => match declare_prefix(current.as_ref(), &prefix) {
-                Some(t) => current = Cow::Owned(t),
+            Err(roxmltree::Error::UnknownNamespace(prefix, pos)) => match declare_prefix(&current, &prefix) {
+                Some(t) => current = t,
                 None => return Err(first_error.unwrap_or(roxmltree::Error::UnknownNamespace(prefix, pos))),
             },
             Err(e) => {
@@ -179,13 +187,14 @@ fn readable_text<'t>(text: &'t str, parse: &dyn Fn(&str) -> Result<(), roxmltree
                     return Err(first);
                 }
                 escaped = true;
-                let t = escape_lt_in_attributes(current.as_ref());
-                if t == current.as_ref() {
+                let t = escape_lt_in_attributes(&current);
+                if t == current {
                     return Err(first);
                 }
-                current = Cow::Owned(t);
+                current = t;
             }
         }
+        result = parse(&current);
     }
     Err(first_error.unwrap_or(roxmltree::Error::NodesLimitReached))
 }
