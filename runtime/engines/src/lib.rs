@@ -8,6 +8,7 @@
 
 pub mod batch;
 pub mod cpu_engine;
+pub mod prepared_kernel;
 pub mod stack_kernel;
 pub mod stack_params;
 pub mod table_batch;

@@ -5,28 +5,15 @@
 //! renderer's reference material and the white furnace check evaluate the stack through it.
 
 use crate::batch::{Columns, Geometry, PatternBatch};
-use crate::cpu_engine::{CpuEngine, CpuKernel};
-use crate::wgpu_engine::{WgpuEngine, WgpuPipeline};
+use crate::cpu_engine::CpuEngine;
+pub use crate::prepared_kernel::Engine;
+use crate::prepared_kernel::PreparedKernel;
 use crate::stack_params::{PARAMETERS, PARAMETER_TABLE};
-use uplift_compiler::{ClosureContext, Compiler, OutputSelection, PatternKernel};
-
-
-/// The engine a stack kernel runs on.
-#[derive(Clone, Copy)]
-pub enum Engine<'a> {
-    Cpu(&'a CpuEngine),
-    Wgpu(&'a WgpuEngine),
-}
-
-enum Prepared {
-    Cpu(CpuKernel),
-    Wgpu(WgpuPipeline),
-}
+use uplift_compiler::{ClosureContext, Compiler, OutputSelection};
 
 /// One closure context of the stack, prepared on an engine.
 pub struct StackKernel {
-    kernel: PatternKernel,
-    prepared: Prepared,
+    prepared: PreparedKernel,
 }
 
 impl StackKernel {
@@ -41,28 +28,21 @@ impl StackKernel {
         let (doc, diags) = mtlx::read_str(text, source);
         let c = Compiler::builtin().compile_document_in(doc, diags, source, &OutputSelection::AllNumeric, Some(context));
         let kernel = c.kernel.ok_or_else(|| c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n"))?;
-        let prepared = match engine {
-            Engine::Cpu(e) => Prepared::Cpu(e.prepare(&kernel)?),
-            Engine::Wgpu(e) => Prepared::Wgpu(e.prepare(&kernel)),
-        };
-        Ok(StackKernel { kernel, prepared })
+        Ok(StackKernel { prepared: PreparedKernel::new(engine, kernel)? })
     }
 
     /// Where the kernel comes from (shipped or built; or the wgpu engine).
     pub fn describe(&self) -> String {
-        match &self.prepared {
-            Prepared::Cpu(k) => k.describe(),
-            Prepared::Wgpu(_) => "the wgpu engine (generated WGSL)".into(),
-        }
+        self.prepared.describe()
     }
 
     fn input_offset(&self, name: &str) -> usize {
-        self.kernel.inputs.iter().find(|i| i.input.name == name).unwrap_or_else(|| panic!("uplift_stack kernel has no input `{name}`")).offset
+        self.prepared.kernel.inputs.iter().find(|i| i.input.name == name).unwrap_or_else(|| panic!("uplift_stack kernel has no input `{name}`")).offset
     }
 
     /// The first column of output `name` (`response`, `throughput`, `albedo`, `wl`, `pdf`).
     pub fn output_offset(&self, name: &str) -> usize {
-        self.kernel.outputs.iter().find(|o| o.name == name).unwrap_or_else(|| panic!("uplift_stack kernel has no output `{name}`")).offset
+        self.prepared.output_offset(name).unwrap_or_else(|| panic!("uplift_stack kernel has no output `{name}`"))
     }
 
     /// Runs the kernel on `rows` (indices into `params`, rows × 22) with per-row directions
@@ -85,7 +65,7 @@ impl StackKernel {
 
     fn run_layout(&self, engine: Engine<'_>, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])], per_group: usize) -> Result<Columns, String> {
         let n = rows.len();
-        let mut inputs = Columns::zeros(n, self.kernel.input_stride);
+        let mut inputs = Columns::zeros(n, self.prepared.kernel.input_stride);
         for (name, dirs) in directions {
             let at = self.input_offset(name);
             for c in 0..3 {
@@ -104,11 +84,7 @@ impl StackKernel {
         // The local frame for every row: uniform columns, not streamed from memory.
         let geometry = Geometry::default().repeated(n);
         let batch = PatternBatch { geometry, inputs, textures: vec![], points_per_group: per_group };
-        match (&self.prepared, engine) {
-            (Prepared::Cpu(k), Engine::Cpu(e)) => e.run_prepared(k, &batch),
-            (Prepared::Wgpu(p), Engine::Wgpu(e)) => e.run_prepared(p, &batch),
-            _ => Err("uplift_stack kernel run on another engine than it was prepared on".into()),
-        }
+        self.prepared.run(engine, &batch)
     }
 }
 

@@ -7,21 +7,14 @@
 
 use crate::scene::{Hit, Vec3};
 use crate::shading::ShadingEngine;
-use uplift_compiler::{Compiler, OutputSelection, PatternKernel};
+use uplift_compiler::{Compiler, OutputSelection};
 use uplift_engines::batch::{Columns, Geometry, PatternBatch};
-use uplift_engines::cpu_engine::CpuKernel;
-use uplift_engines::wgpu_engine::WgpuPipeline;
+use uplift_engines::prepared_kernel::PreparedKernel;
 use uplift_material::GlintRecord;
-
-enum Prepared {
-    Cpu(CpuKernel),
-    Wgpu(WgpuPipeline),
-}
 
 /// The glint kernel, prepared on an engine.
 pub struct GlintKernel {
-    kernel: PatternKernel,
-    prepared: Prepared,
+    prepared: PreparedKernel,
 }
 
 impl GlintKernel {
@@ -30,11 +23,7 @@ impl GlintKernel {
         let (doc, diags) = mtlx::read_str(text, source);
         let c = Compiler::builtin().compile_document(doc, diags, source, &OutputSelection::AllNumeric);
         let kernel = c.kernel.ok_or_else(|| c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n"))?;
-        let prepared = match engine {
-            ShadingEngine::Cpu(e) => Prepared::Cpu(e.prepare(&kernel)?),
-            ShadingEngine::Wgpu(e) => Prepared::Wgpu(e.prepare(&kernel)),
-        };
-        Ok(GlintKernel { kernel, prepared })
+        Ok(GlintKernel { prepared: PreparedKernel::new(engine.as_engine(), kernel)? })
     }
 
     /// N (RGB) per hit for local directions wv, wl (the hit's shading frame).
@@ -43,8 +32,9 @@ impl GlintKernel {
         if n == 0 {
             return Ok(Vec::new());
         }
-        let mut inputs = Columns::zeros(n, self.kernel.input_stride);
-        for inp in &self.kernel.inputs {
+        let kernel = &self.prepared.kernel;
+        let mut inputs = Columns::zeros(n, kernel.input_stride);
+        for inp in &kernel.inputs {
             let name = inp.input.name.as_str();
             if let Some((_, v)) = glint.inputs().into_iter().find(|(g, _)| *g == name) {
                 inputs.column_mut(inp.offset).fill(v);
@@ -65,11 +55,7 @@ impl GlintKernel {
         inputs.mark_uniform_columns();
         let geometry: Vec<Geometry> = hits.iter().map(|h| Geometry { texcoord: h.uv, position: h.position, normal: h.frame[2], tangent: h.frame[0] }).collect();
         let batch = PatternBatch { geometry: Geometry::columns(&geometry), inputs, textures: vec![], points_per_group: 1 };
-        let out = match (&self.prepared, engine) {
-            (Prepared::Cpu(k), ShadingEngine::Cpu(e)) => e.run_prepared(k, &batch)?,
-            (Prepared::Wgpu(p), ShadingEngine::Wgpu(e)) => e.run_chunked(p, &batch, 1 << 16)?,
-            _ => return Err("glint kernel run on another engine than it was prepared on".into()),
-        };
+        let out = self.prepared.run(engine.as_engine(), &batch)?;
         Ok((0..n).map(|k| [0, 1, 2].map(|c| out.column(c)[k]).map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 })).collect())
     }
 }

@@ -15,22 +15,14 @@ use crate::surface_model::{Evaluation, SurfaceModel};
 use std::path::Path;
 use uplift_compiler::graph_builder::document_outputs;
 use uplift_compiler::wgsl_types::is_scattering;
-use uplift_compiler::{ClosureContext, Compiler, OutputSelection, PatternKernel};
+use uplift_compiler::{ClosureContext, Compiler, OutputSelection};
 use uplift_engines::batch::{Columns, Geometry, PatternBatch, TextureData};
-use uplift_engines::cpu_engine::CpuKernel;
+use uplift_engines::prepared_kernel::PreparedKernel;
 use uplift_engines::texture_loader::load_texture;
-use uplift_engines::wgpu_engine::WgpuPipeline;
 use mtlx::DataType;
 
-/// A kernel ready to run on its engine.
-enum Prepared {
-    Cpu(CpuKernel),
-    Wgpu(WgpuPipeline),
-}
-
 struct ClosureKernel {
-    kernel: PatternKernel,
-    prepared: Prepared,
+    prepared: PreparedKernel,
     textures: Vec<TextureData>,
 }
 
@@ -45,11 +37,24 @@ pub struct MtlxMaterial {
     sample: ClosureKernel,
 }
 
+/// The scattering outputs of a document, each with whether it is a material.
+fn scattering_outputs(doc: &mtlx::Document) -> Vec<(String, bool)> {
+    let material = DataType::Closure("material".into());
+    document_outputs(doc).into_iter().filter(|o| is_scattering(&o.ty)).map(|o| (o.name, o.ty == material)).collect()
+}
+
 /// The scattering outputs of a document that `render` can show (material outputs first).
 pub fn material_outputs(doc: &mtlx::Document) -> Vec<String> {
-    let mut outs: Vec<(bool, String)> = document_outputs(doc).into_iter().filter(|o| is_scattering(&o.ty)).map(|o| (o.ty != DataType::Closure("material".into()), o.name)).collect();
-    outs.sort_by_key(|(not_material, _)| *not_material);
-    outs.into_iter().map(|(_, n)| n).collect()
+    let mut outs = scattering_outputs(doc);
+    outs.sort_by_key(|(_, is_material)| !*is_material);
+    outs.into_iter().map(|(n, _)| n).collect()
+}
+
+/// What a gallery shows of a document: its materials, else its surface shaders and BSDFs.
+pub fn gallery_outputs(doc: &mtlx::Document) -> Vec<String> {
+    let outs = scattering_outputs(doc);
+    let any_material = outs.iter().any(|(_, m)| *m);
+    outs.into_iter().filter(|(_, m)| *m || !any_material).map(|(n, _)| n).collect()
 }
 
 impl MtlxMaterial {
@@ -82,11 +87,7 @@ impl MtlxMaterial {
                 _ => return Err(format!("`{name}` does not compile in the {} context:\n{}", c.name(), errors.join("\n"))),
             };
             let textures = kernel.textures.iter().map(|t| load_texture(&t.path, t.colorspace.as_deref())).collect::<Result<Vec<_>, _>>()?;
-            let prepared = match &engine {
-                ShadingEngine::Cpu(e) => Prepared::Cpu(e.prepare(&kernel)?),
-                ShadingEngine::Wgpu(e) => Prepared::Wgpu(e.prepare(&kernel)),
-            };
-            Ok(ClosureKernel { kernel, prepared, textures })
+            Ok(ClosureKernel { prepared: PreparedKernel::new(engine.as_engine(), kernel)?, textures })
         };
         let (pdf, sample) = (kernel(ClosureContext::Pdf)?, kernel(ClosureContext::Sample)?);
         Ok(MtlxMaterial { name, warnings, engine, pdf, sample })
@@ -96,8 +97,9 @@ impl MtlxMaterial {
     /// inputs take their defaults.
     fn run(&self, k: &ClosureKernel, hits: &[Hit], directions: &[(&str, Vec<Vec3>)]) -> Result<Columns, String> {
         let n = hits.len();
-        let mut inputs = Columns::zeros(n, k.kernel.input_stride);
-        for inp in &k.kernel.inputs {
+        let kernel = &k.prepared.kernel;
+        let mut inputs = Columns::zeros(n, kernel.input_stride);
+        for inp in &kernel.inputs {
             let given = directions.iter().find(|(name, _)| *name == inp.input.name);
             for ch in 0..inp.input.ty.components().unwrap_or(0) {
                 let col = inputs.column_mut(inp.offset + ch);
@@ -109,16 +111,8 @@ impl MtlxMaterial {
         }
         let geometry: Vec<Geometry> = hits.iter().map(|h| Geometry { texcoord: h.uv, position: h.position, normal: h.frame[2], tangent: h.frame[0] }).collect();
         let batch = PatternBatch { geometry: Geometry::columns(&geometry), inputs, textures: k.textures.clone(), points_per_group: 1 };
-        match (&self.engine, &k.prepared) {
-            (ShadingEngine::Cpu(e), Prepared::Cpu(p)) => e.run_prepared(p, &batch),
-            (ShadingEngine::Wgpu(e), Prepared::Wgpu(p)) => e.run_chunked(p, &batch, 1 << 16),
-            _ => unreachable!("kernels are prepared for the material's engine"),
-        }
+        k.prepared.run(self.engine.as_engine(), &batch)
     }
-}
-
-fn column_of(k: &PatternKernel, name: &str) -> Option<usize> {
-    k.outputs.iter().find(|o| o.name == name).map(|o| o.offset)
 }
 
 fn rgb(out: &Columns, at: usize, i: usize) -> [f32; 3] {
@@ -133,9 +127,9 @@ impl SurfaceModel for MtlxMaterial {
     fn evaluate(&self, hits: &[Hit], wv: &[Vec3], wl: &[Vec3]) -> Result<Evaluation, String> {
         let world = |d: &[Vec3]| hits.iter().zip(d).map(|(h, l)| h.to_world(*l)).collect::<Vec<_>>();
         let out = self.run(&self.pdf, hits, &[("wv", world(wv)), ("wl", world(wl))])?;
-        let k = &self.pdf.kernel;
-        let (resp, pdf) = (column_of(k, "response").ok_or("pdf kernel without `response`")?, column_of(k, "pdf").ok_or("pdf kernel without `pdf`")?);
-        let emission = column_of(k, "emission");
+        let k = &self.pdf.prepared;
+        let (resp, pdf) = (k.output_offset("response").ok_or("pdf kernel without `response`")?, k.output_offset("pdf").ok_or("pdf kernel without `pdf`")?);
+        let emission = k.output_offset("emission");
         let n = hits.len();
         Ok(Evaluation {
             values: (0..n).map(|i| MaterialValue { fcos: rgb(&out, resp, i), pdf: out.column(pdf)[i].max(0.0) }).collect(),
@@ -148,8 +142,8 @@ impl SurfaceModel for MtlxMaterial {
         let wv_world: Vec<Vec3> = hits.iter().zip(wv).map(|(h, l)| h.to_world(*l)).collect();
         let uu: Vec<Vec3> = u.iter().map(|x| [x[0], x[1], x[2]]).collect();
         let out = self.run(&self.sample, hits, &[("wv", wv_world), ("u", uu)])?;
-        let k = &self.sample.kernel;
-        let (wl, pdf, resp) = (column_of(k, "wl").ok_or("sample kernel without `wl`")?, column_of(k, "pdf").ok_or("sample kernel without `pdf`")?, column_of(k, "response").ok_or("sample kernel without `response`")?);
+        let k = &self.sample.prepared;
+        let (wl, pdf, resp) = (k.output_offset("wl").ok_or("sample kernel without `wl`")?, k.output_offset("pdf").ok_or("sample kernel without `pdf`")?, k.output_offset("response").ok_or("sample kernel without `response`")?);
         Ok((0..hits.len())
             .map(|i| {
                 let d = [0, 1, 2].map(|c| out.column(wl + c)[i]);

@@ -55,6 +55,16 @@ pub enum ShadingEngine {
     Wgpu(WgpuEngine),
 }
 
+impl ShadingEngine {
+    /// The engine, borrowed, as prepared kernels take it.
+    pub fn as_engine(&self) -> Engine<'_> {
+        match self {
+            ShadingEngine::Cpu(e) => Engine::Cpu(e),
+            ShadingEngine::Wgpu(e) => Engine::Wgpu(e),
+        }
+    }
+}
+
 /// The stack's kernels and, for the neural model, the decoder.
 pub struct Shading {
     engine: ShadingEngine,
@@ -115,10 +125,7 @@ impl Shading {
     }
 
     fn engine(&self) -> Engine<'_> {
-        match &self.engine {
-            ShadingEngine::Cpu(e) => Engine::Cpu(e),
-            ShadingEngine::Wgpu(e) => Engine::Wgpu(e),
-        }
+        self.engine.as_engine()
     }
 
     /// The glint pattern N of `glint` per hit at local directions (glint.rs).

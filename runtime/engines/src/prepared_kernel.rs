@@ -1,0 +1,60 @@
+//! A compiled kernel prepared on one engine — a CPU kernel (shipped or a built runner) or a wgpu
+//! pipeline — and run there on batches. The `uplift_stack` kernels, the renderer's glint kernel
+//! and its MaterialX materials' closure kernels all hold their kernels this way.
+
+use crate::batch::{Columns, PatternBatch};
+use crate::cpu_engine::{CpuEngine, CpuKernel};
+use crate::wgpu_engine::{WgpuEngine, WgpuPipeline};
+use uplift_compiler::PatternKernel;
+
+/// The engine a kernel runs on.
+#[derive(Clone, Copy)]
+pub enum Engine<'a> {
+    Cpu(&'a CpuEngine),
+    Wgpu(&'a WgpuEngine),
+}
+
+enum Prepared {
+    Cpu(CpuKernel),
+    Wgpu(WgpuPipeline),
+}
+
+/// A kernel and its preparation on one engine.
+pub struct PreparedKernel {
+    pub kernel: PatternKernel,
+    prepared: Prepared,
+}
+
+impl PreparedKernel {
+    /// Prepares `kernel` on `engine` (the CPU engine finds a shipped kernel or builds a runner;
+    /// wgpu compiles the pipeline).
+    pub fn new(engine: Engine<'_>, kernel: PatternKernel) -> Result<PreparedKernel, String> {
+        let prepared = match engine {
+            Engine::Cpu(e) => Prepared::Cpu(e.prepare(&kernel)?),
+            Engine::Wgpu(e) => Prepared::Wgpu(e.prepare(&kernel)),
+        };
+        Ok(PreparedKernel { kernel, prepared })
+    }
+
+    /// Where the kernel comes from (shipped or built; or the wgpu engine).
+    pub fn describe(&self) -> String {
+        match &self.prepared {
+            Prepared::Cpu(k) => k.describe(),
+            Prepared::Wgpu(_) => "the wgpu engine (generated WGSL)".into(),
+        }
+    }
+
+    /// Runs the kernel on `batch`; `engine` must be the one it was prepared on.
+    pub fn run(&self, engine: Engine<'_>, batch: &PatternBatch) -> Result<Columns, String> {
+        match (&self.prepared, engine) {
+            (Prepared::Cpu(k), Engine::Cpu(e)) => e.run_prepared(k, batch),
+            (Prepared::Wgpu(p), Engine::Wgpu(e)) => e.run_prepared(p, batch),
+            _ => Err("a kernel run on another engine than it was prepared on".into()),
+        }
+    }
+
+    /// The offset of the output named `name` in an output row.
+    pub fn output_offset(&self, name: &str) -> Option<usize> {
+        self.kernel.outputs.iter().find(|o| o.name == name).map(|o| o.offset)
+    }
+}
