@@ -42,6 +42,12 @@ impl EnhancedMaterial<'_> {
     fn lookups(&self, hits: &[Hit]) -> Vec<SurfaceSample> {
         hits.iter().map(|h| self.surface.lookup(h.uv)).collect()
     }
+
+    /// The glint pattern N at these hits as a function of wl, when the material has glints.
+    fn glints<'s>(&'s self, hits: &'s [Hit], wv: &'s [Vec3]) -> Option<impl Fn(&[Vec3]) -> Result<Vec<[f32; 3]>, String> + 's> {
+        let glint = self.surface.glint.as_ref()?;
+        Some(move |wl: &[Vec3]| self.shading.glint_factors(glint, hits, wv, wl))
+    }
 }
 
 impl SurfaceModel for EnhancedMaterial<'_> {
@@ -50,15 +56,15 @@ impl SurfaceModel for EnhancedMaterial<'_> {
     }
 
     fn evaluate(&self, hits: &[Hit], wv: &[Vec3], wl: &[Vec3]) -> Result<Evaluation, String> {
-        let glints = |wl: &[Vec3]| self.shading.glint_factors(self.surface.glint.as_ref().unwrap(), hits, wv, wl);
-        let by: Option<material::Modulation> = if self.surface.glint.is_some() { Some(&glints) } else { None };
+        let glints = self.glints(hits, wv);
+        let by = glints.as_ref().map(|g| g as material::Modulation);
         let (values, select) = material::evaluate(self.shading, &self.lookups(hits), wv, wl, by)?;
         Ok(Evaluation { values, select, emission: vec![[0.0; 3]; hits.len()] })
     }
 
     fn sample(&self, hits: &[Hit], wv: &[Vec3], select: &[f32], u: &[[f32; 6]]) -> Result<Vec<(Vec3, MaterialValue)>, String> {
-        let glints = |wl: &[Vec3]| self.shading.glint_factors(self.surface.glint.as_ref().unwrap(), hits, wv, wl);
-        let by: Option<material::Modulation> = if self.surface.glint.is_some() { Some(&glints) } else { None };
+        let glints = self.glints(hits, wv);
+        let by = glints.as_ref().map(|g| g as material::Modulation);
         material::sample(self.shading, &self.lookups(hits), wv, select, u, by)
     }
 }

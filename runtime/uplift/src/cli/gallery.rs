@@ -7,6 +7,7 @@
 //! images are kept: a second run renders only what is missing (`--force` renders all).
 
 use super::render::{environment, write_outputs};
+use uplift::demo::report::escape;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt::Write as _;
@@ -14,7 +15,7 @@ use std::path::{Path, PathBuf};
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_engines::wgpu_engine::WgpuEngine;
 use uplift_render::integrator::{render_model, RenderOptions};
-use uplift_render::mtlx_material::{material_outputs, MtlxMaterial};
+use uplift_render::mtlx_material::{gallery_outputs, MtlxMaterial};
 use uplift_render::scene::Sphere;
 use uplift_render::shading::ShadingEngine;
 
@@ -80,10 +81,6 @@ fn image_name(document: &str, material: &str) -> String {
     format!("{}__{}.png", clean(document.trim_end_matches(".mtlx")), clean(material))
 }
 
-fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
-}
-
 pub fn run(args: GalleryArgs) -> Result<(), String> {
     if args.size == 0 || args.spp == 0 {
         return Err("--size and --spp must be at least 1".into());
@@ -111,13 +108,7 @@ pub fn run(args: GalleryArgs) -> Result<(), String> {
             entries.push(Entry { document: rel, material: "—".into(), image: None, notes: vec![e.to_string()], failed: true });
             continue;
         }
-        let outputs = material_outputs(&doc);
-        let materials: Vec<String> = {
-            let is_material = |n: &String| uplift_compiler::graph_builder::document_outputs(&doc).iter().any(|o| &o.name == n && o.ty == mtlx::DataType::Closure("material".into()));
-            let m: Vec<String> = outputs.iter().filter(|n| is_material(n)).cloned().collect();
-            if m.is_empty() { outputs } else { m }
-        };
-        for m in materials {
+        for m in gallery_outputs(&doc) {
             jobs.push((f.clone(), rel.clone(), Some(m)));
         }
     }

@@ -46,7 +46,8 @@ pub struct GlintMaterial {
     pub flip_image: String,
 }
 
-fn escape(s: &str) -> String {
+/// Text as HTML: `&`, `<`, `>` and `"` escaped.
+pub fn escape(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 
