@@ -52,6 +52,16 @@ impl Compiler {
         Compiler { library: NodeLibrary::new(Library::load(extra)), file_roots: Some(roots), lower_options: LowerOptions::default(), constant_inputs: Vec::new() }
     }
 
+    /// The library with `overrides` loaded before the builtin one, so that their definitions
+    /// win over builtin ones of the same name (`Library::load_overriding`; the runtime's
+    /// `--stack DIR`).
+    pub fn overriding(overrides: &[PathBuf]) -> Compiler {
+        let mut roots: Vec<PathBuf> = overrides.iter().cloned().chain(mtlx::library::search_path_from_env()).collect();
+        let parents: Vec<PathBuf> = roots.iter().filter(|r| r.file_name().is_some_and(|n| n == "libraries")).filter_map(|r| r.parent().map(Path::to_path_buf)).collect();
+        roots.extend(parents);
+        Compiler { library: NodeLibrary::new(Library::load_overriding(overrides)), file_roots: Some(roots), lower_options: LowerOptions::default(), constant_inputs: Vec::new() }
+    }
+
     /// Only the library embedded in the crate (tests, benchmarks).
     pub fn builtin() -> Compiler {
         Compiler { library: NodeLibrary::new(Library::builtin()), file_roots: Some(Vec::new()), lower_options: LowerOptions::default(), constant_inputs: Vec::new() }

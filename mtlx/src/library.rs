@@ -59,6 +59,24 @@ impl Library {
         lib
     }
 
+    /// Every folder in `overrides` first — their definitions win over the builtin ones of the
+    /// same name (a redefined `uplift_stack`, `--stack DIR`) — then the builtin library, then
+    /// every folder in `MATERIALX_SEARCH_PATH`.
+    pub fn load_overriding(overrides: &[PathBuf]) -> Library {
+        let mut lib = Library::default();
+        for d in overrides {
+            lib.add_dir(d);
+        }
+        let builtin = Library::builtin();
+        lib.documents.extend(builtin.documents);
+        lib.wgsl.extend(builtin.wgsl);
+        lib.diagnostics.extend(builtin.diagnostics);
+        for d in search_path_from_env() {
+            lib.add_dir(&d);
+        }
+        lib
+    }
+
     /// Adds every `.mtlx` and `.wgsl` file under `dir` (recursively, sorted by path).
     pub fn add_dir(&mut self, dir: &Path) {
         for f in files_under(dir) {

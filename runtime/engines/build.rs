@@ -1,17 +1,11 @@
 //! Records, from the workspace's Cargo.lock, the exact versions of the crates the CPU engine's
 //! kernel runners depend on (`cpu_engine/external.rs` writes them into each runner's manifest),
-//! so a runner builds against the same glam, rayon and multiversion as the runtime; and derives
-//! the `uplift_stack` parameter table from the stack's nodedef (`build/stack_table.rs`).
+//! so a runner builds against the same glam, rayon and multiversion as the runtime.
 
 use std::path::PathBuf;
 
-#[path = "build/stack_table.rs"]
-mod stack_table;
-
 fn main() {
     let manifest = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap());
-    let out_dir = PathBuf::from(std::env::var("OUT_DIR").unwrap());
-    stack_table::generate(&manifest.join("../../mtlx/libraries/uplift/uplift_defs.mtlx"), &out_dir);
     let lock = manifest.join("../../Cargo.lock");
     println!("cargo:rerun-if-changed={}", lock.display());
     let lock = std::fs::read_to_string(&lock).unwrap_or_default();

@@ -1,6 +1,7 @@
-//! The `uplift_stack` closure kernels (runtime/kernels/graphs/bsdf/uplift_stack.mtlx, shipped as CPU
-//! kernels in every closure context): one prepared kernel per context, on the CPU engine or
-//! the wgpu engine, run on rows of the 22 parameters (`stack_params::PARAMETER_TABLE` order)
+//! The `uplift_stack` closure kernels (for the builtin stack runtime/kernels/graphs/bsdf/uplift_stack.mtlx,
+//! shipped as CPU kernels in every closure context; for a `--stack` library the document
+//! [`Stack::kernel_document`] generates): one prepared kernel per context, on the CPU engine or
+//! the wgpu engine, run on rows of the stack's parameters (`Stack::parameters` order)
 //! with per-row directions in the local frame (normal +z). The training-data generator, the
 //! renderer's reference material and the white furnace check evaluate the stack through it.
 
@@ -8,27 +9,41 @@ use crate::batch::{Columns, Geometry, PatternBatch};
 use crate::cpu_engine::CpuEngine;
 pub use crate::prepared_kernel::Engine;
 use crate::prepared_kernel::PreparedKernel;
-use crate::stack_params::{PARAMETERS, PARAMETER_TABLE};
-use uplift_compiler::{ClosureContext, Compiler, OutputSelection};
+use crate::stack::Stack;
+use std::sync::Arc;
+use uplift_compiler::{ClosureContext, OutputSelection};
 
 /// One closure context of the stack, prepared on an engine.
 pub struct StackKernel {
     prepared: PreparedKernel,
+    stack: Arc<Stack>,
+    /// Each parameter's input column.
+    columns: Vec<usize>,
 }
 
 impl StackKernel {
     /// The kernel on the CPU engine.
-    pub fn new(engine: &CpuEngine, context: ClosureContext) -> Result<StackKernel, String> {
-        Self::on(Engine::Cpu(engine), context)
+    pub fn new(engine: &CpuEngine, stack: &Arc<Stack>, context: ClosureContext) -> Result<StackKernel, String> {
+        Self::on(Engine::Cpu(engine), stack, context)
     }
 
     /// The kernel on either engine.
-    pub fn on(engine: Engine<'_>, context: ClosureContext) -> Result<StackKernel, String> {
-        let (source, text) = uplift_kernels::shipped::UPLIFT_STACK_GRAPH;
-        let (doc, diags) = mtlx::read_str(text, source);
-        let c = Compiler::builtin().compile_document_in(doc, diags, source, &OutputSelection::AllNumeric, Some(context));
+    pub fn on(engine: Engine<'_>, stack: &Arc<Stack>, context: ClosureContext) -> Result<StackKernel, String> {
+        let (source, text) = stack.kernel_document();
+        let (doc, diags) = mtlx::read_str(&text, &source);
+        let c = stack.compiler().compile_document_in(doc, diags, &source, &OutputSelection::AllNumeric, Some(context));
         let kernel = c.kernel.ok_or_else(|| c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n"))?;
-        Ok(StackKernel { prepared: PreparedKernel::new(engine, kernel)? })
+        let mut columns = Vec::with_capacity(stack.len());
+        for p in stack.parameters() {
+            let input = kernel.inputs.iter().find(|i| i.input.name == p.input).ok_or_else(|| format!("{source}: the uplift_stack kernel has no input `{}`", p.input))?;
+            columns.push(input.offset + p.component);
+        }
+        Ok(StackKernel { prepared: PreparedKernel::new(engine, kernel)?, stack: stack.clone(), columns })
+    }
+
+    /// The stack this kernel shades.
+    pub fn stack(&self) -> &Arc<Stack> {
+        &self.stack
     }
 
     /// Where the kernel comes from (shipped or built; or the wgpu engine).
@@ -45,7 +60,7 @@ impl StackKernel {
         self.prepared.output_offset(name).unwrap_or_else(|| panic!("uplift_stack kernel has no output `{name}`"))
     }
 
-    /// Runs the kernel on `rows` (indices into `params`, rows × 22) with per-row directions
+    /// Runs the kernel on `rows` (indices into `params`, rows × the stack's parameters) with per-row directions
     /// (`wv`, `wl` or `u`, indexed like `params`).
     pub fn run(&self, engine: &CpuEngine, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])]) -> Result<Columns, String> {
         self.run_on(Engine::Cpu(engine), params, rows, directions)
@@ -75,10 +90,11 @@ impl StackKernel {
                 }
             }
         }
-        for (k, p) in PARAMETER_TABLE.iter().enumerate() {
-            let col = inputs.column_mut(self.input_offset(p.input) + p.component);
+        let stride = self.stack.len();
+        for (k, &at) in self.columns.iter().enumerate() {
+            let col = inputs.column_mut(at);
             for (x, &r) in col.iter_mut().zip(rows) {
-                *x = params[r * PARAMETERS + k];
+                *x = params[r * stride + k];
             }
         }
         // The local frame for every row: uniform columns, not streamed from memory.

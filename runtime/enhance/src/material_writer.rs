@@ -51,13 +51,15 @@ pub fn material_document(spec: &MaterialSpec) -> Result<Document, String> {
     let root = doc.root();
     doc.get_mut(root).set_attr("colorspace", "lin_rec709");
 
-    for (path, text) in mtlx::library::BUILTIN_FILES.iter().filter(|(p, _)| p.starts_with("uplift/") && p.ends_with(".mtlx")) {
-        let (lib, diags) = mtlx::read_str(text, &format!("<builtin>/{path}"));
-        if let Some(d) = diags.iter().find(|d| d.severity == mtlx::Severity::Error) {
-            return Err(format!("{}: {}", d.pos, d.message));
-        }
+    // The stack's definitions: a `--stack` library's first, then the builtin uplift library's
+    // (an element both define is the first one's, as the compiler resolves it).
+    let mut defined: std::collections::HashSet<String> = std::collections::HashSet::new();
+    for lib in spec.rule.stack.definition_documents() {
         for &id in lib.top_level() {
-            doc.import_subtree(root, &lib, id);
+            let name = lib.get(id).name().to_string();
+            if name.is_empty() || defined.insert(name) {
+                doc.import_subtree(root, &lib, id);
+            }
         }
     }
 

@@ -17,7 +17,9 @@ use uplift_material::meta::META_FORMAT;
 use uplift_material::{MaskRecord, MaterialFolder, Meta, NormalSpace};
 use uplift_engines::texture_loader::load_texture;
 use std::path::{Path, PathBuf};
-use uplift_compiler::{Compiler, OutputSelection};
+use std::sync::Arc;
+use uplift_compiler::OutputSelection;
+use uplift_engines::stack::Stack;
 
 /// How to enhance.
 #[derive(Clone, Debug)]
@@ -34,6 +36,8 @@ pub struct EnhanceOptions {
     pub mask_size: usize,
     /// Put glints on the stack (`crate::glints`), their inputs drawn from the seed.
     pub glints: bool,
+    /// The stack the rules bake for (`Stack::builtin`, or `--stack DIR`'s).
+    pub stack: Arc<Stack>,
 }
 
 /// What was written for one material.
@@ -64,7 +68,7 @@ fn mean_first(t: &TextureData) -> f32 {
 /// else the built-in rule of `choose_type`'s Type.
 pub fn choose_rule(material: &PbrMaterial, options: &EnhanceOptions) -> Result<RuleInterface, String> {
     if options.rules.is_empty() {
-        return rules::interface(choose_type(material, options)?);
+        return rules::interface(choose_type(material, options)?, &options.stack);
     }
     let total: f64 = options.rules.iter().map(|(_, share)| share).sum();
     let u = uniform(options.seed, hash_str("enhancement rule"), 0) * total;
@@ -210,7 +214,7 @@ pub fn rule_kernel(rule: &RuleInterface, dir: &Path) -> Result<uplift_compiler::
     let name = dir.join(rule.file_name()).display().to_string();
     let (doc, diags) = mtlx::read_str(rule.standalone_text(), &name);
     let outputs: Vec<String> = stack_outputs(&rule.document).into_iter().map(|o| format!("{}/{o}", rules::RULE_GRAPH)).collect();
-    let c = Compiler::builtin().compile_document(doc, diags, &name, &OutputSelection::Named(outputs));
+    let c = rule.stack.compiler().compile_document(doc, diags, &name, &OutputSelection::Named(outputs));
     if mtlx::has_errors(&c.diagnostics) {
         return Err(c.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.to_string()).collect::<Vec<_>>().join("\n"));
     }
@@ -372,7 +376,14 @@ fn bake(
             img.push(name, out.column(o.offset + c).to_vec())?;
         }
     }
+    // Optional stack inputs the rule leaves out keep their nodedef values.
+    for p in rule.stack.parameters() {
+        if img.channel(&p.channel).is_none() {
+            img.push(&p.channel, vec![p.default; n])?;
+        }
+    }
     img.attributes.push(("uplift_rule".into(), rule.name.clone()));
+    img.attributes.push((uplift_material::folder::STACK_ATTRIBUTE.into(), rule.stack.signature()));
     Ok(img)
 }
 

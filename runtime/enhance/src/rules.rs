@@ -15,6 +15,8 @@
 use crate::masks::MaskKind;
 use uplift_base::rng::{hash_str, mix64, unit_f64};
 use mtlx::Document;
+use std::sync::Arc;
+use uplift_engines::stack::Stack;
 
 /// The interface inputs every rule has that come from the PBR material, with their types.
 pub const PBR_INPUTS: [(&str, &str); 5] =
@@ -147,6 +149,8 @@ pub struct RuleInterface {
     pub random: Vec<RandomScalar>,
     /// (interface input, mask kind), in document order.
     pub masks: Vec<(String, MaskKind)>,
+    /// The stack its outputs were checked against (and whose parameters it bakes).
+    pub stack: Arc<Stack>,
 }
 
 impl RuleInterface {
@@ -169,47 +173,38 @@ fn without_includes(text: &str) -> String {
 
 /// Reads a built-in rule's interface. The rules are part of the binary, so an error here is a
 /// defect of a rule document; it still comes back as a message naming the rule and the input.
-pub fn interface(kind: EnhancementType) -> Result<RuleInterface, String> {
+pub fn interface(kind: EnhancementType, stack: &Arc<Stack>) -> Result<RuleInterface, String> {
     let file = format!("mtlx/rules/{}", kind.file_name());
-    read_interface(kind.standalone_text(), &file, kind.name(), Some(kind))
+    read_interface(kind.standalone_text(), &file, kind.name(), Some(kind), stack)
 }
 
 /// Reads a user-written rule (`uplift enhance --rule FILE`): a document with an `uplift_rule`
 /// nodegraph that declares the Type its materials count as (`uplift_type="0"` … `"5"`), whose
 /// interface is checked against the stack as every rule's is (`read_interface`). Errors name
 /// the file, line and column.
-pub fn interface_file(path: &std::path::Path) -> Result<RuleInterface, String> {
+pub fn interface_file(path: &std::path::Path, stack: &Arc<Stack>) -> Result<RuleInterface, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
     let name = path.file_stem().map(|s| s.to_string_lossy().to_string()).filter(|s| !s.is_empty()).ok_or_else(|| format!("{}: not a rule file name", path.display()))?;
-    read_interface(without_includes(&text), &path.display().to_string(), &name, None)
+    read_interface(without_includes(&text), &path.display().to_string(), &name, None, stack)
 }
 
-/// The outputs every rule bakes: `<input>_out` for each input of `uplift_stack` (from its
-/// parameter table), then the diffuse colour and the shading normal the renderer reads.
-pub fn required_outputs() -> Vec<(String, &'static str)> {
-    let mut out: Vec<(String, &'static str)> = Vec::new();
-    for p in uplift_engines::stack_params::PARAMETER_TABLE.iter() {
-        let name = format!("{}_out", p.input);
-        let ty = match (p.channel.rsplit_once('.').map(|(_, c)| c), p.component) {
-            (Some("R" | "G" | "B"), _) => "color3",
-            (Some("X" | "Y" | "Z"), _) => "vector3",
-            _ => "float",
-        };
-        if !out.iter().any(|(n, _)| *n == name) {
-            out.push((name, ty));
-        }
-    }
-    out.push(("diffuse_color_out".into(), "color3"));
-    out.push(("normal_out".into(), "vector3"));
+/// A rule's outputs for `stack`: `<input>_out` for each numeric input of `uplift_stack` (from
+/// its nodedef) with its type and whether a rule may omit it (`uplift_optional`), then the
+/// diffuse colour and the shading normal the renderer reads.
+pub fn rule_outputs(stack: &Stack) -> Vec<(String, String, bool)> {
+    let mut out: Vec<(String, String, bool)> = stack.inputs().iter().map(|i| (format!("{}_out", i.name), i.ty.clone(), i.optional)).collect();
+    out.push(("diffuse_color_out".into(), "color3".into(), false));
+    out.push(("normal_out".into(), "vector3".into(), false));
     out
 }
 
 /// Reads and checks a rule's interface: the `uplift_rule` nodegraph; its inputs are the PBR
 /// inputs (with their types), random scalars (floats with `uimin`/`uimax`) or masks (filename
 /// inputs naming `masks/dust.png` or `masks/damage.png`); its outputs are every
-/// [`required_outputs`] with its type (plus the optional `bsdf_out`), and no other `*_out`.
-/// `builtin`: the Type of a built-in rule; otherwise the nodegraph's `uplift_type` says it.
-fn read_interface(text: String, file: &str, name: &str, builtin: Option<EnhancementType>) -> Result<RuleInterface, String> {
+/// [`rule_outputs`] of `stack` with its type (those of optional stack inputs may be left
+/// out; plus the optional `bsdf_out`), and no other `*_out`. `builtin`: the Type of a built-in
+/// rule; otherwise the nodegraph's `uplift_type` says it.
+fn read_interface(text: String, file: &str, name: &str, builtin: Option<EnhancementType>, stack: &Arc<Stack>) -> Result<RuleInterface, String> {
     let (document, diags) = mtlx::read_str(&text, file);
     if let Some(d) = diags.iter().find(|d| d.severity == mtlx::Severity::Error) {
         return Err(d.to_string());
@@ -277,25 +272,25 @@ fn read_interface(text: String, file: &str, name: &str, builtin: Option<Enhancem
         };
         random.push(RandomScalar { name, min, max, distribution });
     }
-    let required = required_outputs();
+    let required = rule_outputs(stack);
     let outputs: Vec<mtlx::ElementId> = document.children_of(graph, "output").collect();
     for &o in &outputs {
         let e = document.get(o);
         let ty = e.attr("type").unwrap_or("");
-        if let Some((_, want)) = required.iter().find(|(n, _)| n == e.name()) {
-            if ty != *want {
+        if let Some((_, want, _)) = required.iter().find(|(n, _, _)| n == e.name()) {
+            if ty != want {
                 return Err(format!("{}: output `{}` is {ty}; the stack's input takes {want}", at(o), e.name()));
             }
         } else if e.name().ends_with("_out") && !(e.name() == "bsdf_out" && ty == "BSDF") {
-            return Err(format!("{}: output `{}` is not an input of uplift_stack (its outputs: {})", at(o), e.name(), required.iter().map(|(n, _)| n.as_str()).collect::<Vec<_>>().join(", ")));
+            return Err(format!("{}: output `{}` is not an input of uplift_stack (its outputs: {})", at(o), e.name(), required.iter().map(|(n, _, _)| n.as_str()).collect::<Vec<_>>().join(", ")));
         }
     }
-    for (n, ty) in &required {
-        if !outputs.iter().any(|&o| document.get(o).name() == n) {
+    for (n, ty, optional) in &required {
+        if !optional && !outputs.iter().any(|&o| document.get(o).name() == n) {
             return Err(format!("{}: nodegraph `{RULE_GRAPH}` has no output `{n}` ({ty})", at(graph)));
         }
     }
-    Ok(RuleInterface { kind, name: name.to_string(), path: file.to_string(), text, document, random, masks })
+    Ok(RuleInterface { kind, name: name.to_string(), path: file.to_string(), text, document, random, masks, stack: stack.clone() })
 }
 
 fn parse_distribution(text: &str) -> Option<Distribution> {
@@ -359,7 +354,7 @@ mod tests {
     #[test]
     fn every_rule_reads_and_declares_its_scalars() {
         for t in EnhancementType::ALL {
-            let i = interface(t).unwrap();
+            let i = interface(t, &Stack::builtin()).unwrap();
             let names: Vec<&str> = i.random.iter().map(|r| r.name.as_str()).collect();
             for core in ["core_exponent", "haze_exponent", "haze_scale", "haze_boost", "edge_exponent", "specular_ior"] {
                 assert!(names.contains(&core), "{}: {core} missing", t.name());
@@ -373,7 +368,7 @@ mod tests {
 
     #[test]
     fn draws_respect_ranges_and_distributions() {
-        let i = interface(EnhancementType::new(5).unwrap()).unwrap();
+        let i = interface(EnhancementType::new(5).unwrap(), &Stack::builtin()).unwrap();
         let ior = i.random.iter().find(|r| r.name == "specular_ior").unwrap();
         assert_eq!(ior.distribution, Distribution::Normal { mean: 1.5, sd: 0.08 });
         let n = 20_000;
@@ -398,7 +393,7 @@ mod tests {
 
     #[test]
     fn draws_depend_on_seed_and_name_only() {
-        let i = interface(EnhancementType::new(3).unwrap()).unwrap();
+        let i = interface(EnhancementType::new(3).unwrap(), &Stack::builtin()).unwrap();
         let a = draw_all(&i.random, 7);
         let mut reversed = i.random.clone();
         reversed.reverse();

@@ -10,10 +10,14 @@ use serde::Serialize;
 use std::path::{Path, PathBuf};
 use uplift_base::atomic_write::write_atomically;
 use uplift_base::exr::{self, Compression, ExrImage};
-use uplift_engines::stack_params::{PARAMETERS, PARAMETER_TABLE};
+use uplift_engines::stack::Stack;
 
 /// The diffuse colour channels of params.exr.
 pub const DIFFUSE_CHANNELS: [&str; 3] = ["diffuse_color.R", "diffuse_color.G", "diffuse_color.B"];
+
+/// The params.exr header attribute recording the stack signature it was baked for
+/// (`Stack::signature`).
+pub const STACK_ATTRIBUTE: &str = "uplift_stack";
 
 /// The baked shading-normal channels of params.exr.
 pub const NORMAL_CHANNELS: [&str; 3] = ["normal.X", "normal.Y", "normal.Z"];
@@ -35,7 +39,7 @@ pub struct MaterialFolder {
 pub struct ParamsImage {
     pub width: usize,
     pub height: usize,
-    /// The 22 parameters per texel (texels × [`PARAMETERS`], row-major, row 0 at the top).
+    /// The stack's parameters per texel (texels × `Stack::len`, row-major, row 0 at the top).
     pub params: Vec<f32>,
     /// The diffuse colour c per texel (texels × 3); `None` for folders written before
     /// `uplift enhance` baked it.
@@ -158,18 +162,23 @@ impl MaterialFolder {
         exr::write(&self.params_path(), img, Compression::Zip)
     }
 
-    /// params.exr: the parameters (every channel required), and the diffuse colour and
+    /// params.exr: `stack`'s parameters (every channel required; a file recording another
+    /// stack's signature is an error naming the difference), and the diffuse colour and
     /// normals when present. Non-finite values are an error naming the texel.
-    pub fn read_params(&self) -> Result<ParamsImage, String> {
+    pub fn read_params(&self, stack: &Stack) -> Result<ParamsImage, String> {
         let path = self.params_path();
         let img = exr::read(&path)?;
+        if let Some((_, recorded)) = img.attributes.iter().find(|(k, _)| k == STACK_ATTRIBUTE) {
+            stack.check_signature(recorded).map_err(|e| format!("{}: {e} (enhanced with --stack DIR? pass the same folder)", path.display()))?;
+        }
         let (w, h) = (img.width, img.height);
         let n = w * h;
-        let mut params = vec![0.0f32; n * PARAMETERS];
-        for (k, p) in PARAMETER_TABLE.iter().enumerate() {
-            let ch = img.channel(p.channel).ok_or_else(|| format!("{}: no channel `{}` (is this an `uplift enhance` params.exr?)", path.display(), p.channel))?;
+        let np = stack.len();
+        let mut params = vec![0.0f32; n * np];
+        for (k, p) in stack.parameters().iter().enumerate() {
+            let ch = img.channel(&p.channel).ok_or_else(|| format!("{}: no channel `{}` (is this an `uplift enhance` params.exr of this stack?)", path.display(), p.channel))?;
             for t in 0..n {
-                params[t * PARAMETERS + k] = ch[t];
+                params[t * np + k] = ch[t];
             }
         }
         let diffuse = match DIFFUSE_CHANNELS.map(|name| img.channel(name)) {
@@ -182,7 +191,7 @@ impl MaterialFolder {
         };
         let texel = |i: usize, per: usize| (i / per % w, i / per / w);
         if let Some(i) = params.iter().position(|x| !x.is_finite()) {
-            let (x, y) = texel(i, PARAMETERS);
+            let (x, y) = texel(i, np);
             return Err(format!("{}: texel ({x}, {y}) holds a non-finite parameter", path.display()));
         }
         if let Some(i) = diffuse.iter().flatten().position(|x| !x.is_finite()) {

@@ -5,7 +5,7 @@
 //! error naming it.
 
 use std::path::{Path, PathBuf};
-use uplift_engines::stack_params::{PARAMETERS, PARAMETER_TABLE};
+use uplift_engines::stack::Stack;
 use uplift_material::fit_record::FIT_FORMAT;
 use uplift_material::folder::{find_material_folders, LATENTS};
 use uplift_material::meta::META_FORMAT;
@@ -51,8 +51,10 @@ fn files_written_before_the_split_read_back_identically() {
     assert_eq!((e.groups, e.over_before, e.over_after, e.worst_excess_before, e.steps), (22, 0, 0, -0.26712, 0));
 
     // Pixel values: hashes of what the previous codec read from these files.
-    let p = folder.read_params().unwrap();
-    assert_eq!((p.width, p.height, p.params.len()), (8, 6, 48 * PARAMETERS));
+    let p = folder.read_params(&uplift_engines::stack::Stack::builtin()).unwrap();
+    let stack = Stack::builtin();
+    let np = stack.len();
+    assert_eq!((p.width, p.height, p.params.len()), (8, 6, 48 * np));
     assert!(p.normals.is_some() && p.diffuse.is_some());
     assert_eq!(bits_hash(&p.params), PARAMS_HASH, "params");
     assert_eq!(bits_hash(p.diffuse.as_ref().unwrap()), DIFFUSE_HASH, "diffuse");
@@ -61,8 +63,8 @@ fn files_written_before_the_split_read_back_identically() {
     assert_eq!(bits_hash(&l.latents), LATENT_HASH, "latents");
     // The parameters are in the table's order: Type 1 lays dust (the fuzz lobe) somewhere, with
     // weights in [0, 1].
-    let fuzz = PARAMETER_TABLE.iter().position(|q| q.channel == "fuzz_weight").expect("a fuzz weight");
-    let weights: Vec<f32> = (0..48).map(|t| p.params[t * PARAMETERS + fuzz]).collect();
+    let fuzz = stack.index_of("fuzz_weight").expect("a fuzz weight");
+    let weights: Vec<f32> = (0..48).map(|t| p.params[t * np + fuzz]).collect();
     assert!(weights.iter().all(|w| (0.0..=1.0).contains(w)) && weights.iter().any(|&w| w > 0.0), "{weights:?}");
 }
 

@@ -12,7 +12,7 @@
 //! parameter uniformly in its range (in the encoder's encoding).
 
 use uplift_base::color::srgb_to_linear;
-use uplift_engines::stack_params::{PARAMETERS, PARAMETER_TABLE};
+use uplift_engines::stack::Stack;
 use uplift_base::rng::mix64;
 
 /// Cells per tile edge.
@@ -149,11 +149,11 @@ struct Decorators {
 }
 
 /// The parameter vector of cell `cell` (0 … 128² − 1) of tile `tile` of `class`.
-pub fn class_parameters(class: DataClass, seed: u64, tile: u64, cell: u64) -> [f32; PARAMETERS] {
+pub fn class_parameters(stack: &Stack, class: DataClass, seed: u64, tile: u64, cell: u64) -> Vec<f32> {
     let tile_key = mix64(seed ^ ((class.index() as u64) << 58)) ^ mix64(tile.wrapping_mul(0x2545_f491_4f6c_dd1d));
     let mut cs = Stream::new(tile_key ^ mix64(cell.wrapping_add(0x51ed_27)));
     if class == DataClass::Infill {
-        return std::array::from_fn(|k| PARAMETER_TABLE[k].decode(cs.u()));
+        return stack.parameters().iter().map(|p| p.decode(cs.u())).collect();
     }
     let mut ts = Stream::new(tile_key);
     let deco = match class {
@@ -217,10 +217,13 @@ pub fn class_parameters(class: DataClass, seed: u64, tile: u64, cell: u64) -> [f
         let r_sub = ts.range(0.7, 1.0);
         a_sub = r_sub * r_sub;
     }
-    [
+    let v = [
         spec[0], spec[1], spec[2], edge[0], edge[1], edge[2], metalness, core, haze, w_h, eta_d, w_f, tau_f, w_c, eta_c, w_in, tau_in, scatter[0], scatter[1],
         scatter[2], w_sub, a_sub,
-    ]
+    ];
+    let mut row = stack.defaults();
+    row[..v.len()].copy_from_slice(&v);
+    row
 }
 
 #[cfg(test)]
@@ -240,9 +243,10 @@ mod tests {
     fn every_class_stays_in_range_and_is_deterministic() {
         for class in DataClass::ALL {
             for cell in (0..TILE * TILE).step_by(97) {
-                let p = class_parameters(class, 7, cell / 13, cell);
-                assert_eq!(p, class_parameters(class, 7, cell / 13, cell));
-                for (x, spec) in p.iter().zip(&PARAMETER_TABLE) {
+                let stack = Stack::builtin();
+                let p = class_parameters(&stack, class, 7, cell / 13, cell);
+                assert_eq!(p, class_parameters(&stack, class, 7, cell / 13, cell));
+                for (x, spec) in p.iter().zip(stack.parameters()) {
                     assert!(x.is_finite() && *x >= spec.lo - 1e-6 && *x <= spec.hi + 1e-6, "{} {}: {x}", class.name(), spec.channel);
                 }
             }

@@ -10,7 +10,8 @@
 use crate::classes::{class_parameters, DataClass};
 use crate::features::{cosine_view, direction_features, uniform_cosine_view, uniform_hemisphere, FEATURES};
 use crate::loss::OUTPUTS;
-use uplift_engines::stack_params::{encode_rows, PARAMETERS};
+use uplift_engines::stack::Stack;
+use std::sync::Arc;
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_engines::stack_kernel::{usable_sample, StackKernel};
 use uplift_base::rng::{mix64, unit_from_key as unit};
@@ -49,9 +50,9 @@ impl ClassMix {
 pub struct TrainingBatch {
     pub rows: usize,
     pub class: Vec<u8>,
-    /// rows × 22 parameters (physical values).
+    /// rows × the stack's parameters (physical values).
     pub params: Vec<f32>,
-    /// rows × 22 encoder inputs.
+    /// rows × the stack's encoder inputs.
     pub encoded: Vec<f32>,
     pub wv: Vec<[f32; 3]>,
     pub wl: Vec<[f32; 3]>,
@@ -65,6 +66,7 @@ pub struct TrainingBatch {
 /// Generates training batches.
 pub struct DataGenerator {
     engine: CpuEngine,
+    stack: Arc<Stack>,
     eval: StackKernel,
     albedo: StackKernel,
     sample: StackKernel,
@@ -107,18 +109,25 @@ impl ViewDistribution {
 }
 
 impl DataGenerator {
-    pub fn new(engine: CpuEngine, mix: ClassMix, seed: u64) -> Result<DataGenerator, String> {
+    /// A generator of `stack`'s training data on `engine`.
+    pub fn new(engine: CpuEngine, stack: &Arc<Stack>, mix: ClassMix, seed: u64) -> Result<DataGenerator, String> {
         Ok(DataGenerator {
-            eval: StackKernel::new(&engine, ClosureContext::Eval)?,
-            albedo: StackKernel::new(&engine, ClosureContext::Albedo)?,
-            sample: StackKernel::new(&engine, ClosureContext::Sample)?,
-            pdf: StackKernel::new(&engine, ClosureContext::Pdf)?,
+            eval: StackKernel::new(&engine, stack, ClosureContext::Eval)?,
+            albedo: StackKernel::new(&engine, stack, ClosureContext::Albedo)?,
+            sample: StackKernel::new(&engine, stack, ClosureContext::Sample)?,
+            pdf: StackKernel::new(&engine, stack, ClosureContext::Pdf)?,
             engine,
+            stack: stack.clone(),
             mix,
             seed,
             views: ViewDistribution::Cosine,
             directions_per_view: 1,
         })
+    }
+
+    /// The stack whose data this generates.
+    pub fn stack(&self) -> &Arc<Stack> {
+        &self.stack
     }
 
     /// The engine the reference kernels run on.
@@ -156,10 +165,11 @@ impl DataGenerator {
         // Rows are independent (each draws from its own key): drawn in parallel, the same
         // rows whatever the thread count. The kernels run on the engine's threads; this part,
         // on one thread, was a sixth of data generation.
-        let mut params = vec![0.0; rows * PARAMETERS];
+        let np = self.stack.len();
+        let mut params = vec![0.0; rows * np];
         let mut classes = vec![0u8; rows];
-        let (mix, seed) = (self.mix, self.seed);
-        params.par_chunks_mut(PARAMETERS * k).zip(classes.par_chunks_mut(k)).enumerate().for_each(|(g, (group, class_index))| {
+        let (mix, seed, stack) = (self.mix, self.seed, &*self.stack);
+        params.par_chunks_mut(np * k).zip(classes.par_chunks_mut(k)).enumerate().for_each(|(g, (group, class_index))| {
             let rk = mix64(key.wrapping_add(g as u64));
             let class = match mix {
                 ClassMix::All => DataClass::ALL[(unit(rk ^ 1) * 5.0) as usize % 5],
@@ -168,8 +178,8 @@ impl DataGenerator {
             class_index.fill(class.index() as u8);
             let tile = mix64(rk ^ 2) % TILES_PER_CLASS;
             let cell = mix64(rk ^ 3) % (super::classes::TILE * super::classes::TILE);
-            let p = class_parameters(class, seed, tile, cell);
-            for row in group.chunks_mut(PARAMETERS) {
+            let p = class_parameters(stack, class, seed, tile, cell);
+            for row in group.chunks_mut(np) {
                 row.copy_from_slice(&p);
             }
         });
@@ -178,7 +188,8 @@ impl DataGenerator {
         Ok(b)
     }
 
-    /// Directions and reference targets for given parameter rows (rows × 22), drawn from `key`.
+    /// Directions and reference targets for given parameter rows (rows × the stack's
+    /// parameters), drawn from `key`.
     pub fn evaluate(&self, params: Vec<f32>, key: u64) -> Result<TrainingBatch, String> {
         self.evaluate_grouped(params, key, 1)
     }
@@ -186,7 +197,7 @@ impl DataGenerator {
     /// [`evaluate`](Self::evaluate) for rows in groups of `k` sharing their parameters (the
     /// caller's promise): one view per group (`directions_per_view`).
     fn evaluate_grouped(&self, params: Vec<f32>, key: u64, k: usize) -> Result<TrainingBatch, String> {
-        let rows = params.len() / PARAMETERS;
+        let rows = params.len() / self.stack.len();
         let mut b = TrainingBatch { rows, params, class: vec![0; rows], ..Default::default() };
         let mut sampled = Vec::new();
         let mut uniform = Vec::new();
@@ -259,8 +270,8 @@ impl DataGenerator {
             let a = [0, 1, 2].map(|c| out.column(alb_at + c)[g]);
             t[6] = 0.2126 * a[0] + 0.7152 * a[1] + 0.0722 * a[2];
         }
-        b.encoded = vec![0.0; rows * PARAMETERS];
-        encode_rows(&b.params, &mut b.encoded);
+        b.encoded = vec![0.0; rows * self.stack.len()];
+        self.stack.encode_rows(&b.params, &mut b.encoded);
         b.features = Vec::with_capacity(rows * FEATURES);
         for r in 0..rows {
             b.features.extend_from_slice(&direction_features(b.wv[r], b.wl[r]));

@@ -24,7 +24,6 @@ use crate::features::{cosine_hemisphere, direction_features, view_cosines, view_
 use crate::loss::OUTPUTS;
 use crate::mlp::{Mlp, Workspace};
 use crate::model::{DECODER_INPUTS, LATENT};
-use uplift_engines::stack_params::PARAMETERS;
 use uplift_base::rng::{mix64, unit_from_key as unit};
 use uplift_engines::stack_kernel::{usable_sample, vec3_at};
 use std::f32::consts::PI;
@@ -83,23 +82,24 @@ struct GroupProbe {
 /// The R2 sequence's steps (1/g, 1/g² for g³ = g + 1).
 const R2: [f32; 2] = [0.754_877_7, 0.569_840_3];
 
-/// The probes of every group (`group_params`: groups × 22).
+/// The probes of every group (`group_params`: groups × the stack's parameters).
 fn probes(generator: &DataGenerator, group_params: &[f32], diffuse: &[f32], o: &EnergyOptions) -> Result<Vec<GroupProbe>, String> {
-    let groups = group_params.len() / PARAMETERS;
+    let n = generator.stack().len();
+    let groups = group_params.len() / n;
     let mus = view_cosines(o.views);
     let (k_views, m) = (mus.len(), o.lights.max(2) & !1);
     let half = m / 2;
     let per_group = k_views * m;
     let rows = groups * per_group;
     // Row r: group r / per_group, view (r % per_group) / m, light r % m (the first half sampled).
-    let mut params = Vec::with_capacity(rows * PARAMETERS);
+    let mut params = Vec::with_capacity(rows * n);
     let mut wv = Vec::with_capacity(rows);
     let mut wl = vec![[0.0f32, 0.0, 1.0]; rows];
     let mut u = vec![[0.0f32; 3]; rows];
     let (mut sampled, mut cosine) = (Vec::new(), Vec::new());
     for r in 0..rows {
         let (g, k, j) = (r / per_group, (r % per_group) / m, r % m);
-        params.extend_from_slice(&group_params[g * PARAMETERS..(g + 1) * PARAMETERS]);
+        params.extend_from_slice(&group_params[g * n..(g + 1) * n]);
         wv.push(view_direction(mus[k]));
         // Each half is an R2 lattice (Roberts' generalised golden ratio) with a seeded shift
         // per (group, view, half): evenly spread in (u.x, u.y), which choose the direction;
@@ -225,9 +225,9 @@ fn penalty(decoder: &Mlp<f32>, probe: &GroupProbe, z: &[f32], margin: f32, gradi
 }
 
 /// Moves the latents `z` (groups × 6) of groups over the bound until they are within it (or
-/// `o.steps` run out); `group_params` (groups × 22) are the groups' parameters.
+/// `o.steps` run out); `group_params` (groups × the stack's parameters) are the groups' parameters.
 pub fn enforce_energy_bound(decoder: &Mlp<f32>, generator: &DataGenerator, group_params: &[f32], diffuse: &[f32], z: &mut [f32], threads: usize, o: &EnergyOptions) -> Result<EnergyReport, String> {
-    let groups = group_params.len() / PARAMETERS;
+    let groups = group_params.len() / generator.stack().len();
     assert_eq!(z.len(), groups * LATENT, "latents per group");
     assert_eq!(diffuse.len(), groups * 3, "diffuse colours per group");
     let probes = probes(generator, group_params, diffuse, o)?;

@@ -9,7 +9,6 @@ use crate::features::FEATURES;
 use crate::loss::OUTPUTS;
 use crate::mlp::Workspace;
 use crate::model::{fill_decoder_input, NeuralModel};
-use uplift_engines::stack_params::PARAMETERS;
 
 /// The seed offset of held-out data: training seeds never reach it.
 pub const HOLDOUT_SEED: u64 = 0x686f_6c64_6f75_7400;
@@ -28,7 +27,7 @@ pub struct ClassError {
 
 /// Latents of rows of encoded parameters.
 pub fn encode(model: &NeuralModel<f32>, encoded: &[f32]) -> Vec<f32> {
-    let rows = encoded.len() / PARAMETERS;
+    let rows = encoded.len() / model.encoder.shape.widths[0];
     model.encoder.forward(encoded, rows, &mut Workspace::without_input_gradient()).to_vec()
 }
 

@@ -22,7 +22,6 @@ use crate::evaluate::{decode, encode};
 use crate::loss::{eq3_loss, LossParts, LossWeights, OUTPUTS};
 use crate::mlp::Mlp;
 use crate::model::{latent_slice, ModelWorkspace, NeuralModel, Slice, LATENT};
-use uplift_engines::stack_params::{encode_rows, PARAMETERS};
 use crate::trainer::jitter;
 use uplift_base::rng::mix64;
 use std::collections::HashMap;
@@ -144,13 +143,20 @@ pub struct FitResult {
     pub seconds: f64,
 }
 
-/// Fits the latents of a material whose texels have parameters `params` (texels × 22) and
+/// Fits the latents of a material whose texels have parameters `params` (texels × the
+/// generator's stack's parameters) and
 /// diffuse colour `diffuse` (texels × 3; the energy bound assumes c = 1 when it is `None`).
 #[allow(clippy::too_many_arguments)]
 pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params: &[f32], diffuse: Option<&[f32]>, width: usize, height: usize, o: &FitOptions, progress: bool) -> Result<FitResult, String> {
     let start = std::time::Instant::now();
     let n = width * height;
-    if params.len() != n * PARAMETERS {
+    let stack = generator.stack();
+    let model_width = model.encoder.shape.widths[0];
+    if model_width != stack.len() {
+        return Err(format!("the decoder's encoder reads {model_width} parameters; the stack has {}", stack.len()));
+    }
+    let np = stack.len();
+    if params.len() != n * np {
         return Err(format!("{} parameter values for {width}×{height} texels", params.len()));
     }
     if let Some(d) = diffuse {
@@ -162,24 +168,24 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
         }
     }
     if let Some(k) = params.iter().position(|x| !x.is_finite()) {
-        return Err(format!("texel {} parameter {} is not finite", k / PARAMETERS, k % PARAMETERS));
+        return Err(format!("texel {} parameter {} is not finite", k / np, k % np));
     }
     let mut encoded = vec![0.0; params.len()];
-    encode_rows(params, &mut encoded);
+    stack.encode_rows(params, &mut encoded);
     // Groups of texels by quantised encoded parameters.
     let mut group_of = vec![0u32; n];
     let mut index: HashMap<Vec<u32>, u32> = HashMap::new();
     let mut sums: Vec<(Vec<f64>, usize)> = Vec::new();
     for t in 0..n {
-        let e = &encoded[t * PARAMETERS..(t + 1) * PARAMETERS];
+        let e = &encoded[t * np..(t + 1) * np];
         let key: Vec<u32> = if o.levels == 0 { e.iter().map(|x| x.to_bits()).collect() } else { e.iter().map(|x| (x.clamp(0.0, 1.0) * o.levels as f32).round() as u32).collect() };
         let next = sums.len() as u32;
         let g = *index.entry(key).or_insert(next);
         if g == next {
-            sums.push((vec![0.0; PARAMETERS], 0));
+            sums.push((vec![0.0; np], 0));
         }
         let s = &mut sums[g as usize];
-        for (a, x) in s.0.iter_mut().zip(&params[t * PARAMETERS..(t + 1) * PARAMETERS]) {
+        for (a, x) in s.0.iter_mut().zip(&params[t * np..(t + 1) * np]) {
             *a += *x as f64;
         }
         s.1 += 1;
@@ -188,13 +194,13 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     let groups = sums.len();
     let mean: Vec<f32> = sums.iter().flat_map(|(s, c)| s.iter().map(move |x| (x / *c as f64) as f32)).collect();
     let mut mean_encoded = vec![0.0; mean.len()];
-    encode_rows(&mean, &mut mean_encoded);
+    stack.encode_rows(&mean, &mut mean_encoded);
     let z0 = encode(model, &mean_encoded);
     // Each step draws fresh direction pairs for every group (a fixed set lets six latent
     // numbers overfit a few dozen directions of a sharp lobe).
     let d = o.directions.max(1);
     let rows = groups * d;
-    let rows_params: Vec<f32> = (0..rows).flat_map(|r| mean[(r / d) * PARAMETERS..(r / d + 1) * PARAMETERS].to_vec()).collect();
+    let rows_params: Vec<f32> = (0..rows).flat_map(|r| mean[(r / d) * np..(r / d + 1) * np].to_vec()).collect();
     let mut z = z0.clone();
     let mut adam = Adam::new(z.len());
     let mut ws = Vec::new();
@@ -256,7 +262,7 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     // Before/after at sampled texels, on other directions, with their own parameters.
     let checks: Vec<usize> = (0..o.check_texels.min(n).max(1)).map(|k| if o.check_texels >= n { k } else { (mix64(o.seed ^ 0x636b ^ k as u64) % n as u64) as usize }).collect();
     let cd = o.check_directions.max(1);
-    let check_params: Vec<f32> = checks.iter().flat_map(|&t| (0..cd).flat_map(move |_| params[t * PARAMETERS..(t + 1) * PARAMETERS].to_vec())).collect();
+    let check_params: Vec<f32> = checks.iter().flat_map(|&t| (0..cd).flat_map(move |_| params[t * np..(t + 1) * np].to_vec())).collect();
     let check = generator.evaluate(check_params, mix64(o.seed ^ 0x6368_6563_6b))?;
     let lat = |src: &[f32]| -> Vec<f32> { checks.iter().flat_map(|&t| (0..cd).flat_map(move |_| src[t * LATENT..(t + 1) * LATENT].to_vec())).collect() };
     let loss_of = |z: &[f32]| {

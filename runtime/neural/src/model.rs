@@ -1,4 +1,4 @@
-//! The neural material model (lobes.md §4): the encoder (22 encoded parameters → 64 → 64 → 64
+//! The neural material model (lobes.md §4): the encoder (the stack's encoded parameters → 64 → 64 → 64
 //! → 6, LeakyReLU hidden, sigmoid out, so latents are image-like values in (0, 1)) and the
 //! universal decoder (6-D latent + 9 direction features → 4 × 64 LeakyReLU → 7, exp head:
 //! f RGB, T RGB, R). One training slice runs encoder → jitter → decoder → Eq. 3 → back again;
@@ -7,7 +7,6 @@
 use crate::features::FEATURES;
 use crate::loss::{eq3_loss, LossParts, LossWeights, OUTPUTS};
 use crate::mlp::{Activation, Mlp, MlpShape, Real, Workspace};
-use uplift_engines::stack_params::PARAMETERS;
 
 /// Latent dimensions: two RGB textures.
 pub const LATENT: usize = 6;
@@ -15,9 +14,9 @@ pub const LATENT: usize = 6;
 /// The decoder's inputs per query: latent, then direction features.
 pub const DECODER_INPUTS: usize = LATENT + FEATURES;
 
-/// The encoder's shape (lobes.md §4.2).
-pub fn encoder_shape() -> MlpShape {
-    MlpShape { widths: vec![PARAMETERS, 64, 64, 64, LATENT], hidden: Activation::LEAKY_RELU, output: Activation::Sigmoid }
+/// The encoder's shape for a stack of `parameters` parameters (lobes.md §4.2).
+pub fn encoder_shape(parameters: usize) -> MlpShape {
+    MlpShape { widths: vec![parameters, 64, 64, 64, LATENT], hidden: Activation::LEAKY_RELU, output: Activation::Sigmoid }
 }
 
 /// The decoder's shape (paper §4.1: 4 hidden layers of 64).
@@ -91,14 +90,15 @@ impl<T: Real> NeuralModel<T> {
     /// Xavier-uniform weights; the decoder's T and R output biases start at exp(b − 3) = ½, the
     /// middle of their range (from e⁻³ ≈ 0.05, the exp head's rate of change in log space would
     /// take thousands of steps at their small loss weights to get there).
-    pub fn new(seed: u64) -> NeuralModel<T> {
+    /// `parameters`: the stack's parameter count (the encoder's input width).
+    pub fn new(parameters: usize, seed: u64) -> NeuralModel<T> {
         let mut decoder = Mlp::new(decoder_shape(), seed.wrapping_add(1));
         let last = decoder.shape.layers() - 1;
         let (_, b) = decoder.shape.offsets(last);
         for k in 3..OUTPUTS {
             decoder.params[b + k] = T::from_f64(3.0 + 0.5f64.ln());
         }
-        NeuralModel { encoder: Mlp::new(encoder_shape(), seed), decoder }
+        NeuralModel { encoder: Mlp::new(encoder_shape(parameters), seed), decoder }
     }
 
     /// Encoder, jitter, decoder, Eq. 3 and back: adds the gradients of both networks. Runs in

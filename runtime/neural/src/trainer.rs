@@ -10,6 +10,7 @@ use crate::datagen::{ClassMix, DataGenerator, TrainingBatch};
 use crate::loss::{LossParts, LossWeights};
 use crate::model::{ModelWorkspace, NeuralModel, Slice, LATENT};
 use crate::weights::TensorFile;
+use uplift_engines::stack::Stack;
 use uplift_base::rng::mix64;
 use std::path::{Path, PathBuf};
 
@@ -82,8 +83,9 @@ pub struct TrainState {
 }
 
 impl TrainState {
-    pub fn new(seed: u64) -> TrainState {
-        let model = NeuralModel::<f32>::new(seed);
+    /// A fresh state for a stack of `parameters` parameters.
+    pub fn new(parameters: usize, seed: u64) -> TrainState {
+        let model = NeuralModel::<f32>::new(parameters, seed);
         TrainState { adam_enc: Adam::new(model.encoder.params.len()), adam_dec: Adam::new(model.decoder.params.len()), model, step: 0, history: Vec::new(), seconds: 0.0, window: (LossParts::default(), 0) }
     }
 }
@@ -202,13 +204,13 @@ pub fn parse_history(csv: &str) -> Result<Vec<LossRecord>, String> {
 }
 
 /// The networks with their training record (what `uplift train` writes).
-pub fn weights_file(state: &TrainState, opts: &TrainOptions, extra: &[(&str, String)]) -> TensorFile {
+pub fn weights_file(state: &TrainState, stack: &Stack, opts: &TrainOptions, extra: &[(&str, String)]) -> TensorFile {
     let mut f = TensorFile::default();
     f.put_mlp("encoder", &state.model.encoder);
     f.put_mlp("decoder", &state.model.decoder);
     let m = &mut f.metadata;
     m.insert("format".into(), "uplift-neural-material-1".into());
-    m.insert(super::weights::STACK_KEY.into(), uplift_engines::stack_params::signature());
+    m.insert(super::weights::STACK_KEY.into(), stack.signature());
     m.insert("features".into(), "sin_theta_v,mu_v,wl'x,|wl'y|,wl'z,h'x,|h'y|,h'z,c_d (lobes.md 4.1 variant B)".into());
     m.insert("outputs".into(), "f.R,f.G,f.B,T.R,T.G,T.B,R".into());
     m.insert("loss".into(), "Eq.3: 0.95*L1(log1p(mu_l*f)) + 0.04*L1(T) + 0.01*L1(R)".into());
@@ -222,8 +224,8 @@ pub fn weights_file(state: &TrainState, opts: &TrainOptions, extra: &[(&str, Str
     f
 }
 
-fn write_checkpoint(path: &Path, state: &TrainState, opts: &TrainOptions) -> Result<(), String> {
-    let mut f = weights_file(state, opts, &[]);
+fn write_checkpoint(path: &Path, state: &TrainState, stack: &Stack, opts: &TrainOptions) -> Result<(), String> {
+    let mut f = weights_file(state, stack, opts, &[]);
     // Rust prints floats in the shortest form that reads back to the same value.
     let (w, n) = &state.window;
     f.metadata.insert("window".into(), format!("{n},{},{},{},{}", w.total, w.f, w.t, w.r));
@@ -233,7 +235,7 @@ fn write_checkpoint(path: &Path, state: &TrainState, opts: &TrainOptions) -> Res
 }
 
 /// Loads a checkpoint made with the same options.
-pub fn read_checkpoint(path: &Path, opts: &TrainOptions) -> Result<TrainState, String> {
+pub fn read_checkpoint(path: &Path, stack: &Stack, opts: &TrainOptions) -> Result<TrainState, String> {
     let f = TensorFile::read(path)?;
     let at = |e: String| format!("{}: {e}", path.display());
     let made_with = f.meta("options").map_err(at)?;
@@ -242,7 +244,7 @@ pub fn read_checkpoint(path: &Path, opts: &TrainOptions) -> Result<TrainState, S
     }
     let encoder = f.mlp("encoder").map_err(at)?;
     let decoder = f.mlp("decoder").map_err(at)?;
-    super::weights::check_stack(&f, &encoder).map_err(at)?;
+    super::weights::check_stack(&f, &encoder, stack).map_err(at)?;
     Ok(TrainState {
         adam_enc: f.adam("encoder", encoder.params.len()).map_err(at)?,
         adam_dec: f.adam("decoder", decoder.params.len()).map_err(at)?,
@@ -269,7 +271,7 @@ pub fn read_checkpoint(path: &Path, opts: &TrainOptions) -> Result<TrainState, S
 pub fn train(generator: &DataGenerator, opts: &TrainOptions, out: &Path, extra: &[(&str, String)], progress: bool) -> Result<TrainState, String> {
     let state = train_checkpointed(generator, opts, out, progress)?;
     if state.step == opts.steps {
-        weights_file(&state, opts, extra).write(out)?;
+        weights_file(&state, generator.stack(), opts, extra).write(out)?;
         finish(out);
     }
     Ok(state)
@@ -295,14 +297,14 @@ pub fn train_checkpointed(generator: &DataGenerator, opts: &TrainOptions, out: &
     }
     let ckpt = checkpoint_path(out);
     let mut state = if ckpt.exists() {
-        read_checkpoint(&ckpt, opts)?
+        read_checkpoint(&ckpt, generator.stack(), opts)?
     } else {
-        let mut s = TrainState::new(opts.seed);
+        let mut s = TrainState::new(generator.stack().len(), opts.seed);
         if let Some(init) = &opts.init {
             let f = super::weights::TensorFile::read(init)?;
             let at = |e: String| format!("{}: {e}", init.display());
             s.model = NeuralModel { encoder: f.mlp("encoder").map_err(at)?, decoder: f.mlp("decoder").map_err(at)? };
-            super::weights::check_stack(&f, &s.model.encoder).map_err(at)?;
+            super::weights::check_stack(&f, &s.model.encoder, generator.stack()).map_err(at)?;
         }
         s
     };
@@ -336,7 +338,7 @@ pub fn train_checkpointed(generator: &DataGenerator, opts: &TrainOptions, out: &
         bar.set_position(state.step);
         let stop = opts.stop_after == Some(state.step) && state.step < opts.steps;
         if state.step % opts.checkpoint_every.max(1) == 0 || state.step == opts.steps || stop {
-            write_checkpoint(&ckpt, &state, opts)?;
+            write_checkpoint(&ckpt, &state, generator.stack(), opts)?;
         }
         if stop {
             bar.abandon();

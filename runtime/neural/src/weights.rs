@@ -11,6 +11,7 @@ use uplift_base::atomic_write::write_atomically;
 use safetensors::tensor::{Dtype, SafeTensors, TensorView};
 use std::collections::BTreeMap;
 use std::path::Path;
+use uplift_engines::stack::Stack;
 
 /// Named f32 tensors and string metadata, read from or written to one file.
 #[derive(Clone, Debug, Default)]
@@ -156,26 +157,26 @@ impl TensorFile {
 pub const SHIPPED_DECODER: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../weights/decoder.safetensors");
 
 /// The encoder and decoder of a weights file, checked against this build's stack.
-pub fn load_model(path: &Path) -> Result<crate::model::NeuralModel<f32>, String> {
+pub fn load_model(path: &Path, stack: &Stack) -> Result<crate::model::NeuralModel<f32>, String> {
     let f = TensorFile::read(path)?;
     let at = |e: String| format!("{}: {e}", path.display());
     let model = crate::model::NeuralModel { encoder: f.mlp("encoder").map_err(at)?, decoder: f.mlp("decoder").map_err(at)? };
-    check_stack(&f, &model.encoder).map_err(at)?;
+    check_stack(&f, &model.encoder, stack).map_err(at)?;
     Ok(model)
 }
 
-/// The metadata key of the stack signature (`stack_params::signature`).
+/// The metadata key of the stack signature (`Stack::signature`).
 pub const STACK_KEY: &str = "stack";
 
-/// Whether a weights file was trained for this build's `uplift_stack`: its recorded signature
+/// Whether a weights file was trained for `stack`: its recorded signature
 /// (`stack`), or — in files written before signatures were recorded — its encoder's input
 /// width.
-pub fn check_stack(f: &TensorFile, encoder: &Mlp<f32>) -> Result<(), String> {
+pub fn check_stack(f: &TensorFile, encoder: &Mlp<f32>, stack: &Stack) -> Result<(), String> {
     match f.metadata.get(STACK_KEY) {
-        Some(recorded) => uplift_engines::stack_params::check_signature(recorded),
+        Some(recorded) => stack.check_signature(recorded).map_err(|e| format!("{e}{}", if stack.is_builtin() { " (was it trained with --stack DIR? pass the same folder)" } else { "" })),
         None => {
             let width = encoder.shape.widths[0];
-            let ours = uplift_engines::stack_params::PARAMETERS;
+            let ours = stack.len();
             if width == ours {
                 Ok(())
             } else {
@@ -201,20 +202,21 @@ mod tests {
     /// its encoder's width. The shipped decoder records this build's stack.
     #[test]
     fn a_decoder_for_another_stack_is_refused() {
-        let encoder = Mlp::<f32>::new(crate::model::encoder_shape(), 1);
+        let stack = Stack::builtin();
+        let encoder = Mlp::<f32>::new(crate::model::encoder_shape(stack.len()), 1);
         let mut f = TensorFile::default();
-        assert!(check_stack(&f, &encoder).is_ok(), "an old file of the right width");
-        f.metadata.insert(STACK_KEY.into(), uplift_engines::stack_params::signature());
-        assert!(check_stack(&f, &encoder).is_ok());
-        f.metadata.insert(STACK_KEY.into(), format!("{} film_ior[1.2,2.0]linear", uplift_engines::stack_params::signature()));
-        let e = check_stack(&f, &encoder).unwrap_err();
+        assert!(check_stack(&f, &encoder, &stack).is_ok(), "an old file of the right width");
+        f.metadata.insert(STACK_KEY.into(), stack.signature());
+        assert!(check_stack(&f, &encoder, &stack).is_ok());
+        f.metadata.insert(STACK_KEY.into(), format!("{} film_ior[1.2,2.0]linear", stack.signature()));
+        let e = check_stack(&f, &encoder, &stack).unwrap_err();
         assert!(e.contains("another uplift_stack") && e.contains("`film_ior[1.2,2.0]linear` is not in this stack"), "{e}");
-        let mut wide = crate::model::encoder_shape();
+        let mut wide = crate::model::encoder_shape(stack.len());
         wide.widths[0] += 2;
-        let e = check_stack(&TensorFile::default(), &Mlp::<f32>::new(wide, 1)).unwrap_err();
-        assert!(e.contains(&format!("reads {} parameters", uplift_engines::stack_params::PARAMETERS + 2)), "{e}");
+        let e = check_stack(&TensorFile::default(), &Mlp::<f32>::new(wide, 1), &stack).unwrap_err();
+        assert!(e.contains(&format!("reads {} parameters", stack.len() + 2)), "{e}");
         let shipped = TensorFile::read(Path::new(SHIPPED_DECODER)).unwrap();
-        assert_eq!(shipped.meta(STACK_KEY).unwrap(), uplift_engines::stack_params::signature());
+        assert_eq!(shipped.meta(STACK_KEY).unwrap(), stack.signature());
     }
 
     #[test]

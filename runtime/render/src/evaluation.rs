@@ -52,7 +52,7 @@ pub fn material_type(dir: &Path) -> Result<usize, String> {
 /// Renders one fitted material both ways and compares.
 pub fn evaluate_material(dir: &Path, reference: &Shading, neural: &Shading, env: &Environment, o: &RenderOptions, exposure: f32) -> Result<(MaterialEval, EvalImages), String> {
     let kind = material_type(dir)?;
-    let surface = SurfaceTextures::load(dir, true)?;
+    let surface = SurfaceTextures::load(dir, reference.stack(), true)?;
     let t0 = std::time::Instant::now();
     let r = render(&Sphere::preview(), env, &surface, reference, o, None)?;
     let t1 = std::time::Instant::now();

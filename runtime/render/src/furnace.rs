@@ -20,7 +20,7 @@
 use crate::material;
 use crate::scene::Vec3;
 use crate::shading::{Model, Shading};
-use crate::surface::{SurfaceSample, SurfaceTextures, TEXEL_VALUES};
+use crate::surface::{SurfaceSample, SurfaceTextures};
 use uplift_base::rng::{mix64, unit_from_key as unit};
 use uplift_neural::features::view_direction;
 use std::collections::HashMap;
@@ -137,7 +137,8 @@ pub fn distinct_texels(surface: &SurfaceTextures) -> Vec<usize> {
     let mut seen: HashMap<Vec<u32>, usize> = HashMap::new();
     let mut order = Vec::new();
     for t in 0..surface.width * surface.height {
-        let key: Vec<u32> = surface.values[t * TEXEL_VALUES..(t + 1) * TEXEL_VALUES].iter().map(|x| x.to_bits()).collect();
+        let stride = surface.stride();
+        let key: Vec<u32> = surface.values[t * stride..(t + 1) * stride].iter().map(|x| x.to_bits()).collect();
         if let std::collections::hash_map::Entry::Vacant(e) = seen.entry(key) {
             e.insert(t);
             order.push(t);

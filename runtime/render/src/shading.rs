@@ -24,7 +24,8 @@ use uplift_neural::inference::decode_parallel;
 use uplift_neural::loss::OUTPUTS;
 use uplift_neural::mlp::Mlp;
 use uplift_neural::model::{fill_decoder_input, LATENT};
-use uplift_engines::stack_params::PARAMETERS;
+use uplift_engines::stack::Stack;
+use std::sync::Arc;
 use uplift_neural::inference::WgpuDecoder;
 use uplift_engines::stack_kernel::{usable_sample, vec3_at, Engine, StackKernel};
 use uplift_engines::wgpu_engine::WgpuEngine;
@@ -79,9 +80,9 @@ pub struct Shading {
 }
 
 fn params_of(points: &[SurfaceSample]) -> Vec<f32> {
-    let mut p = Vec::with_capacity(points.len() * PARAMETERS);
+    let mut p = Vec::with_capacity(points.len() * points.first().map_or(0, |s| s.count));
     for s in points {
-        p.extend_from_slice(&s.params);
+        p.extend_from_slice(s.parameters());
     }
     p
 }
@@ -91,12 +92,13 @@ fn finite3(v: [f32; 3]) -> [f32; 3] {
 }
 
 impl Shading {
-    /// Shading on the CPU engine (generated Rust; the decoder is the trainer's forward pass).
-    pub fn new(engine: CpuEngine, model: Model) -> Result<Shading, String> {
+    /// Shading of `stack` on the CPU engine (generated Rust; the decoder is the trainer's
+    /// forward pass).
+    pub fn new(engine: CpuEngine, stack: &Arc<Stack>, model: Model) -> Result<Shading, String> {
         Ok(Shading {
-            pdf: StackKernel::new(&engine, ClosureContext::Pdf)?,
-            sample: StackKernel::new(&engine, ClosureContext::Sample)?,
-            albedo: StackKernel::new(&engine, ClosureContext::Albedo)?,
+            pdf: StackKernel::new(&engine, stack, ClosureContext::Pdf)?,
+            sample: StackKernel::new(&engine, stack, ClosureContext::Sample)?,
+            albedo: StackKernel::new(&engine, stack, ClosureContext::Albedo)?,
             threads: engine.threads(),
             engine: ShadingEngine::Cpu(engine),
             glint: Default::default(),
@@ -106,22 +108,27 @@ impl Shading {
     }
 
     /// Shading on the wgpu engine (the stack's WGSL kernels, the emitted WGSL decoder).
-    pub fn new_wgpu(engine: WgpuEngine, model: Model) -> Result<Shading, String> {
+    pub fn new_wgpu(engine: WgpuEngine, stack: &Arc<Stack>, model: Model) -> Result<Shading, String> {
         let e = Engine::Wgpu(&engine);
         let wgpu_decoder = match &model {
             Model::Neural(d) => Some(WgpuDecoder::new(&engine, d, "render")?),
             Model::Reference => None,
         };
         Ok(Shading {
-            pdf: StackKernel::on(e, ClosureContext::Pdf)?,
-            sample: StackKernel::on(e, ClosureContext::Sample)?,
-            albedo: StackKernel::on(e, ClosureContext::Albedo)?,
+            pdf: StackKernel::on(e, stack, ClosureContext::Pdf)?,
+            sample: StackKernel::on(e, stack, ClosureContext::Sample)?,
+            albedo: StackKernel::on(e, stack, ClosureContext::Albedo)?,
             threads: 1,
             engine: ShadingEngine::Wgpu(engine),
             glint: Default::default(),
             wgpu_decoder,
             model,
         })
+    }
+
+    /// The stack it shades.
+    pub fn stack(&self) -> &Arc<Stack> {
+        self.albedo.stack()
     }
 
     fn engine(&self) -> Engine<'_> {

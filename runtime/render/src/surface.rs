@@ -1,4 +1,4 @@
-//! A material's per-texel data as the renderer reads it: the 22 `uplift_stack` parameters and
+//! A material's per-texel data as the renderer reads it: the `uplift_stack` parameters and
 //! the diffuse colour c (from `uplift enhance`'s params.exr), and optionally the 6 fitted latents
 //! (`uplift fit`'s latent.exr). Lookups are bilinear, repeating in u and clamped in v; v = 1 is
 //! the image's top row (MaterialX's texcoord convention, as `uplift enhance` bakes).
@@ -12,20 +12,20 @@
 //! channels or the field render without a normal map (or as `plane`).
 
 use crate::scene::Hit;
-use uplift_engines::stack_params::PARAMETERS;
+use uplift_engines::stack::{Stack, MAX_PARAMETERS};
 use std::path::Path;
 use uplift_material::MaterialFolder;
 use uplift_neural::model::LATENT;
 
 pub use uplift_material::NormalSpace;
 
-/// Values per texel: parameters, diffuse colour, latents.
-pub const TEXEL_VALUES: usize = PARAMETERS + 3 + LATENT;
-
-/// Per-texel material data, row-major (row 0 at the top), `TEXEL_VALUES` floats per texel.
+/// Per-texel material data, row-major (row 0 at the top): per texel the stack's parameters,
+/// the diffuse colour and the latents ([`SurfaceTextures::stride`] floats).
 pub struct SurfaceTextures {
     pub width: usize,
     pub height: usize,
+    /// The stack's parameters per texel.
+    pub parameters: usize,
     pub values: Vec<f32>,
     pub has_latents: bool,
     /// Baked shading normals per texel (empty: no normal map) and their frame.
@@ -35,36 +35,52 @@ pub struct SurfaceTextures {
     pub glint: Option<uplift_material::GlintRecord>,
 }
 
-/// The data at one surface point.
+/// The data at one surface point (the first `count` of `params` are the stack's).
 #[derive(Clone, Copy)]
 pub struct SurfaceSample {
-    pub params: [f32; PARAMETERS],
+    pub params: [f32; MAX_PARAMETERS],
+    pub count: usize,
     pub diffuse: [f32; 3],
     pub latent: [f32; LATENT],
 }
 
+impl SurfaceSample {
+    /// The stack's parameters.
+    pub fn parameters(&self) -> &[f32] {
+        &self.params[..self.count]
+    }
+}
+
 impl SurfaceTextures {
-    /// One texel everywhere.
-    pub fn uniform(params: [f32; PARAMETERS], diffuse: [f32; 3], latent: Option<[f32; LATENT]>) -> SurfaceTextures {
+    /// One texel everywhere (`params`: one row of the stack's parameters).
+    pub fn uniform(params: &[f32], diffuse: [f32; 3], latent: Option<[f32; LATENT]>) -> SurfaceTextures {
+        assert!(params.len() <= MAX_PARAMETERS, "a stack has at most {MAX_PARAMETERS} parameters");
         let mut values = params.to_vec();
         values.extend_from_slice(&diffuse);
         values.extend_from_slice(&latent.unwrap_or([0.0; LATENT]));
-        SurfaceTextures { width: 1, height: 1, values, has_latents: latent.is_some(), normals: Vec::new(), normal_space: NormalSpace::Plane, glint: None }
+        SurfaceTextures { width: 1, height: 1, parameters: params.len(), values, has_latents: latent.is_some(), normals: Vec::new(), normal_space: NormalSpace::Plane, glint: None }
     }
 
-    /// An enhanced material's folder: params.exr (parameters and diffuse colour) and, if
-    /// `latents`, latent.exr of the same size.
-    pub fn load(dir: &Path, latents: bool) -> Result<SurfaceTextures, String> {
+    /// Floats per texel: parameters, diffuse colour, latents.
+    pub fn stride(&self) -> usize {
+        self.parameters + 3 + LATENT
+    }
+
+    /// An enhanced material's folder: params.exr (`stack`'s parameters and the diffuse colour)
+    /// and, if `latents`, latent.exr of the same size.
+    pub fn load(dir: &Path, stack: &Stack, latents: bool) -> Result<SurfaceTextures, String> {
         let folder = MaterialFolder::open(dir)?;
-        let p = folder.read_params()?;
+        let p = folder.read_params(stack)?;
         let (w, h) = (p.width, p.height);
         let n = w * h;
+        let np = stack.len();
+        let stride = np + 3 + LATENT;
         let diffuse = p.diffuse.ok_or_else(|| format!("{}: no channel `diffuse_color.R/G/B` (written by `uplift enhance`; re-run it if the folder predates the diffuse_color channels)", folder.params_path().display()))?;
-        let mut values = vec![0.0f32; n * TEXEL_VALUES];
+        let mut values = vec![0.0f32; n * stride];
         for t in 0..n {
-            let v = &mut values[t * TEXEL_VALUES..(t + 1) * TEXEL_VALUES];
-            v[..PARAMETERS].copy_from_slice(&p.params[t * PARAMETERS..(t + 1) * PARAMETERS]);
-            v[PARAMETERS..PARAMETERS + 3].copy_from_slice(&diffuse[t * 3..t * 3 + 3]);
+            let v = &mut values[t * stride..(t + 1) * stride];
+            v[..np].copy_from_slice(&p.params[t * np..(t + 1) * np]);
+            v[np..np + 3].copy_from_slice(&diffuse[t * 3..t * 3 + 3]);
         }
         if latents {
             let lat = folder.read_latents()?;
@@ -72,25 +88,27 @@ impl SurfaceTextures {
                 return Err(format!("{}: {}×{} texels, but params.exr has {w}×{h}", folder.latent_path().display(), lat.width, lat.height));
             }
             for t in 0..n {
-                values[t * TEXEL_VALUES + PARAMETERS + 3..(t + 1) * TEXEL_VALUES].copy_from_slice(&lat.latents[t * LATENT..(t + 1) * LATENT]);
+                values[t * stride + np + 3..(t + 1) * stride].copy_from_slice(&lat.latents[t * LATENT..(t + 1) * LATENT]);
             }
         }
         let meta = folder.read_meta_if_any()?;
         let normal_space = meta.as_ref().map_or(NormalSpace::Plane, |m| m.normal_space);
         let glint = meta.and_then(|m| m.glint);
-        Ok(SurfaceTextures { width: w, height: h, values, has_latents: latents, normals: p.normals.unwrap_or_default(), normal_space, glint })
+        Ok(SurfaceTextures { width: w, height: h, parameters: np, values, has_latents: latents, normals: p.normals.unwrap_or_default(), normal_space, glint })
     }
 
     /// The data of texel `t` (row-major index).
     pub fn texel(&self, t: usize) -> SurfaceSample {
-        Self::split(&self.values[t * TEXEL_VALUES..(t + 1) * TEXEL_VALUES])
+        let stride = self.stride();
+        self.split(&self.values[t * stride..(t + 1) * stride])
     }
 
-    fn split(v: &[f32]) -> SurfaceSample {
-        let mut s = SurfaceSample { params: [0.0; PARAMETERS], diffuse: [0.0; 3], latent: [0.0; LATENT] };
-        s.params.copy_from_slice(&v[..PARAMETERS]);
-        s.diffuse.copy_from_slice(&v[PARAMETERS..PARAMETERS + 3]);
-        s.latent.copy_from_slice(&v[PARAMETERS + 3..]);
+    fn split(&self, v: &[f32]) -> SurfaceSample {
+        let np = self.parameters;
+        let mut s = SurfaceSample { params: [0.0; MAX_PARAMETERS], count: np, diffuse: [0.0; 3], latent: [0.0; LATENT] };
+        s.params[..np].copy_from_slice(&v[..np]);
+        s.diffuse.copy_from_slice(&v[np..np + 3]);
+        s.latent.copy_from_slice(&v[np + 3..np + 3 + LATENT]);
         s
     }
 
@@ -108,13 +126,14 @@ impl SurfaceTextures {
 
     /// Bilinear lookup at texture coordinates (u, v).
     pub fn lookup(&self, uv: [f32; 2]) -> SurfaceSample {
-        let mut acc = [0.0f32; TEXEL_VALUES];
+        let stride = self.stride();
+        let mut acc = [0.0f32; MAX_PARAMETERS + 3 + LATENT];
         for (t, wgt) in self.taps(uv) {
-            for (a, v) in acc.iter_mut().zip(&self.values[t * TEXEL_VALUES..(t + 1) * TEXEL_VALUES]) {
+            for (a, v) in acc.iter_mut().zip(&self.values[t * stride..(t + 1) * stride]) {
                 *a += wgt * v;
             }
         }
-        Self::split(&acc)
+        self.split(&acc[..stride])
     }
 
     /// The baked normal at (u, v), bilinear and renormalised, in `normal_space` (None without

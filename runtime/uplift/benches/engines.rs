@@ -22,7 +22,7 @@
 //! with every lobe live (metalness 0.5, fuzz 0.3, coat 0.5, inner 0.4, subcutaneous 0.5 — its
 //! defaults leave 6 of the 8 lobes at weight 0) and the conductor graph at GGX α 0.3 (gold, as
 //! Mitsuba's `roughconductor` below); `--random-params` draws every `uplift_stack` parameter
-//! per row inside its range (stack_params.rs; weights at least 5 % of their range, so no lobe
+//! per row inside its range (uplift_engines::stack; weights at least 5 % of their range, so no lobe
 //! is dead). Directions: `wv` and `wl` uniform on the upper hemisphere. `--per-view K`: the
 //! grouped layout (`PatternBatch::points_per_group`): runs of K rows share their first row's
 //! view and parameters, each row its own `wl` — a kernel with a dependence-split form runs its
@@ -161,9 +161,10 @@ fn batch(kernel: &PatternKernel, n: usize, params: &[(String, Vec<f32>)], random
     if random_params {
         // Every uplift_stack parameter per row, inside its range (weights ≥ 5 % of it); each
         // parameter's column found once.
-        let table = &uplift_engines::stack_params::PARAMETER_TABLE;
+        let stack = uplift_engines::stack::Stack::builtin();
         // (Inputs a specialised kernel no longer has are skipped.)
-        let columns: Vec<(usize, &uplift_engines::stack_params::Parameter)> = table
+        let columns: Vec<(usize, &uplift_engines::stack::Parameter)> = stack
+            .parameters()
             .iter()
             .filter_map(|p| kernel.inputs.iter().find(|i| i.input.name == p.input).map(|input| (input.offset + p.component, p)))
             .collect();

@@ -107,7 +107,7 @@ fn main() {
         (None, Some(f)) => (cores as f64 * f / 1e9, "cores × an AVX-512 FMA loop"),
         (None, None) => (sgemm, "cores × a 1024³ sgemm"),
     };
-    let generator = DataGenerator::new(CpuEngine::with_threads(o.threads).unwrap(), ClassMix::All, 1).unwrap();
+    let generator = DataGenerator::new(CpuEngine::with_threads(o.threads).unwrap(), &uplift_engines::stack::Stack::builtin(), ClassMix::All, 1).unwrap();
     let batch = generator.batch(0, o.rows).unwrap();
     let (enc, dec) = (encoder_shape(), decoder_shape());
     // Multiply–adds per row: forward; training adds two GEMMs per layer backward (the
@@ -179,7 +179,7 @@ fn main() {
     // The grouped layout: 32 light directions per (parameter set, view) — 16 lit uniformly
     // through the eval, 16 sampled, each half a full group for the split kernels
     // (`GROUPED_MIN_POINTS`) — the albedo once per group.
-    let mut grouped = DataGenerator::new(CpuEngine::with_threads(o.threads).unwrap(), ClassMix::All, 1).unwrap();
+    let mut grouped = DataGenerator::new(CpuEngine::with_threads(o.threads).unwrap(), &uplift_engines::stack::Stack::builtin(), ClassMix::All, 1).unwrap();
     grouped.directions_per_view = 32;
     let g = rate(o.rows, o.seconds, || {
         grouped.batch(k, o.rows).unwrap();

@@ -6,7 +6,6 @@
 
 use std::time::Instant;
 use uplift_engines::cpu_engine::CpuEngine;
-use uplift_engines::stack_params::PARAMETER_TABLE;
 use uplift_render::environment::Environment;
 use uplift_render::integrator::{render, RenderOptions};
 use uplift_enhance::gltf_input::WorldTriangle;
@@ -23,19 +22,19 @@ fn main() {
         ("fuzz_thickness", 0.5), ("coat_weight", 0.5), ("coat_ior", 1.5), ("inner_weight", 0.0), ("inner_thickness", 0.5), ("scatter_color.R", 0.5),
         ("scatter_color.G", 0.5), ("scatter_color.B", 0.5), ("subcutaneous_weight", 0.0), ("subcutaneous_roughness", 0.64),
     ];
-    let params = std::array::from_fn(|k| values.iter().find(|v| v.0 == PARAMETER_TABLE[k].channel).unwrap().1);
-    let surface = SurfaceTextures::uniform(params, [0.5, 0.35, 0.25], Some([0.5, 0.4, 0.6, 0.3, 0.2, 0.5]));
-    let decoder = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER)).unwrap().decoder;
+    let params: Vec<f32> = uplift_engines::stack::Stack::builtin().parameters().iter().map(|p| values.iter().find(|v| v.0 == p.channel).unwrap().1).collect();
+    let surface = SurfaceTextures::uniform(&params, [0.5, 0.35, 0.25], Some([0.5, 0.4, 0.6, 0.3, 0.2, 0.5]));
+    let decoder = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER), &uplift_engines::stack::Stack::builtin()).unwrap().decoder;
     let env = Environment::studio();
     let o = RenderOptions { width: 192, height: 192, spp: 16, bounces: 2, ..Default::default() };
     let mut engines: Vec<(&str, &str, Shading)> = vec![
-        ("CPU", "reference", Shading::new(CpuEngine::new().unwrap(), Model::Reference).unwrap()),
-        ("CPU", "neural", Shading::new(CpuEngine::new().unwrap(), Model::Neural(decoder.clone())).unwrap()),
+        ("CPU", "reference", Shading::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Reference).unwrap()),
+        ("CPU", "neural", Shading::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Neural(decoder.clone())).unwrap()),
     ];
     match (WgpuEngine::new(), WgpuEngine::new()) {
         (Ok(a), Ok(b)) => {
-            engines.push(("wgpu", "reference", Shading::new_wgpu(a, Model::Reference).unwrap()));
-            engines.push(("wgpu", "neural", Shading::new_wgpu(b, Model::Neural(decoder)).unwrap()));
+            engines.push(("wgpu", "reference", Shading::new_wgpu(a, &uplift_engines::stack::Stack::builtin(), Model::Reference).unwrap()));
+            engines.push(("wgpu", "neural", Shading::new_wgpu(b, &uplift_engines::stack::Stack::builtin(), Model::Neural(decoder)).unwrap()));
         }
         (Err(e), _) | (_, Err(e)) => println!("wgpu engine unavailable ({e}); CPU only"),
     }

@@ -8,7 +8,6 @@
 
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_neural::datagen::{ClassMix, DataGenerator};
-use uplift_engines::stack_params::PARAMETER_TABLE;
 use uplift_neural::weights::TensorFile;
 use clap::Args;
 use std::path::PathBuf;
@@ -38,6 +37,8 @@ pub struct DatagenArgs {
     /// of 16384.
     #[arg(long, default_value_t = 1)]
     pub directions_per_view: usize,
+    #[command(flatten)]
+    pub stack: super::StackArgs,
 }
 
 pub fn run(args: DatagenArgs) -> Result<(), String> {
@@ -52,12 +53,13 @@ pub fn run(args: DatagenArgs) -> Result<(), String> {
         return Err(format!("--directions-per-view {}: a divisor of {CHUNK} and of --count {}", args.directions_per_view, args.count));
     }
     std::fs::create_dir_all(&args.output).map_err(|e| format!("{}: {e}", args.output.display()))?;
-    let mut generator = DataGenerator::new(CpuEngine::new()?, mix, args.seed)?;
+    let stack = args.stack.load()?;
+    let mut generator = DataGenerator::new(CpuEngine::new()?, &stack, mix, args.seed)?;
     generator.directions_per_view = args.directions_per_view;
     let shards = args.count.div_ceil(args.shard_rows);
     let bar = indicatif::ProgressBar::new(args.count as u64);
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows, eta {eta}").unwrap());
-    let names = PARAMETER_TABLE.iter().map(|p| p.channel).collect::<Vec<_>>().join(",");
+    let names = stack.parameters().iter().map(|p| p.channel.as_str()).collect::<Vec<_>>().join(",");
     let mut skipped = 0;
     for shard in 0..shards {
         let rows = args.shard_rows.min(args.count - shard * args.shard_rows);

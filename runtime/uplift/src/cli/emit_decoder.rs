@@ -21,13 +21,15 @@ pub struct EmitDecoderArgs {
     /// Where to write the WGSL shader.
     #[arg(long)]
     pub wgsl: Option<PathBuf>,
+    #[command(flatten)]
+    pub stack: super::StackArgs,
 }
 
 pub fn run(args: EmitDecoderArgs) -> Result<(), String> {
     if args.rust.is_none() && args.wgsl.is_none() {
         return Err("give --rust FILE and/or --wgsl FILE".into());
     }
-    let model = load_model(&args.decoder)?;
+    let model = load_model(&args.decoder, &*args.stack.load()?)?;
     let spec = decoder_spec(&model.decoder, &source_name(&args.decoder));
     for (path, text) in [(args.rust.as_ref(), args.rust.as_ref().map(|_| write_rust_decoder(&spec))), (args.wgsl.as_ref(), args.wgsl.as_ref().map(|_| write_wgsl_decoder(&spec)))] {
         if let (Some(path), Some(text)) = (path, text) {

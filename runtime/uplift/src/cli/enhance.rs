@@ -61,6 +61,8 @@ pub struct EnhanceArgs {
     /// Output folder.
     #[arg(short, long)]
     pub output: PathBuf,
+    #[command(flatten)]
+    pub stack: super::StackArgs,
 }
 
 fn parse_type(s: &str) -> Result<Option<EnhancementType>, String> {
@@ -125,6 +127,7 @@ pub fn run(args: EnhanceArgs) -> Result<(), String> {
     if let Some(bad) = args.rule_shares.iter().find(|s| !(s.is_finite() && **s > 0.0)) {
         return Err(format!("--rule-share {bad}: a share must be positive"));
     }
+    let stack = args.stack.load()?;
     let mut user_rules = Vec::new();
     for (k, path) in args.rules.iter().enumerate() {
         if path.is_dir() {
@@ -132,10 +135,10 @@ pub fn run(args: EnhanceArgs) -> Result<(), String> {
                 return Err(format!("{}: a folder of rules takes its shares from its shares.json, not --rule-share", path.display()));
             }
             for (file, share) in rule_folder(path)? {
-                user_rules.push((rules::interface_file(&file)?, share));
+                user_rules.push((rules::interface_file(&file, &stack)?, share));
             }
         } else {
-            user_rules.push((rules::interface_file(path)?, args.rule_shares.get(k).copied().unwrap_or(1.0)));
+            user_rules.push((rules::interface_file(path, &stack)?, args.rule_shares.get(k).copied().unwrap_or(1.0)));
         }
     }
     let options = EnhanceOptions {
@@ -145,6 +148,7 @@ pub fn run(args: EnhanceArgs) -> Result<(), String> {
         resolution: args.resolution.as_deref().map(parse_resolution).transpose()?,
         mask_size: args.mask_size,
         glints: args.glints,
+        stack,
     };
     if options.mask_size == 0 || options.mask_size > 8192 {
         return Err(format!("--mask-size {}: 1 to 8192", options.mask_size));

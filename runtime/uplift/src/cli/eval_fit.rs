@@ -33,8 +33,9 @@ pub fn run(args: EvalFitArgs) -> Result<(), String> {
     let st = &args.settings;
     let folders = material_folders(&args.materials)?;
     let env = environment(&st.env)?;
-    let reference = Shading::new(CpuEngine::with_threads(threads)?, Model::Reference)?;
-    let neural = Shading::new(CpuEngine::with_threads(threads)?, Model::Neural(load_model(&st.decoder)?.decoder))?;
+    let stack = st.stack.load()?;
+    let reference = Shading::new(CpuEngine::with_threads(threads)?, &stack, Model::Reference)?;
+    let neural = Shading::new(CpuEngine::with_threads(threads)?, &stack, Model::Neural(load_model(&st.decoder, &stack)?.decoder))?;
     let o = RenderOptions { width: st.size, height: st.size, spp: st.spp, seed: st.seed, ..Default::default() };
     if let Some(out) = &args.output {
         std::fs::create_dir_all(out).map_err(|e| format!("{}: {e}", out.display()))?;

@@ -36,6 +36,8 @@ pub struct FitArgs {
     pub seed: u64,
     #[arg(long)]
     pub threads: Option<usize>,
+    #[command(flatten)]
+    pub stack: super::StackArgs,
 }
 
 pub fn run(args: FitArgs) -> Result<(), String> {
@@ -43,10 +45,11 @@ pub fn run(args: FitArgs) -> Result<(), String> {
     if args.steps == 0 || args.directions == 0 {
         return Err("--steps and --directions must be at least 1".into());
     }
-    let model = load_model(&args.decoder)?;
+    let stack = args.stack.load()?;
+    let model = load_model(&args.decoder, &stack)?;
     let folder = MaterialFolder::open(&args.material)?;
-    let ParamsImage { width: w, height: h, params, diffuse, .. } = folder.read_params()?;
-    let generator = DataGenerator::new(CpuEngine::with_threads(threads)?, ClassMix::All, args.seed)?;
+    let ParamsImage { width: w, height: h, params, diffuse, .. } = folder.read_params(&stack)?;
+    let generator = DataGenerator::new(CpuEngine::with_threads(threads)?, &stack, ClassMix::All, args.seed)?;
     let mut o = FitOptions { steps: args.steps, directions: args.directions, levels: args.levels, seed: args.seed, threads, ..Default::default() };
     if args.no_energy_bound {
         o.energy = None;

@@ -40,6 +40,8 @@ pub struct FurnaceArgs {
     pub seed: u64,
     #[arg(long)]
     pub threads: Option<usize>,
+    #[command(flatten)]
+    pub stack: super::StackArgs,
 }
 
 
@@ -60,15 +62,16 @@ pub fn run(args: FurnaceArgs) -> Result<(), String> {
         return Err("--views, --directions and --max-texels must be at least 1".into());
     }
     let folders = material_folders(&args.materials)?;
-    let model = if args.neural { Model::Neural(load_model(&args.decoder)?.decoder) } else { Model::Reference };
-    let shading = Shading::new(CpuEngine::with_threads(threads)?, model)?;
+    let stack = args.stack.load()?;
+    let model = if args.neural { Model::Neural(load_model(&args.decoder, &stack)?.decoder) } else { Model::Reference };
+    let shading = Shading::new(CpuEngine::with_threads(threads)?, &stack, model)?;
     let o = FurnaceOptions { views: args.views, directions: args.directions, max_texels: args.max_texels, seed: args.seed, ..Default::default() };
     let bar = ProgressBar::new(folders.len() as u64).with_style(ProgressStyle::with_template("furnace [{bar:30}] {pos}/{len} {msg}").map_err(|e| e.to_string())?.progress_chars("=> "));
     let mut passed = 0;
     let mut failed = Vec::new();
     for dir in &folders {
         bar.set_message(dir.display().to_string());
-        let surface = SurfaceTextures::load(dir, args.neural)?;
+        let surface = SurfaceTextures::load(dir, &stack, args.neural)?;
         let r = white_furnace(&surface, &shading, &o)?;
         let line = format!(
             "{}: {} — worst albedo {:.4} at texel ({}, {}), μv {:.3}; {} of {} (texel, view) pairs above 1; {} of {} distinct texels checked",

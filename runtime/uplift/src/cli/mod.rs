@@ -69,3 +69,22 @@ pub fn compiler(library: &[PathBuf], allow_any_path: bool) -> Result<Compiler, S
     }
     Ok(compiler)
 }
+
+/// `--stack DIR`: the library folders of another `uplift_stack` (a redefined `ND_uplift_stack`
+/// and nodegraph, with the lobes it adds), for every command that enhances, trains, fits or
+/// renders enhanced materials.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct StackArgs {
+    /// A library folder whose definitions win over the builtin ones — a redefined
+    /// `uplift_stack` with its lobes (repeatable). Materials, decoders and this command must
+    /// agree on the stack: each records its signature.
+    #[arg(long = "stack", value_name = "DIR")]
+    pub stack: Vec<PathBuf>,
+}
+
+impl StackArgs {
+    /// The stack: the builtin one, or the folders' (errors name the file and position).
+    pub fn load(&self) -> Result<std::sync::Arc<uplift_engines::stack::Stack>, String> {
+        uplift_engines::stack::Stack::load(&self.stack)
+    }
+}

@@ -84,6 +84,8 @@ pub struct RenderSettings {
     pub seed: u64,
     #[arg(long)]
     pub threads: Option<usize>,
+    #[command(flatten)]
+    pub stack: super::StackArgs,
 }
 
 impl RenderSettings {
@@ -160,9 +162,10 @@ pub fn run(args: RenderArgs) -> Result<(), String> {
         report_speed(&o, start);
         return Ok(());
     }
-    let surface = SurfaceTextures::load(&args.material, args.neural)?;
-    let model = if args.neural { Model::Neural(load_model(&st.decoder)?.decoder) } else { Model::Reference };
-    let shading = Shading::new(CpuEngine::with_threads(threads)?, model)?;
+    let stack = st.stack.load()?;
+    let surface = SurfaceTextures::load(&args.material, &stack, args.neural)?;
+    let model = if args.neural { Model::Neural(load_model(&st.decoder, &stack)?.decoder) } else { Model::Reference };
+    let shading = Shading::new(CpuEngine::with_threads(threads)?, &stack, model)?;
     let bar = progress_bar(o.spp, format!("rendering {}", args.material.display()))?;
     let start = std::time::Instant::now();
     let img = render(scene.as_ref(), &env, &surface, &shading, &o, Some(&bar))?;

@@ -58,6 +58,8 @@ pub struct TrainArgs {
     /// --directions-per-view`); a divisor of --batch.
     #[arg(long, default_value_t = 1)]
     pub directions_per_view: usize,
+    #[command(flatten)]
+    pub stack: super::StackArgs,
 }
 
 pub fn run(args: TrainArgs) -> Result<(), String> {
@@ -74,7 +76,8 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
     if let Some(parent) = args.output.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
     }
-    let mut generator = DataGenerator::new(CpuEngine::with_threads(threads)?, mix, args.seed)?;
+    let stack = args.stack.load()?;
+    let mut generator = DataGenerator::new(CpuEngine::with_threads(threads)?, &stack, mix, args.seed)?;
     generator.views = views;
     if args.directions_per_view == 0 || args.batch % args.directions_per_view != 0 {
         return Err(format!("--directions-per-view {}: a divisor of --batch {}", args.directions_per_view, args.batch));
@@ -87,6 +90,9 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
     }
     if args.directions_per_view != 1 {
         command += &format!(" --directions-per-view {}", args.directions_per_view);
+    }
+    for dir in &args.stack.stack {
+        command += &format!(" --stack {}", dir.display());
     }
     let mut extra = vec![];
     if let Some(init) = &args.init {
@@ -116,7 +122,7 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
         table += &format!("{},{:.5},{:.5},{:.5}\n", e.class.name(), e.fcos_relative_l1, e.t_l1, e.r_l1);
     }
     // Store the held-out table beside the training record; then the checkpoint is done with.
-    let mut file = weights_file(&state, &opts, &extra_refs);
+    let mut file = weights_file(&state, &stack, &opts, &extra_refs);
     file.metadata.insert("holdout".into(), table);
     file.write(&args.output)?;
     finish(&args.output);

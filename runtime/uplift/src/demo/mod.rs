@@ -102,6 +102,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
     std::fs::create_dir_all(&img_dir).map_err(|e| format!("{}: {e}", img_dir.display()))?;
     let set = pbr_set::procedural_set(o.per_type, o.texture_size, o.seed);
     let engine = CpuEngine::with_threads(o.threads)?;
+    let stack = uplift_engines::stack::Stack::builtin();
 
     // 1. Enhance.
     let b = bar(set.len(), "enhance");
@@ -110,7 +111,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         let dir = materials_dir.join(&m.material.name);
         b.set_message(m.material.name.clone());
         if !MaterialFolder::is_finished(&dir) {
-            let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(dirs.len() as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: false };
+            let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(dirs.len() as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: false, stack: stack.clone() };
             enhance(&m.material, &options, &dir, &engine)?;
         }
         dirs.push(dir);
@@ -119,15 +120,15 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
     b.finish();
 
     // 2. Fit.
-    let model = load_model(&o.decoder)?;
-    let generator = DataGenerator::new(CpuEngine::with_threads(o.threads)?, ClassMix::All, o.seed)?;
+    let model = load_model(&o.decoder, &stack)?;
+    let generator = DataGenerator::new(CpuEngine::with_threads(o.threads)?, &stack, ClassMix::All, o.seed)?;
     let fit_options = FitOptions { steps: o.fit_steps, seed: o.seed, threads: o.threads, ..Default::default() };
     let b = bar(dirs.len(), "fit");
     for dir in &dirs {
         b.set_message(dir.file_name().unwrap_or_default().to_string_lossy().to_string());
         let folder = MaterialFolder::open(dir)?;
         if !folder.has_fit() {
-            let ParamsImage { width: w, height: h, params, diffuse, .. } = folder.read_params()?;
+            let ParamsImage { width: w, height: h, params, diffuse, .. } = folder.read_params(&stack)?;
             let r = fit_material(&model, &generator, &params, diffuse.as_deref(), w, h, &fit_options, false)?;
             folder.write_latents(&r.latent_image())?;
             folder.write_fit(&r.record(&o.decoder, &fit_options))?;
@@ -138,8 +139,8 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
 
     // 3. Render and compare; 4. white furnace.
     let env = Environment::studio();
-    let reference = Shading::new(CpuEngine::with_threads(o.threads)?, Model::Reference)?;
-    let neural = Shading::new(CpuEngine::with_threads(o.threads)?, Model::Neural(model.decoder.clone()))?;
+    let reference = Shading::new(CpuEngine::with_threads(o.threads)?, &stack, Model::Reference)?;
+    let neural = Shading::new(CpuEngine::with_threads(o.threads)?, &stack, Model::Neural(model.decoder.clone()))?;
     let ro = RenderOptions { width: o.render_size, height: o.render_size, spp: o.spp, seed: o.seed, ..Default::default() };
     let fo = FurnaceOptions { directions: 512, max_texels: 64, seed: o.seed, ..Default::default() };
     let b = bar(dirs.len(), "evaluate");
@@ -150,7 +151,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         let (eval, images) = evaluate_material(dir, &reference, &neural, &env, &ro, 1.0)?;
         write_eval_images(&img_dir, &name, &images, (ro.width, ro.height))?;
         write_png(&img_dir.join(format!("{name}_pbr.png")), &pbr_image(&m.material.base_color, &m.material.roughness, o.render_size), o.render_size, o.render_size)?;
-        let surface = SurfaceTextures::load(dir, true)?;
+        let surface = SurfaceTextures::load(dir, &stack, true)?;
         let fr = white_furnace(&surface, &reference, &fo)?;
         let fneu = white_furnace(&surface, &neural, &fo)?;
         let fit = MaterialFolder::open(dir)?.read_fit()?;
@@ -180,10 +181,10 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         glints.push((index, m.kind.index()));
         let twin = materials_dir.join(format!("{}_glints", m.material.name));
         if !MaterialFolder::is_finished(&twin) || !MaterialFolder::open(&twin)?.has_fit() {
-            let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(index as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: true };
+            let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(index as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: true, stack: stack.clone() };
             enhance(&m.material, &options, &twin, &engine)?;
             let (from, to) = (MaterialFolder::open(dir)?, MaterialFolder::open(&twin)?);
-            if from.read_params()?.params != to.read_params()?.params {
+            if from.read_params(&stack)?.params != to.read_params(&stack)?.params {
                 return Err(format!("{}: the glint twin's parameters differ from {}'s", twin.display(), dir.display()));
             }
             to.write_latents(&from.read_latents()?)?;

@@ -107,7 +107,7 @@ fn shipped_kernels_run_in_process_and_agree_with_wgpu() {
         let kernel = match shipped.context {
             // The uplift rules ship their `<name>_out` pattern outputs, reading the example masks.
             None if rule.is_some() => {
-                let rule = uplift_enhance::rules::interface(rule.unwrap()).unwrap();
+                let rule = uplift_enhance::rules::interface(rule.unwrap(), &uplift_engines::stack::Stack::builtin()).unwrap();
                 uplift_enhance::pipeline::rule_kernel(&rule, path.parent().unwrap()).unwrap()
             }
             None => compile_file(&compiler, &path),
@@ -122,7 +122,7 @@ fn shipped_kernels_run_in_process_and_agree_with_wgpu() {
             // A rule's random scalars are drawn within their declared ranges (outside them the
             // haze weight's variance ratio is ill-conditioned: at p ≈ 2 its numerator cancels),
             // and `object_size` is the bounding-box diagonal (positions here span a cube of side 8).
-            let declared = uplift_enhance::rules::interface(t).unwrap().random;
+            let declared = uplift_enhance::rules::interface(t, &uplift_engines::stack::Stack::builtin()).unwrap().random;
             for inp in &kernel.inputs {
                 let range = declared.iter().find(|d| d.name == inp.input.name).map(|d| (d.min as f32, d.max as f32));
                 let value = |rng: &mut Rng| match (inp.input.name.as_str(), range) {

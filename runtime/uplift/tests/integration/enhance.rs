@@ -199,7 +199,7 @@ fn rules_validate_and_their_shipped_kernels_agree_with_wgpu() {
             None => say_validator_skipped(),
         }
         let kind = uplift_enhance::rules::EnhancementType::ALL.into_iter().find(|t| path.ends_with(t.file_name())).unwrap();
-        let rule = uplift_enhance::rules::interface(kind).unwrap();
+        let rule = uplift_enhance::rules::interface(kind, &uplift_engines::stack::Stack::builtin()).unwrap();
         let kernel = uplift_enhance::pipeline::rule_kernel(&rule, &repo().join("mtlx/rules")).unwrap();
         let prepared = engine.prepare(&kernel).unwrap();
         assert!(matches!(prepared, CpuKernel::Builtin(_)), "{}: not shipped", path.display());

@@ -25,14 +25,13 @@ use uplift_neural::evaluate::{batch_errors, decode, holdout_errors};
 use uplift_material::ParamsImage;
 use uplift_neural::fit::{fit_material, FitOptions};
 use uplift_neural::model::{NeuralModel, LATENT};
-use uplift_engines::stack_params::PARAMETERS;
 
 fn shipped() -> NeuralModel<f32> {
-    uplift_neural::weights::load_model(Path::new(uplift_neural::weights::SHIPPED_DECODER)).expect("the shipped decoder")
+    uplift_neural::weights::load_model(Path::new(uplift_neural::weights::SHIPPED_DECODER), &uplift_engines::stack::Stack::builtin()).expect("the shipped decoder")
 }
 
 fn generator(seed: u64) -> DataGenerator {
-    DataGenerator::new(CpuEngine::new().unwrap(), ClassMix::All, seed).unwrap()
+    DataGenerator::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), ClassMix::All, seed).unwrap()
 }
 
 /// Held-out relative L1 of f·cos per class: bounds a little above the measured figures
@@ -70,14 +69,16 @@ fn uniform_params(kind: EnhancementType, dir: &Path) -> (Vec<f32>, Vec<f32>) {
         surface: Surface::Plane,
     };
     let out = dir.join(material.name.clone());
-    let options = EnhanceOptions { kind: Some(kind), rules: Vec::new(), seed: 11, resolution: Some((32, 32)), mask_size: 64, glints: false };
+    let options = EnhanceOptions { kind: Some(kind), rules: Vec::new(), seed: 11, resolution: Some((32, 32)), mask_size: 64, glints: false, stack: uplift_engines::stack::Stack::builtin() };
     enhance(&material, &options, &out, &CpuEngine::new().unwrap()).unwrap();
-    let ParamsImage { width: w, height: h, params, diffuse, .. } = uplift_material::MaterialFolder::open(&out).unwrap().read_params().unwrap();
+    let ParamsImage { width: w, height: h, params, diffuse, .. } = uplift_material::MaterialFolder::open(&out).unwrap().read_params(&uplift_engines::stack::Stack::builtin()).unwrap();
     // The texel with the most dust or fuzz (the centre when there is none).
-    let fuzz = uplift_engines::stack_params::index_of("fuzz_weight").unwrap();
-    let t = (0..w * h).fold((h / 2) * w + w / 2, |best, t| if params[t * PARAMETERS + fuzz] > params[best * PARAMETERS + fuzz] { t } else { best });
+    let stack = uplift_engines::stack::Stack::builtin();
+    let fuzz = stack.index_of("fuzz_weight").unwrap();
+    let np = stack.len();
+    let t = (0..w * h).fold((h / 2) * w + w / 2, |best, t| if params[t * np + fuzz] > params[best * np + fuzz] { t } else { best });
     let diffuse = diffuse.expect("diffuse colour channels");
-    (params[t * PARAMETERS..(t + 1) * PARAMETERS].to_vec(), diffuse[t * 3..t * 3 + 3].to_vec())
+    (params[t * np..(t + 1) * np].to_vec(), diffuse[t * 3..t * 3 + 3].to_vec())
 }
 
 #[test]
@@ -178,9 +179,9 @@ fn fitting_a_512_material_beats_the_encoder_within_the_energy_bound() {
     };
     let out = dir.join("m");
     // Type 2 (clearcoat with its damage mask) over textured base colour and roughness.
-    let options = EnhanceOptions { kind: Some(EnhancementType::new(2).unwrap()), rules: Vec::new(), seed: 5, resolution: Some((512, 512)), mask_size: 256, glints: false };
+    let options = EnhanceOptions { kind: Some(EnhancementType::new(2).unwrap()), rules: Vec::new(), seed: 5, resolution: Some((512, 512)), mask_size: 256, glints: false, stack: uplift_engines::stack::Stack::builtin() };
     enhance(&material, &options, &out, &CpuEngine::new().unwrap()).unwrap();
-    let ParamsImage { width: w, height: h, params, diffuse, .. } = uplift_material::MaterialFolder::open(&out).unwrap().read_params().unwrap();
+    let ParamsImage { width: w, height: h, params, diffuse, .. } = uplift_material::MaterialFolder::open(&out).unwrap().read_params(&uplift_engines::stack::Stack::builtin()).unwrap();
     assert_eq!((w, h), (512, 512));
     let model = shipped();
     let g = generator(41);

@@ -19,8 +19,8 @@ use uplift_compiler::backend_neural::write_rust_decoder;
 
 /// Rows of [latent, features] and the trainer's outputs for them.
 fn rows() -> (Vec<f32>, Vec<f32>) {
-    let model = load_model(Path::new(SHIPPED_DECODER)).unwrap();
-    let g = DataGenerator::new(CpuEngine::new().unwrap(), ClassMix::All, 51).unwrap();
+    let model = load_model(Path::new(SHIPPED_DECODER), &uplift_engines::stack::Stack::builtin()).unwrap();
+    let g = DataGenerator::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), ClassMix::All, 51).unwrap();
     let b = g.batch(0, 4096).unwrap();
     let z = encode(&model, &b.encoded);
     let out = decode(&model, &z, &b.features);
@@ -41,7 +41,7 @@ fn assert_agree(what: &str, got: &[f32], want: &[f32]) {
 
 #[test]
 fn committed_rust_decoder_is_current_and_agrees() {
-    let model = load_model(Path::new(SHIPPED_DECODER)).unwrap();
+    let model = load_model(Path::new(SHIPPED_DECODER), &uplift_engines::stack::Stack::builtin()).unwrap();
     let text = write_rust_decoder(&decoder_spec(&model.decoder, &source_name(Path::new(SHIPPED_DECODER)))).unwrap();
     let committed = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../neural/src/shipped_decoder.rs")).unwrap();
     assert!(text == committed, "runtime/neural/src/shipped_decoder.rs is stale: run `cargo run --release -p uplift -- emit-decoder --rust runtime/neural/src/shipped_decoder.rs`");
@@ -54,7 +54,7 @@ fn committed_rust_decoder_is_current_and_agrees() {
 
 #[test]
 fn wgsl_decoder_agrees() {
-    let model = load_model(Path::new(SHIPPED_DECODER)).unwrap();
+    let model = load_model(Path::new(SHIPPED_DECODER), &uplift_engines::stack::Stack::builtin()).unwrap();
     let engine = common::engine();
     let d = WgpuDecoder::new(engine, &model.decoder, "runtime/weights/decoder.safetensors").unwrap();
     let (dec_in, want) = rows();

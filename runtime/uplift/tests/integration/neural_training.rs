@@ -17,13 +17,13 @@ use uplift_engines::cpu_engine::CpuEngine;
 use uplift_neural::classes::DataClass;
 use uplift_neural::datagen::{ClassMix, DataGenerator};
 use uplift_neural::evaluate::{decode, encode};
-use uplift_engines::stack_params::{PARAMETERS, PARAMETER_TABLE};
+use uplift_engines::stack::Stack;
 use uplift_neural::trainer::{checkpoint_path, train, TrainOptions};
 use uplift_neural::weights::TensorFile;
 use uplift_compiler::ClosureContext;
 
 fn generator(mix: ClassMix, seed: u64) -> DataGenerator {
-    DataGenerator::new(CpuEngine::new().unwrap(), mix, seed).unwrap()
+    DataGenerator::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), mix, seed).unwrap()
 }
 
 #[test]
@@ -44,15 +44,16 @@ fn generated_targets_equal_the_stack_kernels() {
     }
     let eval = bsdf("uplift_stack", ClosureContext::Eval);
     let albedo = bsdf("uplift_stack", ClosureContext::Albedo);
-    let names: Vec<&'static str> = PARAMETER_TABLE.iter().map(|p| p.input).collect();
+    // Params names inputs by `&'static str`: the process's builtin stack lives that long.
+    let stack: &'static Stack = Box::leak(Box::new(Stack::builtin()));
+    let np = stack.len();
     let row_params = |r: usize| -> Params {
         let mut p = Params::new();
-        for (k, spec) in PARAMETER_TABLE.iter().enumerate() {
-            p.entry(spec.input).or_insert_with(Vec::new).push(b.params[r * PARAMETERS + k]);
+        for (k, spec) in stack.parameters().iter().enumerate() {
+            p.entry(spec.input.as_str()).or_insert_with(Vec::new).push(b.params[r * np + k]);
         }
         p
     };
-    assert_eq!(names.len(), PARAMETERS);
     let params: Vec<Params> = (0..b.rows).map(row_params).collect();
     let ranges: Vec<(std::ops::Range<usize>, &Params)> = params.iter().enumerate().map(|(r, p)| (r..r + 1, p)).collect();
     let e = eval.run(&[b.wv.clone(), b.wl.clone()], &ranges);
@@ -134,7 +135,7 @@ fn python_reproduces_the_forward_pass_from_the_weights_file() {
     let z = encode(&state.model, &b.encoded);
     let out = decode(&state.model, &z, &b.features);
     let mut inputs = TensorFile::default();
-    inputs.put("encoded", vec![b.rows, PARAMETERS], b.encoded.clone());
+    inputs.put("encoded", vec![b.rows, Stack::builtin().len()], b.encoded.clone());
     inputs.put("features", vec![b.rows, 9], b.features.clone());
     inputs.write(&dir.join("inputs.safetensors")).unwrap();
     let script = r#"

@@ -5,7 +5,7 @@
 //! albedo kernel and an all-white dielectric stack integrates to 1.
 
 use uplift_engines::cpu_engine::CpuEngine;
-use uplift_engines::stack_params::{PARAMETERS, PARAMETER_TABLE};
+use uplift_engines::stack::Stack;
 use uplift_render::environment::Environment;
 use uplift_render::furnace::{estimated_albedo, exact_albedo, view_cosines};
 use uplift_render::integrator::{render, RenderOptions, Rendering, Strategy};
@@ -16,28 +16,29 @@ use uplift_render::surface::SurfaceTextures;
 use uplift_render::tonemap::to_display;
 
 /// The stack's parameters: the uplift_stack graph's defaults with `set` applied (channel names).
-fn stack_params(set: &[(&str, f32)]) -> [f32; PARAMETERS] {
+fn stack_params(set: &[(&str, f32)]) -> Vec<f32> {
+    let stack = Stack::builtin();
     let defaults: [(&str, f32); 22] = [
         ("reflectivity.R", 0.9), ("reflectivity.G", 0.9), ("reflectivity.B", 0.9), ("edge_color.R", 1.0), ("edge_color.G", 1.0), ("edge_color.B", 1.0),
         ("metalness", 0.0), ("core_roughness", 0.1), ("haze_roughness", 0.3), ("haze_weight", 0.2), ("specular_ior", 1.5), ("fuzz_weight", 0.0),
         ("fuzz_thickness", 0.5), ("coat_weight", 0.0), ("coat_ior", 1.5), ("inner_weight", 0.0), ("inner_thickness", 0.5), ("scatter_color.R", 0.5),
         ("scatter_color.G", 0.5), ("scatter_color.B", 0.5), ("subcutaneous_weight", 0.0), ("subcutaneous_roughness", 0.64),
     ];
-    let mut p = [0.0; PARAMETERS];
-    for (k, d) in PARAMETER_TABLE.iter().enumerate() {
+    let mut p = vec![0.0; stack.len()];
+    for (k, d) in stack.parameters().iter().enumerate() {
         p[k] = defaults.iter().find(|x| x.0 == d.channel).expect("default").1;
         if let Some(s) = set.iter().find(|x| x.0 == d.channel) {
             p[k] = s.1;
         }
     }
     for s in set {
-        assert!(PARAMETER_TABLE.iter().any(|d| d.channel == s.0), "no parameter {}", s.0);
+        assert!(stack.parameters().iter().any(|d| d.channel == s.0), "no parameter {}", s.0);
     }
     p
 }
 
 fn reference() -> Shading {
-    Shading::new(CpuEngine::new().unwrap(), Model::Reference).unwrap()
+    Shading::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Reference).unwrap()
 }
 
 fn draw(surface: &SurfaceTextures, env: &Environment, o: &RenderOptions) -> Rendering {
@@ -49,9 +50,9 @@ fn white_lambertian_sphere_under_unit_environment_is_one() {
     // ior 1 and zero weights: the stack reflects nothing and transmits everything (T = 1).
     let p = stack_params(&[("specular_ior", 1.0), ("haze_weight", 0.0), ("metalness", 0.0)]);
     let shading = reference();
-    let a = exact_albedo(&shading, &[SurfaceTextures::uniform(p, [1.0; 3], None).texel(0)], &[[0.6, 0.0, 0.8]]).unwrap();
+    let a = exact_albedo(&shading, &[SurfaceTextures::uniform(&p, [1.0; 3], None).texel(0)], &[[0.6, 0.0, 0.8]]).unwrap();
     assert!(a[0].iter().all(|&x| (x - 1.0).abs() < 1e-3), "total albedo {:?}", a[0]);
-    let surface = SurfaceTextures::uniform(p, [1.0; 3], None);
+    let surface = SurfaceTextures::uniform(&p, [1.0; 3], None);
     let o = RenderOptions { width: 48, height: 48, spp: 64, bounces: 2, ..Default::default() };
     let img = draw(&surface, &Environment::constant([1.0; 3]), &o);
     let (mut sum, mut n, mut worst) = (0.0f64, 0usize, 0.0f32);
@@ -80,7 +81,7 @@ fn conductor_sphere_matches_its_albedo_at_every_pixel() {
     let sphere = Sphere::preview();
     for rough in [0.25f32, 0.5, 0.9] {
         let p = stack_params(&[("metalness", 1.0), ("core_roughness", rough), ("haze_weight", 0.0), ("reflectivity.R", 0.95), ("reflectivity.G", 0.64), ("reflectivity.B", 0.54)]);
-        let surface = SurfaceTextures::uniform(p, [0.5; 3], None);
+        let surface = SurfaceTextures::uniform(&p, [0.5; 3], None);
         let o = RenderOptions { width: 40, height: 40, spp: 1024, bounces: 0, jitter: false, ..Default::default() };
         let img = draw(&surface, &env, &o);
         // The albedo kernel at each covered pixel's view direction.
@@ -145,7 +146,7 @@ fn smooth_sky() -> Environment {
 #[test]
 fn mis_and_single_strategies_converge_to_the_same_image() {
     let p = stack_params(&[("core_roughness", 0.35), ("haze_roughness", 0.6), ("haze_weight", 0.3), ("coat_weight", 0.0)]);
-    let surface = SurfaceTextures::uniform(p, [0.6, 0.3, 0.2], None);
+    let surface = SurfaceTextures::uniform(&p, [0.6, 0.3, 0.2], None);
     let env = smooth_sky();
     let base = RenderOptions { width: 40, height: 40, spp: 4096, bounces: 0, ..Default::default() };
     let mis = draw(&surface, &env, &base);
@@ -201,7 +202,7 @@ fn furnace_estimator_matches_the_albedo_kernel() {
     let mut wv = vec![];
     for p in materials {
         for &mu in &mus {
-            points.push(SurfaceTextures::uniform(p, [0.7, 0.5, 0.3], None).texel(0));
+            points.push(SurfaceTextures::uniform(&p, [0.7, 0.5, 0.3], None).texel(0));
             wv.push([(1.0 - mu * mu).sqrt(), 0.0, mu]);
         }
     }
@@ -222,7 +223,7 @@ fn furnace_estimator_matches_the_albedo_kernel() {
         ("reflectivity.R", 1.0), ("reflectivity.G", 1.0), ("reflectivity.B", 1.0), ("coat_weight", 1.0), ("fuzz_weight", 0.5), ("haze_weight", 0.5),
         ("scatter_color.R", 1.0), ("scatter_color.G", 1.0), ("scatter_color.B", 1.0),
     ]);
-    let pts = vec![SurfaceTextures::uniform(white, [1.0; 3], None).texel(0); mus.len()];
+    let pts = vec![SurfaceTextures::uniform(&white, [1.0; 3], None).texel(0); mus.len()];
     let wv: Vec<[f32; 3]> = mus.iter().map(|&mu| [(1.0 - mu * mu).sqrt(), 0.0, mu]).collect();
     for (a, mu) in exact_albedo(&shading, &pts, &wv).unwrap().iter().zip(&mus) {
         assert!(a.iter().all(|&x| (x - 1.0).abs() <= 2e-3), "white stack at μ {mu}: {a:?}");
@@ -238,12 +239,12 @@ fn wgpu_engine_renders_what_the_cpu_engine_renders() {
         Err(e) => panic!("wgpu engine: {e} (install mesa-vulkan-drivers for lavapipe)"),
     };
     let p = stack_params(&[("haze_weight", 0.4), ("coat_weight", 0.6), ("fuzz_weight", 0.3)]);
-    let decoder = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER)).unwrap().decoder;
-    let surface = SurfaceTextures::uniform(p, [0.5, 0.4, 0.3], Some([0.5, 0.4, 0.6, 0.3, 0.2, 0.5]));
+    let decoder = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER), &uplift_engines::stack::Stack::builtin()).unwrap().decoder;
+    let surface = SurfaceTextures::uniform(&p, [0.5, 0.4, 0.3], Some([0.5, 0.4, 0.6, 0.3, 0.2, 0.5]));
     let o = RenderOptions { width: 32, height: 32, spp: 8, bounces: 1, ..Default::default() };
     let env = Environment::studio();
-    let gpu = Shading::new_wgpu(engine, Model::Neural(decoder.clone())).unwrap();
-    let cpu = Shading::new(CpuEngine::new().unwrap(), Model::Neural(decoder)).unwrap();
+    let gpu = Shading::new_wgpu(engine, &uplift_engines::stack::Stack::builtin(), Model::Neural(decoder.clone())).unwrap();
+    let cpu = Shading::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Neural(decoder)).unwrap();
     for (name, a, b) in [("neural", &cpu, &gpu)] {
         let x = render(&Sphere::preview(), &env, &surface, a, &o, None).unwrap();
         let y = render(&Sphere::preview(), &env, &surface, b, &o, None).unwrap();
@@ -259,7 +260,7 @@ fn wgpu_engine_renders_what_the_cpu_engine_renders() {
         eprintln!("{name}: {close} of {n} pixel channels agree within 1e-3 between the engines");
         assert!(close as f64 >= 0.99 * n as f64, "{name}: only {close} of {n} agree");
     }
-    let gpu_ref = Shading::new_wgpu(uplift_engines::wgpu_engine::WgpuEngine::new().unwrap(), Model::Reference).unwrap();
+    let gpu_ref = Shading::new_wgpu(uplift_engines::wgpu_engine::WgpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Reference).unwrap();
     let x = render(&Sphere::preview(), &env, &surface, &reference(), &o, None).unwrap();
     let y = render(&Sphere::preview(), &env, &surface, &gpu_ref, &o, None).unwrap();
     let agree = x.radiance.iter().zip(&y.radiance).filter(|(p, q)| (0..3).all(|c| (p[c] - q[c]).abs() <= 1e-3 * (1.0 + p[c].abs()))).count();
@@ -273,27 +274,27 @@ fn neural_material_energy_follows_the_reference() {
     // albedo on the training classes (encoder latents). Treating f̂ as f·cos would give ratios of
     // 1.3–1.9 at normal incidence and ~10 at grazing views.
     use uplift_neural::classes::{class_parameters, DataClass};
-    use uplift_engines::stack_params::encode_rows;
+    let stack = Stack::builtin();
     use uplift_render::furnace::estimated_albedo;
-    let model = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER)).unwrap();
-    let neural = Shading::new(CpuEngine::new().unwrap(), Model::Neural(model.decoder.clone())).unwrap();
+    let model = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER), &uplift_engines::stack::Stack::builtin()).unwrap();
+    let neural = Shading::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Neural(model.decoder.clone())).unwrap();
     let shading = reference();
     let mus = [1.0f32, 0.6, 0.25];
     for class in DataClass::ALL {
         let rows = 32;
         let mut params = vec![];
         for k in 0..rows {
-            params.extend_from_slice(&class_parameters(class, 1, 11 + k as u64, (k as u64 * 977) % 16384));
+            params.extend_from_slice(&class_parameters(&stack, class, 1, 11 + k as u64, (k as u64 * 977) % 16384));
         }
         let mut enc = vec![0.0; params.len()];
-        encode_rows(&params, &mut enc);
+        stack.encode_rows(&params, &mut enc);
         let z = uplift_neural::evaluate::encode(&model, &enc);
         let (mut pts, mut wv) = (vec![], vec![]);
         for k in 0..rows {
-            let p: [f32; PARAMETERS] = params[k * PARAMETERS..(k + 1) * PARAMETERS].try_into().unwrap();
+            let p = &params[k * stack.len()..(k + 1) * stack.len()];
             let l: [f32; 6] = z[k * 6..k * 6 + 6].try_into().unwrap();
             for &mu in &mus {
-                pts.push(SurfaceTextures::uniform(p, [0.0; 3], Some(l)).texel(0));
+                pts.push(SurfaceTextures::uniform(&p, [0.0; 3], Some(l)).texel(0));
                 wv.push([(1.0 - mu * mu).sqrt(), 0.0, mu]);
             }
         }
@@ -322,9 +323,9 @@ fn energy_bound_keeps_a_fitted_metal_within_the_white_furnace() {
     use uplift_neural::energy_bound::EnergyOptions;
     use uplift_neural::fit::{fit_material, FitOptions};
     use uplift_render::furnace::estimated_albedo_with_error;
-    let model = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER)).unwrap();
-    let neural = Shading::new(CpuEngine::new().unwrap(), Model::Neural(model.decoder.clone())).unwrap();
-    let g = DataGenerator::new(CpuEngine::new().unwrap(), ClassMix::All, 5).unwrap();
+    let model = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER), &uplift_engines::stack::Stack::builtin()).unwrap();
+    let neural = Shading::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Neural(model.decoder.clone())).unwrap();
+    let g = DataGenerator::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), ClassMix::All, 5).unwrap();
     let p = stack_params(&[
         ("metalness", 1.0),
         ("reflectivity.R", 1.0),
@@ -344,7 +345,7 @@ fn energy_bound_keeps_a_fitted_metal_within_the_white_furnace() {
         let o = FitOptions { steps: 200, directions: 64, levels: 0, threads: 2, check_texels: 1, check_directions: 64, energy, ..Default::default() };
         let r = fit_material(&model, &g, &p, Some(&[0.0; 3]), 1, 1, &o, false).unwrap();
         let latent: [f32; 6] = r.latents[..6].try_into().unwrap();
-        let points: Vec<_> = mus.iter().map(|_| SurfaceTextures::uniform(p, [0.0; 3], Some(latent)).texel(0)).collect();
+        let points: Vec<_> = mus.iter().map(|_| SurfaceTextures::uniform(&p, [0.0; 3], Some(latent)).texel(0)).collect();
         let est = estimated_albedo_with_error(&neural, &points, &wv, 8192, 7).unwrap();
         for (k, (a, se)) in est.iter().enumerate() {
             for c in 0..3 {
@@ -426,12 +427,12 @@ fn a_gltf_sphere_renders_like_the_analytic_ball() {
     // Each pole row has 128 degenerate triangles (two vertices at the pole), which are skipped.
     assert_eq!(mesh.triangle_count(), 2 * 128 * 64 - 2 * 128);
     // A 4 × 2 texture of different metals, so the uvs must agree too.
-    let mut surface = SurfaceTextures::uniform(stack_params(&[]), [0.0; 3], None);
+    let mut surface = SurfaceTextures::uniform(&stack_params(&[]), [0.0; 3], None);
     surface.values.clear();
     for t in 0..8 {
         let k = t as f32 / 7.0;
         let p = stack_params(&[("metalness", 1.0), ("core_roughness", 0.15 + 0.5 * k), ("reflectivity.R", 0.95 - 0.6 * k), ("reflectivity.B", 0.3 + 0.6 * k), ("haze_weight", 0.3)]);
-        surface.values.extend(SurfaceTextures::uniform(p, [0.0; 3], None).values);
+        surface.values.extend(SurfaceTextures::uniform(&p, [0.0; 3], None).values);
     }
     (surface.width, surface.height) = (4, 2);
     let env = Environment::studio();
@@ -478,8 +479,8 @@ fn a_plane_normal_map_becomes_the_tangent_space_normal_on_the_ball() {
         surface: Surface::Plane,
     };
     let out = dir.join("bumped");
-    enhance(&material, &EnhanceOptions { kind: Some(EnhancementType::new(0).unwrap()), rules: Vec::new(), seed: 3, resolution: Some((8, 8)), mask_size: 64, glints: false }, &out, &CpuEngine::new().unwrap()).unwrap();
-    let s = SurfaceTextures::load(&out, false).unwrap();
+    enhance(&material, &EnhanceOptions { kind: Some(EnhancementType::new(0).unwrap()), rules: Vec::new(), seed: 3, resolution: Some((8, 8)), mask_size: 64, glints: false, stack: uplift_engines::stack::Stack::builtin() }, &out, &CpuEngine::new().unwrap()).unwrap();
+    let s = SurfaceTextures::load(&out, &uplift_engines::stack::Stack::builtin(), false).unwrap();
     assert_eq!(s.normal_space, NormalSpace::Plane);
     let n = s.normal_at([0.5, 0.5]).expect("a baked normal");
     let tangent_space = [n[0], -n[2], n[1]];
@@ -497,7 +498,7 @@ fn a_plane_normal_map_becomes_the_tangent_space_normal_on_the_ball() {
     }
     assert!((0..3).all(|c| (cross(f[0], f[1])[c] - f[2][c]).abs() < 1e-5), "right-handed frame");
     // A flat normal map leaves the frame alone.
-    assert!(SurfaceTextures::uniform(stack_params(&[]), [0.5; 3], None).normal_mapped(&hit, false).frame == hit.frame);
+    assert!(SurfaceTextures::uniform(&stack_params(&[]), [0.5; 3], None).normal_mapped(&hit, false).frame == hit.frame);
 }
 
 /// Any MaterialX material renders through its own closure kernels (render/mtlx_material.rs, on
@@ -559,17 +560,17 @@ fn a_materialx_material_renders_with_its_own_kernels_and_emission() {
 #[test]
 fn glints_sparkle_on_reference_and_neural_alike() {
     let p = stack_params(&[("metalness", 1.0), ("core_roughness", 0.05), ("haze_weight", 0.3), ("haze_roughness", 0.2)]);
-    let model = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER)).unwrap();
-    let mut enc = vec![0.0; PARAMETERS];
-    uplift_engines::stack_params::encode_rows(&p, &mut enc);
+    let model = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER), &uplift_engines::stack::Stack::builtin()).unwrap();
+    let mut enc = vec![0.0; p.len()];
+    Stack::builtin().encode_rows(&p, &mut enc);
     let z = uplift_neural::evaluate::encode(&model, &enc);
     let latent: [f32; 6] = z[..6].try_into().unwrap();
-    let plain = SurfaceTextures::uniform(p, [0.0; 3], Some(latent));
-    let mut glinty = SurfaceTextures::uniform(p, [0.0; 3], Some(latent));
+    let plain = SurfaceTextures::uniform(&p, [0.0; 3], Some(latent));
+    let mut glinty = SurfaceTextures::uniform(&p, [0.0; 3], Some(latent));
     glinty.glint = Some(uplift_material::GlintRecord { density: 0.05, size: 0.005, angle: 0.12, spread: 0.5, strength: 0.7, seed: 3.0 });
     let o = RenderOptions { width: 64, height: 64, spp: 16, bounces: 1, ..Default::default() };
     let env = Environment::constant([1.0; 3]);
-    for (name, shading) in [("reference", reference()), ("neural", Shading::new(CpuEngine::new().unwrap(), Model::Neural(model.decoder.clone())).unwrap())] {
+    for (name, shading) in [("reference", reference()), ("neural", Shading::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Neural(model.decoder.clone())).unwrap())] {
         let a = render(&Sphere::preview(), &env, &plain, &shading, &o, None).unwrap();
         let b = render(&Sphere::preview(), &env, &glinty, &shading, &o, None).unwrap();
         let mask = a.object_mask();

@@ -10,7 +10,7 @@ use std::path::Path;
 use uplift_compiler::ir::ValueKind;
 use uplift_compiler::{ClosureContext, Compiler, OutputSelection, PatternKernel};
 use uplift_engines::batch::{Geometry, PatternBatch, PatternEngine};
-use uplift_engines::stack_params::PARAMETER_TABLE;
+use uplift_engines::stack::Stack;
 
 const STACK: &str = "../kernels/graphs/bsdf/uplift_stack.mtlx";
 
@@ -64,9 +64,9 @@ fn a_stack_specialised_per_class_computes_what_the_generic_one_does() {
             let rows: Vec<Vec<(String, Vec<f32>)>> = (0..n)
                 .map(|_| {
                     let mut row: Vec<(String, Vec<f32>)> = Vec::new();
-                    for p in PARAMETER_TABLE.iter() {
-                        let v = if dead.contains(&p.input) { 0.0 } else { p.lo + (p.hi - p.lo) * (0.05 + 0.95 * rng.unit()) };
-                        match row.iter_mut().find(|(name, _)| name == p.input) {
+                    for p in Stack::builtin().parameters() {
+                        let v = if dead.contains(&p.input.as_str()) { 0.0 } else { p.lo + (p.hi - p.lo) * (0.05 + 0.95 * rng.unit()) };
+                        match row.iter_mut().find(|(name, _)| *name == p.input) {
                             Some((_, values)) => values.push(v),
                             None => row.push((p.input.to_string(), vec![v])),
                         }
