@@ -291,7 +291,8 @@ const GROUPED_KERNELS: &[&str] = &["uplift_stack_eval", "uplift_stack_sample"];
 
 /// The kernels the runtime ships, `runtime/kernels/src/generated/`, are snapshots too: the
 /// compiler's Rust for every graph in `runtime/kernels/graphs/`, `examples/marble.mtlx`, the
-/// uplift rules' baked pattern outputs (`mtlx/rules/`, `uplift_rule/<name>_out`) and every BSDF
+/// uplift rules' baked pattern outputs (`mtlx/rules/`, `uplift_rule/<name>_out`), the training
+/// classes' (`mtlx/rules/classes/`, `uplift_class/<name>_out`) and every BSDF
 /// graph in `runtime/kernels/graphs/bsdf/` in every closure context; the albedo tables once
 /// (`albedo_table_data.rs`), which every kernel that reads them shares; and `mod.rs`, their
 /// table (each kernel's fingerprint, shape and dispatching batch function). They are committed
@@ -319,16 +320,23 @@ fn shipped_kernels_are_current() {
     for g in &sources {
         builder = builder.graph(g);
     }
-    for rule in mtlx_files("mtlx/rules") {
+    let mut rule_documents = mtlx_files("mtlx/rules");
+    rule_documents.extend(mtlx_files("mtlx/rules/classes"));
+    for rule in rule_documents {
         let (doc, diags) = mtlx::read_file(&rule);
         assert!(!mtlx::has_errors(&diags), "{}: {:?}", rule.display(), diags.iter().map(|d| d.to_string()).collect::<Vec<_>>());
-        let graph = doc.top_level().iter().copied().find(|&id| doc.get(id).name() == "uplift_rule").unwrap_or_else(|| panic!("{}: no uplift_rule", rule.display()));
+        let graph = doc.top_level().iter().copied().find(|&id| ["uplift_rule", "uplift_class"].contains(&doc.get(id).name())).unwrap_or_else(|| panic!("{}: no uplift_rule or uplift_class", rule.display()));
+        let graph_name = doc.get(graph).name().to_string();
         let outputs: Vec<String> = doc
             .children_of(graph, "output")
             .map(|id| doc.get(id))
             .filter(|e| e.name().ends_with("_out") && e.attr("type") != Some("BSDF"))
-            .map(|e| format!("uplift_rule/{}", e.name()))
+            .map(|e| format!("{graph_name}/{}", e.name()))
             .collect();
+        if outputs.is_empty() {
+            // The infill class draws uniformly: no kernel.
+            continue;
+        }
         builder = builder.graph_outputs(&rule, &outputs.iter().map(String::as_str).collect::<Vec<_>>());
     }
     for g in mtlx_files("runtime/kernels/graphs/bsdf") {

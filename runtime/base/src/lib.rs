@@ -10,5 +10,6 @@ pub mod atomic_write;
 pub mod color;
 pub mod csv_table;
 pub mod exr;
+pub mod random_scalar;
 pub mod rng;
 pub mod test_env;

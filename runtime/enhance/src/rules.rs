@@ -13,7 +13,7 @@
 //! name, never on the order of the inputs or on which other inputs exist.
 
 use crate::masks::MaskKind;
-use uplift_base::rng::{hash_str, mix64, unit_f64};
+pub use uplift_base::random_scalar::{parse_distribution, uniform, Distribution, RandomScalar};
 use mtlx::Document;
 use std::sync::Arc;
 use uplift_engines::stack::Stack;
@@ -110,25 +110,6 @@ impl EnhancementType {
         }
         *allowed.last().unwrap()
     }
-}
-
-/// How a random scalar is drawn within `[min, max]`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Distribution {
-    Uniform,
-    /// A normal distribution truncated to the range.
-    Normal { mean: f64, sd: f64 },
-    /// 0 with probability 1 − `p`, else uniform in the range.
-    Optional { p: f64 },
-}
-
-/// A per-material random scalar declared on a rule's interface.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RandomScalar {
-    pub name: String,
-    pub min: f64,
-    pub max: f64,
-    pub distribution: Distribution,
 }
 
 /// What `uplift enhance` needs to know of a rule.
@@ -258,19 +239,7 @@ fn read_interface(text: String, file: &str, name: &str, builtin: Option<Enhancem
                 PBR_INPUTS.map(|p| p.0).join(", ")
             ));
         };
-        if ty != "float" {
-            return Err(format!("{pos}: random scalar `{name}` is {ty}; random scalars are floats"));
-        }
-        let number = |s: &str, what: &str| s.trim().parse::<f64>().map_err(|_| format!("{pos}: `{name}` has {what} `{s}`, not a number"));
-        let (min, max) = (number(lo, "uimin")?, number(hi, "uimax")?);
-        if !(min <= max) {
-            return Err(format!("{pos}: `{name}` has uimin {min} above uimax {max}"));
-        }
-        let distribution = match e.attr("uplift_distribution") {
-            None => Distribution::Uniform,
-            Some(d) => parse_distribution(d).ok_or_else(|| format!("{pos}: `{name}`: uplift_distribution `{d}` is not `normal(MEAN, SD)` or `optional(P)`"))?,
-        };
-        random.push(RandomScalar { name, min, max, distribution });
+        random.push(RandomScalar::from_attributes(&name, ty, lo, hi, e.attr("uplift_distribution")).map_err(|m| format!("{pos}: {m}"))?);
     }
     let required = rule_outputs(stack);
     let outputs: Vec<mtlx::ElementId> = document.children_of(graph, "output").collect();
@@ -291,55 +260,6 @@ fn read_interface(text: String, file: &str, name: &str, builtin: Option<Enhancem
         }
     }
     Ok(RuleInterface { kind, name: name.to_string(), path: file.to_string(), text, document, random, masks, stack: stack.clone() })
-}
-
-fn parse_distribution(text: &str) -> Option<Distribution> {
-    let text = text.trim();
-    let open = text.find('(')?;
-    let args: Vec<f64> = text[open + 1..].strip_suffix(')')?.split(',').map(|a| a.trim().parse::<f64>()).collect::<Result<_, _>>().ok()?;
-    match (&text[..open], args.as_slice()) {
-        ("normal", [mean, sd]) if *sd > 0.0 => Some(Distribution::Normal { mean: *mean, sd: *sd }),
-        ("optional", [p]) if (0.0..=1.0).contains(p) => Some(Distribution::Optional { p: *p }),
-        _ => None,
-    }
-}
-
-/// The `k`-th uniform number in [0, 1) of the stream (`seed`, `stream`).
-pub fn uniform(seed: u64, stream: u64, k: u64) -> f64 {
-    unit_f64(mix64(mix64(seed ^ mix64(stream)).wrapping_add(k)))
-}
-
-impl RandomScalar {
-    /// This scalar's value for a material seed.
-    pub fn draw(&self, seed: u64) -> f64 {
-        let stream = hash_str(&self.name);
-        let u = |k| uniform(seed, stream, k);
-        let within = |t: f64| self.min + (self.max - self.min) * t;
-        match self.distribution {
-            Distribution::Uniform => within(u(0)),
-            Distribution::Optional { p } => {
-                if u(0) < p {
-                    within(u(1))
-                } else {
-                    0.0
-                }
-            }
-            Distribution::Normal { mean, sd } => {
-                // Rejection from the normal (Box–Muller); the rules' ranges hold most of the
-                // mass, so 64 tries essentially never run out. If they do, the draw is uniform
-                // in the range: still inside it, and still deterministic.
-                for k in 0..64 {
-                    let (u1, u2) = (u(2 * k).max(1e-300), u(2 * k + 1));
-                    let z = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
-                    let x = mean + sd * z;
-                    if (self.min..=self.max).contains(&x) {
-                        return x;
-                    }
-                }
-                within(u(200))
-            }
-        }
-    }
 }
 
 /// Every random scalar of a rule, drawn for `seed`, in the rule's order.

@@ -1,229 +1,297 @@
-//! The five training-data classes of paper §4.2 (lobes.md §3.3), as parameter vectors generated
-//! on the fly from a counter-based RNG keyed by (seed, class, tile, cell) — never stored.
-//!
-//! A themed class (haze, dust, clearcoat, inner/subcutaneous) draws a *base material* per tile
-//! of 128 × 128 cells from physically informed distributions (conductor reflectivities from
-//! measured metals, dielectric albedos, IORs of real dielectrics), holds it constant over the
-//! tile and samples roughness densely across it: the cell column i sets the input roughness
-//! r ∈ [0.02, 1], the row j interpolates the enhancement's exponent triple (p, q, s) from
-//! (2.5, 1.8, 1.2) to (4, 1, 2), so a tile covers the (α_core, α_haze) manifold the Type-0 rule
-//! produces. The specular colour varies per cell. The decorators follow the rules' ranges
-//! (lobes.md §3), with per-cell weights standing in for the masks. The infill class draws every
-//! parameter uniformly in its range (in the encoder's encoding).
+//! The training-data classes (paper §4.2; lobes.md §3.3) as data: MaterialX documents, one per
+//! class, next to the rules (`mtlx/rules/classes/*.mtlx`, embedded), plus any class documents
+//! in the `--stack` folders (a class of the same name replaces the builtin one). A class is an
+//! `uplift_class` nodegraph with the rules' output contract — `<input>_out` for inputs of
+//! `uplift_stack`; an input it leaves out keeps its nodedef value, so a decorator the class
+//! does not mention stays off — whose interface inputs are random scalars (`uimin`/`uimax`,
+//! `uplift_distribution`, as a rule's) drawn once per base material (`uplift_scope="tile"`) or
+//! once per row (`uplift_scope="cell"`); `uplift_share` is its share of the training rows;
+//! `uplift_draw="uniform"` instead draws every parameter uniformly in the encoder's range (the
+//! infill class). A class's graph runs as a pattern kernel on the CPU engine (the builtin
+//! classes' are shipped); parameter rows are never stored, only regenerated from (seed, class,
+//! tile, cell).
 
-use uplift_base::color::srgb_to_linear;
+use std::sync::Arc;
+use uplift_base::random_scalar::RandomScalar;
+use uplift_base::rng::{hash_str, mix64};
+use uplift_compiler::OutputSelection;
+use uplift_engines::batch::{Columns, Geometry, PatternBatch};
+use uplift_engines::cpu_engine::CpuEngine;
+use uplift_engines::prepared_kernel::{Engine, PreparedKernel};
 use uplift_engines::stack::Stack;
-use uplift_base::rng::mix64;
 
-/// Cells per tile edge.
+/// Cells per tile edge: a tile (base material) holds `TILE²` cells.
 pub const TILE: u64 = 128;
 
-/// A training-data class.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum DataClass {
-    Haze,
-    Dust,
-    Clearcoat,
-    InnerSubcutaneous,
-    Infill,
-}
+/// The nodegraph a class document defines.
+pub const CLASS_GRAPH: &str = "uplift_class";
 
-impl DataClass {
-    pub const ALL: [DataClass; 5] = [DataClass::Haze, DataClass::Dust, DataClass::Clearcoat, DataClass::InnerSubcutaneous, DataClass::Infill];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            DataClass::Haze => "haze",
-            DataClass::Dust => "dust",
-            DataClass::Clearcoat => "clearcoat",
-            DataClass::InnerSubcutaneous => "inner",
-            DataClass::Infill => "infill",
-        }
-    }
-
-    pub fn parse(name: &str) -> Result<DataClass, String> {
-        Self::ALL.into_iter().find(|c| c.name() == name).ok_or_else(|| {
-            format!("unknown data class `{name}` (expected one of {})", Self::ALL.map(|c| c.name()).join(", "))
-        })
-    }
-
-    pub fn index(self) -> usize {
-        Self::ALL.iter().position(|&c| c == self).unwrap()
-    }
-}
-
-/// Uniform numbers of one keyed stream.
-struct Stream {
-    key: u64,
-    k: u64,
-}
-
-impl Stream {
-    fn new(key: u64) -> Stream {
-        Stream { key: mix64(key), k: 0 }
-    }
-    fn u(&mut self) -> f32 {
-        self.k += 1;
-        ((mix64(self.key.wrapping_add(self.k)) >> 40) as f32) / (1u64 << 24) as f32
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.u()
-    }
-    fn chance(&mut self, p: f32) -> bool {
-        self.u() < p
-    }
-    /// A normal draw truncated to [lo, hi] (by rejection; Box–Muller).
-    fn truncated_normal(&mut self, mean: f32, sd: f32, lo: f32, hi: f32) -> f32 {
-        for _ in 0..64 {
-            let (u1, u2) = (self.u().max(1e-7), self.u());
-            let x = mean + sd * (-2.0 * u1.ln()).sqrt() * (std::f32::consts::TAU * u2).cos();
-            if (lo..=hi).contains(&x) {
-                return x;
-            }
-        }
-        mean
-    }
-}
-
-/// Normal-incidence reflectivity (linear Rec.709) of measured metals (Naty Hoffman, "Physics and
-/// Math of Shading", SIGGRAPH 2015 course; values also in Karis 2013 / Lagarde's charts).
-const METALS: [[f32; 3]; 12] = [
-    [1.000, 0.766, 0.336], // gold
-    [0.972, 0.960, 0.915], // silver
-    [0.955, 0.638, 0.538], // copper
-    [0.913, 0.922, 0.924], // aluminium
-    [0.562, 0.565, 0.578], // iron
-    [0.550, 0.556, 0.554], // chromium
-    [0.660, 0.609, 0.526], // nickel
-    [0.542, 0.497, 0.449], // titanium
-    [0.673, 0.637, 0.585], // platinum
-    [0.664, 0.824, 0.850], // zinc
-    [0.910, 0.778, 0.423], // brass
-    [0.662, 0.655, 0.634], // cobalt
+/// The builtin classes (name, source, text), in order.
+const BUILTIN: [(&str, &str, &str); 5] = [
+    ("haze", "mtlx/rules/classes/haze.mtlx", include_str!("../../../mtlx/rules/classes/haze.mtlx")),
+    ("dust", "mtlx/rules/classes/dust.mtlx", include_str!("../../../mtlx/rules/classes/dust.mtlx")),
+    ("clearcoat", "mtlx/rules/classes/clearcoat.mtlx", include_str!("../../../mtlx/rules/classes/clearcoat.mtlx")),
+    ("inner", "mtlx/rules/classes/inner.mtlx", include_str!("../../../mtlx/rules/classes/inner.mtlx")),
+    ("infill", "mtlx/rules/classes/infill.mtlx", include_str!("../../../mtlx/rules/classes/infill.mtlx")),
 ];
 
-/// A dielectric albedo: a random hue and saturation at an sRGB value in [0.12, 0.95] (linear
-/// albedos ≈ 0.013–0.89, the range of real dielectric surfaces).
-fn dielectric_color(s: &mut Stream) -> [f32; 3] {
-    let (h, sat, v) = (s.u(), s.u().powf(1.5) * 0.9, s.range(0.12, 0.95));
-    let c = v * sat;
-    let hp = h * 6.0;
-    let x = c * (1.0 - ((hp % 2.0) - 1.0).abs());
-    let (r, g, b) = match hp as u32 {
-        0 => (c, x, 0.0),
-        1 => (x, c, 0.0),
-        2 => (0.0, c, x),
-        3 => (0.0, x, c),
-        4 => (x, 0.0, c),
-        _ => (c, 0.0, x),
+/// When a class's random scalar is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scope {
+    /// Once per base material (tile).
+    Tile,
+    /// Once per row (cell).
+    Cell,
+}
+
+/// A class's random scalar and the kernel input column it feeds.
+#[derive(Clone, Debug)]
+struct ClassScalar {
+    scalar: RandomScalar,
+    scope: Scope,
+    column: usize,
+}
+
+enum Draw {
+    /// Every parameter uniform in the encoder's range.
+    Uniform,
+    /// The class graph's kernel; `outputs[k]`: the output column of stack parameter k, if the
+    /// class sets it.
+    Graph { kernel: PreparedKernel, scalars: Vec<ClassScalar>, outputs: Vec<Option<usize>> },
+}
+
+/// One training class.
+pub struct TrainingClass {
+    pub name: String,
+    /// Where it was read from.
+    pub source: String,
+    /// Its share of the training rows (relative to the other classes').
+    pub share: f64,
+    draw: Draw,
+}
+
+/// The classes of a stack, their kernels prepared on a CPU engine.
+pub struct TrainingClasses {
+    stack: Arc<Stack>,
+    classes: Vec<TrainingClass>,
+}
+
+/// Text with its `xi:include` lines emptied (lines kept, so positions stay the file's): the
+/// uplift library they include is in the compiler's library anyway.
+fn without_includes(text: &str) -> String {
+    text.lines().map(|l| if l.trim_start().starts_with("<xi:include") { "\n".to_string() } else { format!("{l}\n") }).collect()
+}
+
+impl TrainingClasses {
+    /// The builtin classes and the class documents of `stack`'s folders, prepared on `engine`.
+    pub fn load(stack: &Arc<Stack>, engine: &CpuEngine) -> Result<TrainingClasses, String> {
+        let mut docs: Vec<(String, String, String)> = BUILTIN.iter().map(|(n, s, t)| (n.to_string(), s.to_string(), t.to_string())).collect();
+        for dir in stack.library() {
+            for file in mtlx::library::files_under(dir).into_iter().filter(|f| f.extension().is_some_and(|e| e == "mtlx")) {
+                let text = std::fs::read_to_string(&file).map_err(|e| format!("{}: {e}", file.display()))?;
+                if !text.contains(CLASS_GRAPH) {
+                    continue;
+                }
+                let name = file.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_default();
+                let entry = (name.clone(), file.display().to_string(), text);
+                match docs.iter_mut().find(|d| d.0 == name) {
+                    Some(d) => *d = entry,
+                    None => docs.push(entry),
+                }
+            }
+        }
+        let mut classes = Vec::new();
+        for (name, source, text) in docs {
+            if let Some(c) = read_class(stack, engine, &name, &source, &text)? {
+                classes.push(c);
+            }
+        }
+        if classes.is_empty() {
+            return Err("no training classes".into());
+        }
+        Ok(TrainingClasses { stack: stack.clone(), classes })
+    }
+
+    pub fn len(&self) -> usize {
+        self.classes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.classes.is_empty()
+    }
+
+    pub fn get(&self, index: usize) -> &TrainingClass {
+        &self.classes[index]
+    }
+
+    pub fn iter(&self) -> impl Iterator<Item = &TrainingClass> {
+        self.classes.iter()
+    }
+
+    /// The index of the class named `name`.
+    pub fn index_of(&self, name: &str) -> Result<usize, String> {
+        self.classes.iter().position(|c| c.name == name).ok_or_else(|| format!("unknown data class `{name}` (the classes: {})", self.names().join(", ")))
+    }
+
+    pub fn names(&self) -> Vec<&str> {
+        self.classes.iter().map(|c| c.name.as_str()).collect()
+    }
+
+    /// The class a uniform number `u` ∈ [0, 1) picks, in proportion to the shares.
+    pub fn pick(&self, u: f64) -> usize {
+        let total: f64 = self.classes.iter().map(|c| c.share).sum();
+        let mut acc = 0.0;
+        for (k, c) in self.classes.iter().enumerate() {
+            acc += c.share / total;
+            if u < acc {
+                return k;
+            }
+        }
+        self.classes.len() - 1
+    }
+
+    /// The parameter rows (`tiles.len()` × the stack's parameters) of class `class` at the
+    /// given (tile, cell) pairs, for generator seed `seed`.
+    pub fn parameters(&self, engine: &CpuEngine, class: usize, seed: u64, tiles: &[u64], cells: &[u64]) -> Result<Vec<f32>, String> {
+        assert_eq!(tiles.len(), cells.len());
+        let c = &self.classes[class];
+        let np = self.stack.len();
+        let n = tiles.len();
+        let class_key = mix64(seed ^ hash_str(&c.name));
+        let tile_key = |tile: u64| class_key ^ mix64(tile.wrapping_mul(0x2545_f491_4f6c_dd1d));
+        let cell_key = |tile: u64, cell: u64| tile_key(tile) ^ mix64(cell.wrapping_add(0x51ed_27));
+        match &c.draw {
+            Draw::Uniform => {
+                let mut out = Vec::with_capacity(n * np);
+                for (&t, &cell) in tiles.iter().zip(cells) {
+                    let key = cell_key(t, cell);
+                    out.extend(self.stack.parameters().iter().enumerate().map(|(k, p)| p.decode(uplift_base::random_scalar::uniform(key, hash_str(&p.channel), k as u64) as f32)));
+                }
+                Ok(out)
+            }
+            Draw::Graph { kernel, scalars, outputs } => {
+                let mut inputs = Columns::zeros(n, kernel.kernel.input_stride);
+                for s in scalars {
+                    let col = inputs.column_mut(s.column);
+                    for (r, x) in col.iter_mut().enumerate() {
+                        let key = match s.scope {
+                            Scope::Tile => tile_key(tiles[r]),
+                            Scope::Cell => cell_key(tiles[r], cells[r]),
+                        };
+                        *x = s.scalar.draw(key) as f32;
+                    }
+                }
+                let batch = PatternBatch { geometry: Geometry::default().repeated(n), inputs, textures: vec![], points_per_group: 1 };
+                let out = kernel.run(Engine::Cpu(engine), &batch)?;
+                let mut rows = self.stack.defaults().repeat(n);
+                for (k, o) in outputs.iter().enumerate() {
+                    if let Some(at) = o {
+                        for (r, v) in out.column(*at).iter().enumerate() {
+                            rows[r * np + k] = *v;
+                        }
+                    }
+                }
+                Ok(rows)
+            }
+        }
+    }
+}
+
+/// Reads one class document (`None`: it defines no `uplift_class`, a stack folder's other
+/// document). Errors name the file, line and column.
+fn read_class(stack: &Arc<Stack>, engine: &CpuEngine, name: &str, source: &str, text: &str) -> Result<Option<TrainingClass>, String> {
+    let text = without_includes(text);
+    let (doc, diags) = mtlx::read_str(&text, source);
+    if let Some(d) = diags.iter().find(|d| d.is_error()) {
+        return Err(d.to_string());
+    }
+    let Some(graph) = doc.top_level().iter().copied().find(|&id| doc.get(id).category == "nodegraph" && doc.get(id).name() == CLASS_GRAPH) else { return Ok(None) };
+    let at = |id: mtlx::ElementId| {
+        let p = &doc.get(id).pos;
+        format!("{source}:{}:{}", p.line, p.column)
     };
-    let m = v - c;
-    [srgb_to_linear(r + m), srgb_to_linear(g + m), srgb_to_linear(b + m)]
+    let g = doc.get(graph);
+    let share = match g.attr("uplift_share") {
+        None => 1.0,
+        Some(s) => s.trim().parse::<f64>().ok().filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| format!("{}: `uplift_share` is `{s}`, not a positive number", at(graph)))?,
+    };
+    let draw = match g.attr("uplift_draw") {
+        Some("uniform") => Draw::Uniform,
+        Some(other) => return Err(format!("{}: `uplift_draw` is `{other}`; the one kind is `uniform`", at(graph))),
+        None => {
+            let mut declared = Vec::new();
+            for id in doc.children_of(graph, "input") {
+                let e = doc.get(id);
+                let (Some(lo), Some(hi)) = (e.attr("uimin"), e.attr("uimax")) else {
+                    return Err(format!("{}: input `{}` is not a random scalar (a float with uimin and uimax)", at(id), e.name()));
+                };
+                let scalar = RandomScalar::from_attributes(e.name(), e.attr("type").unwrap_or(""), lo, hi, e.attr("uplift_distribution")).map_err(|m| format!("{}: {m}", at(id)))?;
+                let scope = match e.attr("uplift_scope") {
+                    Some("tile") => Scope::Tile,
+                    Some("cell") => Scope::Cell,
+                    other => return Err(format!("{}: `{}` has uplift_scope {other:?}: a class's random scalar is drawn per `tile` or per `cell`", at(id), e.name())),
+                };
+                declared.push((scalar, scope));
+            }
+            let stack_inputs = stack.inputs();
+            let mut selected = Vec::new();
+            for id in doc.children_of(graph, "output") {
+                let e = doc.get(id);
+                let input = e.name().strip_suffix("_out").and_then(|n| stack_inputs.iter().find(|i| i.name == n));
+                match input {
+                    Some(i) if e.attr("type") == Some(i.ty.as_str()) => selected.push(format!("{CLASS_GRAPH}/{}", e.name())),
+                    Some(i) => return Err(format!("{}: output `{}` is {}; the stack's input takes {}", at(id), e.name(), e.attr("type").unwrap_or("untyped"), i.ty)),
+                    None => return Err(format!("{}: output `{}` is not `<input>_out` of an uplift_stack input ({})", at(id), e.name(), stack_inputs.iter().map(|i| i.name.as_str()).collect::<Vec<_>>().join(", "))),
+                }
+            }
+            if selected.is_empty() {
+                return Err(format!("{}: class `{name}` sets no stack input (give outputs, or uplift_draw=\"uniform\")", at(graph)));
+            }
+            let c = stack.compiler().compile_document(doc.clone(), diags, source, &OutputSelection::Named(selected));
+            if let Some(d) = c.diagnostics.iter().find(|d| d.is_error()) {
+                return Err(d.to_string());
+            }
+            let kernel = c.kernel.ok_or_else(|| format!("{source}: class `{name}` compiled to no kernel"))?;
+            let mut scalars = Vec::new();
+            for input in &kernel.inputs {
+                let (scalar, scope) = declared.iter().find(|(s, _)| s.name == input.input.name).cloned().ok_or_else(|| format!("{source}: the class kernel reads `{}`, which is not a declared random scalar", input.input.name))?;
+                scalars.push(ClassScalar { scalar, scope, column: input.offset });
+            }
+            let outputs = stack
+                .parameters()
+                .iter()
+                .map(|p| kernel.outputs.iter().find(|o| o.name.rsplit('/').next() == Some(&format!("{}_out", p.input))).map(|o| o.offset + p.component))
+                .collect();
+            Draw::Graph { kernel: PreparedKernel::new(Engine::Cpu(engine), kernel)?, scalars, outputs }
+        }
+    };
+    Ok(Some(TrainingClass { name: name.to_string(), source: source.to_string(), share, draw }))
 }
 
-fn luminance(c: [f32; 3]) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
-}
+impl TrainingClass {
+    /// Whether the class runs a graph (else it draws uniformly).
+    pub fn has_graph(&self) -> bool {
+        matches!(self.draw, Draw::Graph { .. })
+    }
 
-/// (1 − d)·c + d·Y(c).
-fn desaturate(c: [f32; 3], d: f32) -> [f32; 3] {
-    let y = luminance(c);
-    c.map(|x| (1.0 - d) * x + d * y)
+    /// Where its kernel comes from (shipped or built), for a graph class.
+    pub fn describe(&self) -> String {
+        match &self.draw {
+            Draw::Uniform => "uniform in the encoder's ranges".into(),
+            Draw::Graph { kernel, .. } => kernel.describe(),
+        }
+    }
 }
 
 /// The Type-0 mapping of lobes.md §3 (rows 8–10): (α_core, α_haze, w_h) from input roughness r,
-/// exponents p, q, scale s and haze gain κh.
+/// exponents p, q, scale s and haze gain κh — the closed form the classes' and rules'
+/// `uplift_core_roughness`, `uplift_haze_roughness` and `uplift_haze_weight` nodes compute.
 pub fn haze_mapping(r: f32, p: f32, q: f32, s: f32, kappa: f32) -> (f32, f32, f32) {
     let core = r.powf(p).clamp(0.004, 1.0);
     let haze = (s * r.powf(q)).clamp(0.004, 1.0);
     let denom = haze * haze - core * core;
     let w_vm = if denom > 1e-12 { (r.powi(4) - core * core) / denom } else { 0.0 };
     (core, haze, (kappa * w_vm).clamp(0.05, 0.6))
-}
-
-/// Which decorators a themed tile has on.
-struct Decorators {
-    dust: bool,
-    coat: bool,
-    inner: bool,
-}
-
-/// The parameter vector of cell `cell` (0 … 128² − 1) of tile `tile` of `class`.
-pub fn class_parameters(stack: &Stack, class: DataClass, seed: u64, tile: u64, cell: u64) -> Vec<f32> {
-    let tile_key = mix64(seed ^ ((class.index() as u64) << 58)) ^ mix64(tile.wrapping_mul(0x2545_f491_4f6c_dd1d));
-    let mut cs = Stream::new(tile_key ^ mix64(cell.wrapping_add(0x51ed_27)));
-    if class == DataClass::Infill {
-        return stack.parameters().iter().map(|p| p.decode(cs.u())).collect();
-    }
-    let mut ts = Stream::new(tile_key);
-    let deco = match class {
-        DataClass::Haze => Decorators { dust: false, coat: false, inner: false },
-        DataClass::Dust => Decorators { dust: true, coat: ts.chance(0.5), inner: false },
-        DataClass::Clearcoat => Decorators { dust: false, coat: true, inner: false },
-        _ => Decorators { dust: false, coat: ts.chance(2.0 / 3.0), inner: true },
-    };
-    // Base material (per tile).
-    let metal = !deco.inner && ts.chance(0.35);
-    let color = if metal {
-        if ts.chance(0.2) {
-            [ts.range(0.3, 0.95), ts.range(0.3, 0.95), ts.range(0.3, 0.95)]
-        } else {
-            let m = METALS[(ts.u() * METALS.len() as f32) as usize % METALS.len()];
-            let k = ts.range(0.9, 1.05);
-            m.map(|x| (x * k).min(0.99))
-        }
-    } else {
-        dielectric_color(&mut ts)
-    };
-    let metalness = if metal {
-        if ts.chance(0.8) { 1.0 } else { ts.range(0.5, 1.0) }
-    } else if ts.chance(0.8) {
-        0.0
-    } else {
-        ts.range(0.0, if deco.inner { 0.3 } else { 0.5 })
-    };
-    let gamma_g = ts.range(0.1, 1.0);
-    let kappa = ts.range(1.0, 2.0);
-    let eta_d = ts.truncated_normal(1.5, 0.08, 1.33, 1.8);
-    // Densely sampled roughness: column → r, row → (p, q, s).
-    let (i, j) = (cell % TILE, (cell / TILE) % TILE);
-    let r = 0.02 + 0.98 * ((i as f32 + cs.u()) / TILE as f32);
-    let t = (j as f32 + cs.u()) / TILE as f32;
-    let (p, q, s) = (2.5 + 1.5 * t, 1.8 - 0.8 * t, 1.2 + 0.8 * t);
-    let (core, haze, w_h) = haze_mapping(r, p, q, s, kappa);
-    // Specular colour per cell; metalness transitions in a few cells.
-    let spec = if cs.chance(0.2) { [cs.range(0.0, 0.99), cs.range(0.0, 0.99), cs.range(0.0, 0.99)] } else { color.map(|x| (x * cs.range(0.85, 1.15)).clamp(0.0, 0.99)) };
-    let metalness = if cs.chance(0.1) { cs.u() } else { metalness };
-    let edge = spec.map(|x| x.powf(gamma_g));
-    // Decorators, with canonical values when off.
-    let (mut w_f, mut tau_f, mut w_c, mut eta_c) = (0.0, 0.5, 0.0, 1.5);
-    let (mut w_in, mut tau_in, mut scatter, mut w_sub, mut a_sub) = (0.0, 0.5, desaturate(color, 0.35), 0.0, 0.64);
-    if deco.dust {
-        let full = ts.range(0.4, 1.0);
-        tau_f = ts.range(0.5, 1.0);
-        w_f = if cs.chance(0.3) { full } else { full * cs.u() };
-    }
-    if deco.coat {
-        eta_c = ts.range(1.45, 1.65);
-        w_c = if cs.chance(0.9) { 1.0 } else { 0.0 };
-    }
-    if deco.inner {
-        w_f = ts.range(0.3, 0.9);
-        tau_f = ts.range(0.2, 0.5);
-        w_in = ts.range(0.3, 1.0);
-        tau_in = ts.range(0.3, 0.7);
-        scatter = desaturate(color, ts.range(0.2, 0.5));
-        w_sub = 1.0;
-        let r_sub = ts.range(0.7, 1.0);
-        a_sub = r_sub * r_sub;
-    }
-    let v = [
-        spec[0], spec[1], spec[2], edge[0], edge[1], edge[2], metalness, core, haze, w_h, eta_d, w_f, tau_f, w_c, eta_c, w_in, tau_in, scatter[0], scatter[1],
-        scatter[2], w_sub, a_sub,
-    ];
-    let mut row = stack.defaults();
-    row[..v.len()].copy_from_slice(&v);
-    row
 }
 
 #[cfg(test)]
@@ -241,13 +309,20 @@ mod tests {
 
     #[test]
     fn every_class_stays_in_range_and_is_deterministic() {
-        for class in DataClass::ALL {
-            for cell in (0..TILE * TILE).step_by(97) {
-                let stack = Stack::builtin();
-                let p = class_parameters(&stack, class, 7, cell / 13, cell);
-                assert_eq!(p, class_parameters(&stack, class, 7, cell / 13, cell));
-                for (x, spec) in p.iter().zip(stack.parameters()) {
-                    assert!(x.is_finite() && *x >= spec.lo - 1e-6 && *x <= spec.hi + 1e-6, "{} {}: {x}", class.name(), spec.channel);
+        let stack = Stack::builtin();
+        let engine = CpuEngine::with_threads(1).unwrap();
+        let classes = TrainingClasses::load(&stack, &engine).unwrap();
+        assert_eq!(classes.names(), ["haze", "dust", "clearcoat", "inner", "infill"]);
+        let cells: Vec<u64> = (0..TILE * TILE).step_by(97).collect();
+        let tiles: Vec<u64> = cells.iter().map(|c| c / 13).collect();
+        for k in 0..classes.len() {
+            let c = classes.get(k);
+            assert!(!c.has_graph() || c.describe().starts_with("built-in kernel"), "{}: {}", c.name, c.describe());
+            let p = classes.parameters(&engine, k, 7, &tiles, &cells).unwrap();
+            assert_eq!(p, classes.parameters(&engine, k, 7, &tiles, &cells).unwrap());
+            for row in p.chunks(stack.len()) {
+                for (x, spec) in row.iter().zip(stack.parameters()) {
+                    assert!(x.is_finite() && *x >= spec.lo - 1e-6 && *x <= spec.hi + 1e-6, "{} {}: {x}", c.name, spec.channel);
                 }
             }
         }

@@ -1,13 +1,13 @@
 //! Training data from the compiled `uplift_stack` kernels (runtime/kernels/graphs/bsdf/uplift_stack.mtlx,
 //! shipped in the eval, albedo and sample contexts). A batch is a pure function of (seed, batch
-//! index, size): each row draws its class (20 % each, or one class), tile and cell from a
-//! counter-based hash, its parameters from `classes`, its view cosine-weighted (θv ≤ 87°) and
+//! index, size): each row draws its class (by the classes' shares, or one class), tile and cell
+//! from a counter-based hash, its parameters from the class's graph (`classes`), its view cosine-weighted (θv ≤ 87°) and
 //! its light from a mixture — half uniform on the hemisphere, half from the stack's own
 //! `sample` (falling back to uniform where a sample leaves the hemisphere). No importance weights:
 //! the mixture itself is the regression weighting (lobes.md §4.3). Targets: f·μl (RGB) from
 //! `eval` (or `sample`, whose response is the same), T (RGB) and R = Y(albedo) from `albedo`.
 
-use crate::classes::{class_parameters, DataClass};
+use crate::classes::{TrainingClasses, TILE};
 use crate::features::{cosine_view, direction_features, uniform_cosine_view, uniform_hemisphere, FEATURES};
 use crate::loss::OUTPUTS;
 use uplift_engines::stack::Stack;
@@ -22,25 +22,30 @@ use uplift_compiler::ClosureContext;
 pub const TILES_PER_CLASS: u64 = 1 << 16;
 
 /// Which classes a generator draws.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub enum ClassMix {
-    /// Every class with probability 1/5 (paper §4.2: infill ≈ 20 %).
+    /// Every class in proportion to its share (the builtin five: 1/5 each; paper §4.2:
+    /// infill ≈ 20 %).
     All,
-    Only(DataClass),
+    /// One class, by name.
+    Only(String),
 }
 
 impl ClassMix {
+    /// `all` or a class name (checked against the classes when a batch is drawn).
     pub fn parse(text: &str) -> Result<ClassMix, String> {
         if text == "all" {
             Ok(ClassMix::All)
+        } else if text.is_empty() {
+            Err("an empty class name".into())
         } else {
-            DataClass::parse(text).map(ClassMix::Only)
+            Ok(ClassMix::Only(text.to_string()))
         }
     }
-    pub fn name(self) -> &'static str {
+    pub fn name(&self) -> &str {
         match self {
             ClassMix::All => "all",
-            ClassMix::Only(c) => c.name(),
+            ClassMix::Only(c) => c,
         }
     }
 }
@@ -67,6 +72,7 @@ pub struct TrainingBatch {
 pub struct DataGenerator {
     engine: CpuEngine,
     stack: Arc<Stack>,
+    classes: TrainingClasses,
     eval: StackKernel,
     albedo: StackKernel,
     sample: StackKernel,
@@ -116,6 +122,7 @@ impl DataGenerator {
             albedo: StackKernel::new(&engine, stack, ClosureContext::Albedo)?,
             sample: StackKernel::new(&engine, stack, ClosureContext::Sample)?,
             pdf: StackKernel::new(&engine, stack, ClosureContext::Pdf)?,
+            classes: TrainingClasses::load(stack, &engine)?,
             engine,
             stack: stack.clone(),
             mix,
@@ -128,6 +135,11 @@ impl DataGenerator {
     /// The stack whose data this generates.
     pub fn stack(&self) -> &Arc<Stack> {
         &self.stack
+    }
+
+    /// The training classes (`classes`).
+    pub fn classes(&self) -> &TrainingClasses {
+        &self.classes
     }
 
     /// The engine the reference kernels run on.
@@ -166,23 +178,37 @@ impl DataGenerator {
         // rows whatever the thread count. The kernels run on the engine's threads; this part,
         // on one thread, was a sixth of data generation.
         let np = self.stack.len();
+        let only = match &self.mix {
+            ClassMix::All => None,
+            ClassMix::Only(name) => Some(self.classes.index_of(name)?),
+        };
+        // Each group of k rows draws its class, tile and cell from its own key; the classes'
+        // kernels then run once per class on all of its groups.
+        let groups = rows / k;
+        let picks: Vec<(usize, u64, u64)> = (0..groups)
+            .map(|g| {
+                let rk = mix64(key.wrapping_add(g as u64));
+                let class = only.unwrap_or_else(|| self.classes.pick(unit(rk ^ 1) as f64));
+                (class, mix64(rk ^ 2) % TILES_PER_CLASS, mix64(rk ^ 3) % (TILE * TILE))
+            })
+            .collect();
         let mut params = vec![0.0; rows * np];
         let mut classes = vec![0u8; rows];
-        let (mix, seed, stack) = (self.mix, self.seed, &*self.stack);
-        params.par_chunks_mut(np * k).zip(classes.par_chunks_mut(k)).enumerate().for_each(|(g, (group, class_index))| {
-            let rk = mix64(key.wrapping_add(g as u64));
-            let class = match mix {
-                ClassMix::All => DataClass::ALL[(unit(rk ^ 1) * 5.0) as usize % 5],
-                ClassMix::Only(c) => c,
-            };
-            class_index.fill(class.index() as u8);
-            let tile = mix64(rk ^ 2) % TILES_PER_CLASS;
-            let cell = mix64(rk ^ 3) % (super::classes::TILE * super::classes::TILE);
-            let p = class_parameters(stack, class, seed, tile, cell);
-            for row in group.chunks_mut(np) {
-                row.copy_from_slice(&p);
+        for c in 0..self.classes.len() {
+            let members: Vec<usize> = (0..groups).filter(|&g| picks[g].0 == c).collect();
+            if members.is_empty() {
+                continue;
             }
-        });
+            let tiles: Vec<u64> = members.iter().map(|&g| picks[g].1).collect();
+            let cells: Vec<u64> = members.iter().map(|&g| picks[g].2).collect();
+            let p = self.classes.parameters(&self.engine, c, self.seed, &tiles, &cells)?;
+            for (m, &g) in members.iter().enumerate() {
+                for r in g * k..(g + 1) * k {
+                    params[r * np..(r + 1) * np].copy_from_slice(&p[m * np..(m + 1) * np]);
+                    classes[r] = c as u8;
+                }
+            }
+        }
         let mut b = self.evaluate_grouped(params, key, k)?;
         b.class = classes;
         Ok(b)

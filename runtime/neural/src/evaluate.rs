@@ -3,7 +3,6 @@
 //! rows and channels — and the mean absolute errors of T and R. Also the plain forward pass
 //! (encoder → decoder, no jitter) that evaluation, fitting initialisation and inference share.
 
-use crate::classes::DataClass;
 use crate::datagen::{ClassMix, DataGenerator, TrainingBatch};
 use crate::features::FEATURES;
 use crate::loss::OUTPUTS;
@@ -14,9 +13,10 @@ use crate::model::{fill_decoder_input, NeuralModel};
 pub const HOLDOUT_SEED: u64 = 0x686f_6c64_6f75_7400;
 
 /// Errors of a model on one class.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct ClassError {
-    pub class: DataClass,
+    /// The class's name.
+    pub class: String,
     pub rows: usize,
     /// Σ|f̂·μl − f·μl| / Σ|f·μl|.
     pub fcos_relative_l1: f64,
@@ -40,7 +40,7 @@ pub fn decode(model: &NeuralModel<f32>, latents: &[f32], features: &[f32]) -> Ve
 }
 
 /// The errors of `outputs` (rows × 7) against a batch's targets.
-pub fn batch_errors(class: DataClass, batch: &TrainingBatch, outputs: &[f32]) -> ClassError {
+pub fn batch_errors(class: &str, batch: &TrainingBatch, outputs: &[f32]) -> ClassError {
     let (mut num, mut den, mut t, mut r) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for k in 0..batch.rows {
         let (o, g) = (&outputs[k * OUTPUTS..(k + 1) * OUTPUTS], &batch.target[k * OUTPUTS..(k + 1) * OUTPUTS]);
@@ -53,19 +53,20 @@ pub fn batch_errors(class: DataClass, batch: &TrainingBatch, outputs: &[f32]) ->
         r += (o[6] as f64 - g[6] as f64).abs();
     }
     let n = batch.rows.max(1) as f64;
-    ClassError { class, rows: batch.rows, fcos_relative_l1: num / den.max(1e-30), t_l1: t / n, r_l1: r / n }
+    ClassError { class: class.to_string(), rows: batch.rows, fcos_relative_l1: num / den.max(1e-30), t_l1: t / n, r_l1: r / n }
 }
 
 /// The model's errors on `rows` held-out rows of every class (generated with `seed` +
 /// [`HOLDOUT_SEED`]).
 pub fn holdout_errors(model: &NeuralModel<f32>, generator: &mut DataGenerator, seed: u64, rows: usize) -> Result<Vec<ClassError>, String> {
-    let (mix, s) = (generator.mix, generator.seed);
+    let (mix, s) = (generator.mix.clone(), generator.seed);
+    let names: Vec<String> = generator.classes().names().iter().map(|n| n.to_string()).collect();
     let mut out = Vec::new();
-    for class in DataClass::ALL {
-        generator.mix = ClassMix::Only(class);
+    for class in &names {
+        generator.mix = ClassMix::Only(class.clone());
         generator.seed = seed.wrapping_add(HOLDOUT_SEED);
         let batch = generator.batch(0, rows);
-        generator.mix = mix;
+        generator.mix = mix.clone();
         generator.seed = s;
         let batch = batch?;
         let z = encode(model, &batch.encoded);

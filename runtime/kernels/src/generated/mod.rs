@@ -36,6 +36,18 @@ static TYPE4_FUZZ_SCATTER_SCALAR: BatchFn = cpu_batch_fn!(type4_fuzz_scatter);
 pub mod type5_fuzz_clearcoat_scatter;
 static TYPE5_FUZZ_CLEARCOAT_SCATTER_SCALAR: BatchFn = cpu_batch_fn!(type5_fuzz_clearcoat_scatter);
 #[allow(clippy::all, dead_code, unused_imports)]
+pub mod clearcoat;
+static CLEARCOAT_SCALAR: BatchFn = cpu_batch_fn!(clearcoat);
+#[allow(clippy::all, dead_code, unused_imports)]
+pub mod dust;
+static DUST_SCALAR: BatchFn = cpu_batch_fn!(dust);
+#[allow(clippy::all, dead_code, unused_imports)]
+pub mod haze;
+static HAZE_SCALAR: BatchFn = cpu_batch_fn!(haze);
+#[allow(clippy::all, dead_code, unused_imports)]
+pub mod inner;
+static INNER_SCALAR: BatchFn = cpu_batch_fn!(inner);
+#[allow(clippy::all, dead_code, unused_imports)]
 pub mod bsdf_conductor_eval;
 static BSDF_CONDUCTOR_EVAL_SCALAR: BatchFn = cpu_batch_fn!(bsdf_conductor_eval);
 #[allow(clippy::all, dead_code, unused_imports)]
@@ -137,6 +149,10 @@ pub static BUILTIN_KERNELS: &[BuiltinKernel] = &[
     BuiltinKernel { name: "type3_dust_clearcoat", source: "mtlx/rules/type3_dust_clearcoat.mtlx", context: None, fingerprint: 0xcbaff79e3fe83d5a, shape: KernelShape { input_columns: type3_dust_clearcoat::INPUT_COLUMNS, output_columns: type3_dust_clearcoat::OUTPUT_COLUMNS, texture_count: type3_dust_clearcoat::TEXTURE_COUNT }, batch: TYPE3_DUST_CLEARCOAT_SCALAR, scalar: None, grouped: None },
     BuiltinKernel { name: "type4_fuzz_scatter", source: "mtlx/rules/type4_fuzz_scatter.mtlx", context: None, fingerprint: 0xf74de13e4523af08, shape: KernelShape { input_columns: type4_fuzz_scatter::INPUT_COLUMNS, output_columns: type4_fuzz_scatter::OUTPUT_COLUMNS, texture_count: type4_fuzz_scatter::TEXTURE_COUNT }, batch: TYPE4_FUZZ_SCATTER_SCALAR, scalar: None, grouped: None },
     BuiltinKernel { name: "type5_fuzz_clearcoat_scatter", source: "mtlx/rules/type5_fuzz_clearcoat_scatter.mtlx", context: None, fingerprint: 0x2d054c0173dd3be2, shape: KernelShape { input_columns: type5_fuzz_clearcoat_scatter::INPUT_COLUMNS, output_columns: type5_fuzz_clearcoat_scatter::OUTPUT_COLUMNS, texture_count: type5_fuzz_clearcoat_scatter::TEXTURE_COUNT }, batch: TYPE5_FUZZ_CLEARCOAT_SCATTER_SCALAR, scalar: None, grouped: None },
+    BuiltinKernel { name: "clearcoat", source: "mtlx/rules/classes/clearcoat.mtlx", context: None, fingerprint: 0x24bc82ff54a239ef, shape: KernelShape { input_columns: clearcoat::INPUT_COLUMNS, output_columns: clearcoat::OUTPUT_COLUMNS, texture_count: clearcoat::TEXTURE_COUNT }, batch: CLEARCOAT_SCALAR, scalar: None, grouped: None },
+    BuiltinKernel { name: "dust", source: "mtlx/rules/classes/dust.mtlx", context: None, fingerprint: 0x7a5adcf5c6897bfd, shape: KernelShape { input_columns: dust::INPUT_COLUMNS, output_columns: dust::OUTPUT_COLUMNS, texture_count: dust::TEXTURE_COUNT }, batch: DUST_SCALAR, scalar: None, grouped: None },
+    BuiltinKernel { name: "haze", source: "mtlx/rules/classes/haze.mtlx", context: None, fingerprint: 0x425dfa8e173d50b6, shape: KernelShape { input_columns: haze::INPUT_COLUMNS, output_columns: haze::OUTPUT_COLUMNS, texture_count: haze::TEXTURE_COUNT }, batch: HAZE_SCALAR, scalar: None, grouped: None },
+    BuiltinKernel { name: "inner", source: "mtlx/rules/classes/inner.mtlx", context: None, fingerprint: 0xa28d250f61c2053d, shape: KernelShape { input_columns: inner::INPUT_COLUMNS, output_columns: inner::OUTPUT_COLUMNS, texture_count: inner::TEXTURE_COUNT }, batch: INNER_SCALAR, scalar: None, grouped: None },
     BuiltinKernel { name: "bsdf_conductor_eval", source: "runtime/kernels/graphs/bsdf/bsdf_conductor.mtlx", context: Some("eval"), fingerprint: 0x85b89e79a9a8a730, shape: KernelShape { input_columns: bsdf_conductor_eval::INPUT_COLUMNS, output_columns: bsdf_conductor_eval::OUTPUT_COLUMNS, texture_count: bsdf_conductor_eval::TEXTURE_COUNT }, batch: packet_batch_fn!(bsdf_conductor_eval_packet, BSDF_CONDUCTOR_EVAL_SCALAR), scalar: Some(BSDF_CONDUCTOR_EVAL_SCALAR), grouped: Some(Grouped { run: bsdf_conductor_eval_packet::mx_pattern_grouped_batch_simd, point_columns: bsdf_conductor_eval_packet::POINT_INPUT_COLUMNS }) },
     BuiltinKernel { name: "bsdf_conductor_albedo", source: "runtime/kernels/graphs/bsdf/bsdf_conductor.mtlx", context: Some("albedo"), fingerprint: 0xb102b2497011a0a2, shape: KernelShape { input_columns: bsdf_conductor_albedo::INPUT_COLUMNS, output_columns: bsdf_conductor_albedo::OUTPUT_COLUMNS, texture_count: bsdf_conductor_albedo::TEXTURE_COUNT }, batch: BSDF_CONDUCTOR_ALBEDO_SCALAR, scalar: None, grouped: None },
     BuiltinKernel { name: "bsdf_conductor_sample", source: "runtime/kernels/graphs/bsdf/bsdf_conductor.mtlx", context: Some("sample"), fingerprint: 0xf8c1f7b3cfec2c12, shape: KernelShape { input_columns: bsdf_conductor_sample::INPUT_COLUMNS, output_columns: bsdf_conductor_sample::OUTPUT_COLUMNS, texture_count: bsdf_conductor_sample::TEXTURE_COUNT }, batch: BSDF_CONDUCTOR_SAMPLE_SCALAR, scalar: None, grouped: None },

@@ -54,7 +54,10 @@ pub fn run(args: DatagenArgs) -> Result<(), String> {
     }
     std::fs::create_dir_all(&args.output).map_err(|e| format!("{}: {e}", args.output.display()))?;
     let stack = args.stack.load()?;
-    let mut generator = DataGenerator::new(CpuEngine::new()?, &stack, mix, args.seed)?;
+    let mut generator = DataGenerator::new(CpuEngine::new()?, &stack, mix.clone(), args.seed)?;
+    if let ClassMix::Only(name) = &mix {
+        generator.classes().index_of(name).map_err(|e| format!("--class: {e}"))?;
+    }
     generator.directions_per_view = args.directions_per_view;
     let shards = args.count.div_ceil(args.shard_rows);
     let bar = indicatif::ProgressBar::new(args.count as u64);

@@ -72,12 +72,15 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
     }
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
     let views = ViewDistribution::parse(&args.views).map_err(|e| format!("--views: {e}"))?;
-    let opts = TrainOptions { steps: args.steps, batch: args.batch, seed: args.seed, lr_start: args.lr, lr_end: args.lr_end, jitter: args.jitter, threads, mix, checkpoint_every: args.checkpoint_every, stop_after: args.stop_after, init: args.init.clone(), views, ..Default::default() };
+    let opts = TrainOptions { steps: args.steps, batch: args.batch, seed: args.seed, lr_start: args.lr, lr_end: args.lr_end, jitter: args.jitter, threads, mix: mix.clone(), checkpoint_every: args.checkpoint_every, stop_after: args.stop_after, init: args.init.clone(), views, ..Default::default() };
     if let Some(parent) = args.output.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
     }
     let stack = args.stack.load()?;
-    let mut generator = DataGenerator::new(CpuEngine::with_threads(threads)?, &stack, mix, args.seed)?;
+    let mut generator = DataGenerator::new(CpuEngine::with_threads(threads)?, &stack, mix.clone(), args.seed)?;
+    if let ClassMix::Only(name) = &mix {
+        generator.classes().index_of(name).map_err(|e| format!("--class: {e}"))?;
+    }
     generator.views = views;
     if args.directions_per_view == 0 || args.batch % args.directions_per_view != 0 {
         return Err(format!("--directions-per-view {}: a divisor of --batch {}", args.directions_per_view, args.batch));
@@ -118,8 +121,8 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
     eprintln!("held-out ({} rows per class): class, relative L1 of f·cos, mean |ΔT|, mean |ΔR|", args.holdout);
     let mut table = String::from("class,fcos_relative_l1,t_l1,r_l1\n");
     for e in &errors {
-        eprintln!("  {:<10} {:.4}  {:.4}  {:.4}", e.class.name(), e.fcos_relative_l1, e.t_l1, e.r_l1);
-        table += &format!("{},{:.5},{:.5},{:.5}\n", e.class.name(), e.fcos_relative_l1, e.t_l1, e.r_l1);
+        eprintln!("  {:<10} {:.4}  {:.4}  {:.4}", e.class, e.fcos_relative_l1, e.t_l1, e.r_l1);
+        table += &format!("{},{:.5},{:.5},{:.5}\n", e.class, e.fcos_relative_l1, e.t_l1, e.r_l1);
     }
     // Store the held-out table beside the training record; then the checkpoint is done with.
     let mut file = weights_file(&state, &stack, &opts, &extra_refs);
