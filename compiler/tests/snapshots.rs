@@ -292,7 +292,8 @@ const GROUPED_KERNELS: &[&str] = &["uplift_stack_eval", "uplift_stack_sample"];
 /// The kernels the runtime ships, `runtime/kernels/src/generated/`, are snapshots too: the
 /// compiler's Rust for every graph in `runtime/kernels/graphs/`, `examples/marble.mtlx`, the
 /// uplift rules' baked pattern outputs (`mtlx/rules/`, `uplift_rule/<name>_out`), the training
-/// classes' (`mtlx/rules/classes/`, `uplift_class/<name>_out`) and every BSDF
+/// classes' (`mtlx/rules/classes/`, `uplift_class/<name>_out`), the rule options'
+/// (`mtlx/rules/options/`, `uplift_rule_option/<name>_out`) and every BSDF
 /// graph in `runtime/kernels/graphs/bsdf/` in every closure context; the albedo tables once
 /// (`albedo_table_data.rs`), which every kernel that reads them shares; and `mod.rs`, their
 /// table (each kernel's fingerprint, shape and dispatching batch function). They are committed
@@ -322,10 +323,11 @@ fn shipped_kernels_are_current() {
     }
     let mut rule_documents = mtlx_files("mtlx/rules");
     rule_documents.extend(mtlx_files("mtlx/rules/classes"));
+    rule_documents.extend(mtlx_files("mtlx/rules/options"));
     for rule in rule_documents {
         let (doc, diags) = mtlx::read_file(&rule);
         assert!(!mtlx::has_errors(&diags), "{}: {:?}", rule.display(), diags.iter().map(|d| d.to_string()).collect::<Vec<_>>());
-        let graph = doc.top_level().iter().copied().find(|&id| ["uplift_rule", "uplift_class"].contains(&doc.get(id).name())).unwrap_or_else(|| panic!("{}: no uplift_rule or uplift_class", rule.display()));
+        let graph = doc.top_level().iter().copied().find(|&id| ["uplift_rule", "uplift_class", "uplift_rule_option"].contains(&doc.get(id).name())).unwrap_or_else(|| panic!("{}: no uplift_rule, uplift_class or uplift_rule_option", rule.display()));
         let graph_name = doc.get(graph).name().to_string();
         let outputs: Vec<String> = doc
             .children_of(graph, "output")

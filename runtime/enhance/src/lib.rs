@@ -9,4 +9,5 @@ pub mod gltf_input;
 pub mod material_writer;
 pub mod pbr_input;
 pub mod pipeline;
+pub mod rule_option;
 pub mod rules;

@@ -27,6 +27,8 @@ pub enum PbrValue {
 #[derive(Clone, Debug)]
 pub struct MaterialSpec<'a> {
     pub rule: &'a RuleInterface,
+    /// Rule options merged into the rule's graph.
+    pub options: &'a [crate::rule_option::RuleOption],
     /// The rule's random scalars, drawn.
     pub scalars: &'a [(String, f64)],
     /// A value per PBR input name ([`PBR_INPUTS`]); inputs not given keep the rule's default.
@@ -72,6 +74,9 @@ pub fn material_document(spec: &MaterialSpec) -> Result<Document, String> {
         .ok_or_else(|| format!("rule {}: no nodegraph `{RULE_GRAPH}`", spec.rule.kind.name()))?;
     let graph = doc.import_subtree(root, rule, rule_graph);
     doc.get_mut(graph).set_attr("name", MATERIAL_GRAPH);
+    for o in spec.options {
+        o.merge_into(&mut doc, graph)?;
+    }
 
     for (name, value) in spec.scalars {
         let input = interface_input(&doc, graph, name)?;

@@ -8,6 +8,7 @@ use crate::gltf_input;
 use crate::masks::{self, MaskKind};
 use crate::material_writer::{material_document, MaterialSpec, PbrValue};
 use crate::pbr_input::{PbrChannel, PbrMaterial, Surface};
+use crate::rule_option::RuleOption;
 use crate::rules::{self, uniform, EnhancementType, RuleInterface};
 use uplift_base::rng::{hash_str, mix64};
 use uplift_base::atomic_write::write_atomically;
@@ -38,6 +39,8 @@ pub struct EnhanceOptions {
     pub glints: bool,
     /// The stack the rules bake for (`Stack::builtin`, or `--stack DIR`'s).
     pub stack: Arc<Stack>,
+    /// Rule options applied on top of every material's rule (`--option`, `--iridescence`).
+    pub rule_options: Vec<RuleOption>,
 }
 
 /// What was written for one material.
@@ -245,7 +248,11 @@ pub fn channel_names(output: &str, components: usize, is_color: bool) -> Vec<Str
 pub fn enhance(material: &PbrMaterial, options: &EnhanceOptions, out: &Path, engine: &dyn PatternEngine) -> Result<Enhanced, String> {
     let rule = choose_rule(material, options)?;
     let kind = rule.kind;
-    let scalars = rules::draw_all(&rule.random, options.seed);
+    let mut scalars = rules::draw_all(&rule.random, options.seed);
+    for o in &options.rule_options {
+        o.check_against(&rule)?;
+        scalars.extend(rules::draw_all(&o.random, options.seed));
+    }
     let parent = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
     let leaf = out.file_name().map(|n| n.to_string_lossy().to_string()).ok_or_else(|| format!("{}: not a folder name", out.display()))?;
@@ -266,7 +273,8 @@ pub fn enhance(material: &PbrMaterial, options: &EnhanceOptions, out: &Path, eng
         let _ = std::fs::remove_dir_all(&old);
     }
     std::fs::rename(&staging, out).map_err(|e| format!("{}: {e}", out.display()))?;
-    Ok(Enhanced { kind, rule: rule.name.clone(), out_dir: out.to_path_buf(), scalars })
+    let name = std::iter::once(rule.name.as_str()).chain(options.rule_options.iter().map(|o| o.name.as_str())).collect::<Vec<_>>().join("+");
+    Ok(Enhanced { kind, rule: name, out_dir: out.to_path_buf(), scalars })
 }
 
 fn write_outputs(
@@ -306,15 +314,22 @@ fn write_outputs(
     }
 
     let glint = if options.glints { Some(crate::glints::draw(mix64(options.seed ^ hash_str("glints")), object_size)?) } else { None };
-    let doc = material_document(&MaterialSpec { rule, scalars, pbr: &pbr, glint: glint.as_ref() })?;
+    let doc = material_document(&MaterialSpec { rule, options: &options.rule_options, scalars, pbr: &pbr, glint: glint.as_ref() })?;
     let path = dir.join("material.mtlx");
     write_atomically(&path, mtlx::write_string(&doc).as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
 
     let folder = MaterialFolder::create(dir);
-    let params = bake(rule, scalars, &pbr, dir, &geometry, w, h, engine)?;
+    let mut params = bake(rule, scalars, &pbr, dir, &geometry, w, h, engine)?;
+    for o in &options.rule_options {
+        bake_option(o, &rule.stack, scalars, &geometry, &mut params, engine)?;
+    }
     folder.write_params_image(&params)?;
     // meta.json last: its presence marks a finished material.
-    folder.write_meta(&Meta { glint, ..meta(material, kind, options.seed, scalars, (w, h), object_size, rule) })
+    let mut meta = Meta { glint, ..meta(material, kind, options.seed, scalars, (w, h), object_size, rule) };
+    for o in &options.rule_options {
+        meta.rule += &format!(" + {}", o.path);
+    }
+    folder.write_meta(&meta)
 }
 
 /// Evaluates the rule's kernel at every texel: the PBR inputs read from the written textures
@@ -385,6 +400,36 @@ fn bake(
     img.attributes.push(("uplift_rule".into(), rule.name.clone()));
     img.attributes.push((uplift_material::folder::STACK_ATTRIBUTE.into(), rule.stack.signature()));
     Ok(img)
+}
+
+/// Bakes a rule option's outputs into `img` (replacing the rule's channels of the same name):
+/// the option's own kernel on its drawn scalars at every texel.
+fn bake_option(option: &RuleOption, stack: &Stack, scalars: &[(String, f64)], geometry: &[Geometry], img: &mut ExrImage, engine: &dyn PatternEngine) -> Result<(), String> {
+    let text = option.text();
+    let (doc, diags) = mtlx::read_str(&text, &option.path);
+    let c = stack.compiler().compile_document(doc, diags, &option.path, &OutputSelection::Named(option.kernel_outputs()));
+    if mtlx::has_errors(&c.diagnostics) {
+        return Err(c.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.to_string()).collect::<Vec<_>>().join("\n"));
+    }
+    let kernel = c.kernel.ok_or_else(|| format!("{}: no pattern outputs", option.path))?;
+    let n = geometry.len();
+    let mut rows = vec![0.0f32; n * kernel.input_stride];
+    for input in &kernel.inputs {
+        let (_, v) = scalars.iter().find(|(s, _)| *s == input.input.name).ok_or_else(|| format!("{}: the option's outputs read `{}`, which is not one of its random scalars", option.path, input.input.name))?;
+        for r in 0..n {
+            rows[r * kernel.input_stride + input.offset] = *v as f32;
+        }
+    }
+    let batch = PatternBatch { geometry: Geometry::columns(geometry), inputs: Columns::from_rows(&rows, kernel.input_stride), textures: vec![], points_per_group: 1 };
+    let out = engine.run_pattern(&kernel, &batch)?;
+    for o in &kernel.outputs {
+        let components = o.ty.components().unwrap_or(1);
+        for (c, name) in channel_names(&o.name, components, o.ty.is_color()).iter().enumerate() {
+            img.channels.retain(|ch| ch.name != *name);
+            img.push(name, out.column(o.offset + c).to_vec())?;
+        }
+    }
+    Ok(())
 }
 
 /// meta.json of a material enhanced by `kind` with `seed`.

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! OUT/material.mtlx      the standalone uplifted MaterialX document
-//! OUT/params.exr         per texel: the 22 uplift_stack parameters, diffuse_color.R/G/B, normal.X/Y/Z
+//! OUT/params.exr         per texel: the uplift_stack parameters, diffuse_color.R/G/B, normal.X/Y/Z
 //! OUT/meta.json          what made it (format, Type, rule, seed, source, scalars, masks): `Meta`
 //! OUT/masks/, textures/  the rule's procedural masks and the PBR input's textures
 //! OUT/latent.exr         the fitted latents latent0.R/G/B, latent1.R/G/B (`uplift fit`)

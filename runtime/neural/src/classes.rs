@@ -283,29 +283,9 @@ impl TrainingClass {
     }
 }
 
-/// The Type-0 mapping of lobes.md §3 (rows 8–10): (α_core, α_haze, w_h) from input roughness r,
-/// exponents p, q, scale s and haze gain κh — the closed form the classes' and rules'
-/// `uplift_core_roughness`, `uplift_haze_roughness` and `uplift_haze_weight` nodes compute.
-pub fn haze_mapping(r: f32, p: f32, q: f32, s: f32, kappa: f32) -> (f32, f32, f32) {
-    let core = r.powf(p).clamp(0.004, 1.0);
-    let haze = (s * r.powf(q)).clamp(0.004, 1.0);
-    let denom = haze * haze - core * core;
-    let w_vm = if denom > 1e-12 { (r.powi(4) - core * core) / denom } else { 0.0 };
-    (core, haze, (kappa * w_vm).clamp(0.05, 0.6))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn haze_mapping_matches_the_worked_example() {
-        // lobes.md §3: p = 3, q = 1.5, s = 1.5, κh = 1.
-        for (r, core, haze, w) in [(0.2, 0.008, 0.134, 0.09), (0.4, 0.064, 0.380, 0.15), (0.6, 0.216, 0.697, 0.19)] {
-            let (c, h, wh) = haze_mapping(r, 3.0, 1.5, 1.5, 1.0);
-            assert!((c - core).abs() < 1e-3 && (h - haze).abs() < 1e-3 && (wh - w).abs() < 5e-3, "r {r}: {c} {h} {wh}");
-        }
-    }
 
     #[test]
     fn every_class_stays_in_range_and_is_deterministic() {

@@ -1,5 +1,5 @@
-//! Neural materials (paper §4, lobes.md §3.3–4; docs/neural.md), over the 22 parameters of
-//! `uplift_engines::stack_params`: direction features (`features`), training data generated on the fly from the compiled
+//! Neural materials (paper §4, lobes.md §3.3–4; docs/neural.md), over the parameters of
+//! `uplift_engines::stack`: direction features (`features`), training data generated on the fly from the compiled
 //! `uplift_stack` kernels (`classes`, `datagen`), the hand-written networks and their training
 //! (`mlp`, `model`, `loss`, `adam`, `trainer`), weights as safetensors (`weights`), held-out
 //! errors (`evaluate`), per-material latent fitting (`fit`) and its energy bound (`energy_bound`) and inference (`inference`; the

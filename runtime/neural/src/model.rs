@@ -42,7 +42,7 @@ pub struct ModelWorkspace<T: Real> {
 
 /// One slice of a batch: the rows the loss sees.
 pub struct Slice<'a, T> {
-    /// Encoded parameters (rows × 22) for training, or latents (rows × 6) for fitting.
+    /// Encoded parameters (rows × the stack's parameters) for training, or latents (rows × 6) for fitting.
     pub input: &'a [T],
     /// Added to the latent (rows × 6): the ±0.005 jitter.
     pub jitter: &'a [T],

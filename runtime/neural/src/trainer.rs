@@ -113,6 +113,7 @@ pub fn train_step(state: &mut TrainState, batch: &TrainingBatch, opts: &TrainOpt
     let threads = opts.threads.clamp(1, rows.max(1));
     jitter(opts.seed, state.step, rows, opts.jitter, &mut buf.jitter);
     let (ne, nd) = (state.model.encoder.params.len(), state.model.decoder.params.len());
+    let np = state.model.encoder.shape.widths[0];
     buf.slices.resize_with(threads, || (ModelWorkspace::default(), Vec::new(), Vec::new()));
     let per = rows.div_ceil(threads);
     let model = &state.model;
@@ -133,7 +134,7 @@ pub fn train_step(state: &mut TrainState, batch: &TrainingBatch, opts: &TrainOpt
                         return LossParts::default();
                     }
                     let s = Slice {
-                        input: &batch.encoded[a * 22..b * 22],
+                        input: &batch.encoded[a * np..b * np],
                         jitter: &jit[a * LATENT..b * LATENT],
                         features: &batch.features[a * 9..b * 9],
                         target: &batch.target[a * 7..b * 7],

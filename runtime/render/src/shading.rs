@@ -2,7 +2,7 @@
 //! f·cos θl (RGB), the throughput T (RGB) that scales the Lambertian base, R = Y(albedo) of the
 //! non-diffuse part, and the pdf of the non-diffuse sampling strategy.
 //!
-//! - `Reference`: the compiled `uplift_stack` kernels on the 22 interpolated parameters (the
+//! - `Reference`: the compiled `uplift_stack` kernels on the interpolated parameters (the
 //!   `pdf` context returns response, throughput and pdf in one call; `albedo` gives R).
 //! - `Neural`: the frozen decoder on the interpolated latents: its outputs are f (so f·cos θl
 //!   is f̂·μl, as Eq. 3 compares it), T and R (paper Eq. 2).

@@ -22,7 +22,11 @@ fn main() {
         ("fuzz_thickness", 0.5), ("coat_weight", 0.5), ("coat_ior", 1.5), ("inner_weight", 0.0), ("inner_thickness", 0.5), ("scatter_color.R", 0.5),
         ("scatter_color.G", 0.5), ("scatter_color.B", 0.5), ("subcutaneous_weight", 0.0), ("subcutaneous_roughness", 0.64),
     ];
-    let params: Vec<f32> = uplift_engines::stack::Stack::builtin().parameters().iter().map(|p| values.iter().find(|v| v.0 == p.channel).unwrap().1).collect();
+    let stack = uplift_engines::stack::Stack::builtin();
+    let mut params = stack.defaults();
+    for (name, v) in values {
+        params[stack.index_of(name).expect("a stack parameter")] = v;
+    }
     let surface = SurfaceTextures::uniform(&params, [0.5, 0.35, 0.25], Some([0.5, 0.4, 0.6, 0.3, 0.2, 0.5]));
     let decoder = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER), &uplift_engines::stack::Stack::builtin()).unwrap().decoder;
     let env = Environment::studio();

@@ -50,6 +50,9 @@ pub struct MxInputs {
     pub coat_u: f32,
     pub coat_ior: f32,
     pub coat_cell_u: f32,
+    pub film_u: f32,
+    pub film_thickness: f32,
+    pub film_ior: f32,
     pub dust_full: f32,
     pub dust_thickness: f32,
     pub dust_full_u: f32,
@@ -78,6 +81,8 @@ pub struct MxOutputs {
     pub uplift_class_fuzz_thickness_out: f32,
     pub uplift_class_coat_weight_out: f32,
     pub uplift_class_coat_ior_out: f32,
+    pub uplift_class_coat_film_thickness_out: f32,
+    pub uplift_class_coat_film_ior_out: f32,
     pub uplift_class_scatter_color_out: Vec3,
 }
 
@@ -287,24 +292,25 @@ pub fn mx_pattern(_geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let v120_ = mx_ifgreater_float(0.9f32, inputs.coat_cell_u, 1.0f32, 0.0f32);
     let v121_ = mx_ifgreater_float(0.5f32, inputs.coat_u, v120_, 0.0f32);
     let v123_ = mx_ifgreater_float(0.5f32, inputs.coat_u, inputs.coat_ior, 1.5f32);
-    let v125_ = mx_luminance_color3_(v61_, Vec3::new(0.2126f32, 0.7152f32, 0.0722f32));
-    let v126_ = mx_mix_color3_(v125_, v61_, 0.35f32);
-    MxOutputs { uplift_class_reflectivity_out: v66_, uplift_class_edge_color_out: v68_, uplift_class_metalness_out: v79_, uplift_class_core_roughness_out: v87_, uplift_class_haze_roughness_out: v95_, uplift_class_haze_weight_out: v108_, uplift_class_specular_ior_out: inputs.specular_ior, uplift_class_fuzz_weight_out: v115_, uplift_class_fuzz_thickness_out: inputs.dust_thickness, uplift_class_coat_weight_out: v121_, uplift_class_coat_ior_out: v123_, uplift_class_scatter_color_out: v126_ }
+    let v126_ = mx_ifgreater_float(0.5f32, inputs.film_u, inputs.film_thickness, 0.0f32);
+    let v129_ = mx_luminance_color3_(v61_, Vec3::new(0.2126f32, 0.7152f32, 0.0722f32));
+    let v130_ = mx_mix_color3_(v129_, v61_, 0.35f32);
+    MxOutputs { uplift_class_reflectivity_out: v66_, uplift_class_edge_color_out: v68_, uplift_class_metalness_out: v79_, uplift_class_core_roughness_out: v87_, uplift_class_haze_roughness_out: v95_, uplift_class_haze_weight_out: v108_, uplift_class_specular_ior_out: inputs.specular_ior, uplift_class_fuzz_weight_out: v115_, uplift_class_fuzz_thickness_out: inputs.dust_thickness, uplift_class_coat_weight_out: v121_, uplift_class_coat_ior_out: v123_, uplift_class_coat_film_thickness_out: v126_, uplift_class_coat_film_ior_out: inputs.film_ior, uplift_class_scatter_color_out: v130_ }
 }
 
 /// Columns of `geom`: texcoord (2), then position, normal and tangent, each in object and world
 /// space (3 each). Bitangents are normal × tangent.
 pub const GEOMETRY_COLUMNS: usize = 20;
 /// Columns of `inputs`: the interface inputs' components.
-pub const INPUT_COLUMNS: usize = 32;
+pub const INPUT_COLUMNS: usize = 35;
 /// Columns of `outputs`: the outputs' components.
-pub const OUTPUT_COLUMNS: usize = 18;
+pub const OUTPUT_COLUMNS: usize = 20;
 /// Textures the kernel reads through `MxTextures`, indices `0..TEXTURE_COUNT`.
 pub const TEXTURE_COUNT: usize = 0;
 /// Interface inputs: (name, first column, components).
-pub const INPUTS: &[(&str, usize, usize)] = &[("metal_u", 0, 1), ("rgb_metal_u", 1, 1), ("metal_r", 2, 1), ("metal_g", 3, 1), ("metal_b", 4, 1), ("metal_pick", 5, 1), ("metal_scale", 6, 1), ("metalness_metal", 7, 1), ("hue", 8, 1), ("saturation_u", 9, 1), ("value", 10, 1), ("pure_u", 11, 1), ("metalness_dielectric", 12, 1), ("edge_exponent", 13, 1), ("haze_boost", 14, 1), ("specular_ior", 15, 1), ("coat_u", 16, 1), ("coat_ior", 17, 1), ("coat_cell_u", 18, 1), ("dust_full", 19, 1), ("dust_thickness", 20, 1), ("dust_full_u", 21, 1), ("dust_part", 22, 1), ("roughness", 23, 1), ("exponent_t", 24, 1), ("specular_random_u", 25, 1), ("specular_r", 26, 1), ("specular_g", 27, 1), ("specular_b", 28, 1), ("specular_scale", 29, 1), ("metalness_flip_u", 30, 1), ("metalness_cell", 31, 1)];
+pub const INPUTS: &[(&str, usize, usize)] = &[("metal_u", 0, 1), ("rgb_metal_u", 1, 1), ("metal_r", 2, 1), ("metal_g", 3, 1), ("metal_b", 4, 1), ("metal_pick", 5, 1), ("metal_scale", 6, 1), ("metalness_metal", 7, 1), ("hue", 8, 1), ("saturation_u", 9, 1), ("value", 10, 1), ("pure_u", 11, 1), ("metalness_dielectric", 12, 1), ("edge_exponent", 13, 1), ("haze_boost", 14, 1), ("specular_ior", 15, 1), ("coat_u", 16, 1), ("coat_ior", 17, 1), ("coat_cell_u", 18, 1), ("film_u", 19, 1), ("film_thickness", 20, 1), ("film_ior", 21, 1), ("dust_full", 22, 1), ("dust_thickness", 23, 1), ("dust_full_u", 24, 1), ("dust_part", 25, 1), ("roughness", 26, 1), ("exponent_t", 27, 1), ("specular_random_u", 28, 1), ("specular_r", 29, 1), ("specular_g", 30, 1), ("specular_b", 31, 1), ("specular_scale", 32, 1), ("metalness_flip_u", 33, 1), ("metalness_cell", 34, 1)];
 /// Outputs: (name, first column, components).
-pub const OUTPUTS: &[(&str, usize, usize)] = &[("uplift_class/reflectivity_out", 0, 3), ("uplift_class/edge_color_out", 3, 3), ("uplift_class/metalness_out", 6, 1), ("uplift_class/core_roughness_out", 7, 1), ("uplift_class/haze_roughness_out", 8, 1), ("uplift_class/haze_weight_out", 9, 1), ("uplift_class/specular_ior_out", 10, 1), ("uplift_class/fuzz_weight_out", 11, 1), ("uplift_class/fuzz_thickness_out", 12, 1), ("uplift_class/coat_weight_out", 13, 1), ("uplift_class/coat_ior_out", 14, 1), ("uplift_class/scatter_color_out", 15, 3)];
+pub const OUTPUTS: &[(&str, usize, usize)] = &[("uplift_class/reflectivity_out", 0, 3), ("uplift_class/edge_color_out", 3, 3), ("uplift_class/metalness_out", 6, 1), ("uplift_class/core_roughness_out", 7, 1), ("uplift_class/haze_roughness_out", 8, 1), ("uplift_class/haze_weight_out", 9, 1), ("uplift_class/specular_ior_out", 10, 1), ("uplift_class/fuzz_weight_out", 11, 1), ("uplift_class/fuzz_thickness_out", 12, 1), ("uplift_class/coat_weight_out", 13, 1), ("uplift_class/coat_ior_out", 14, 1), ("uplift_class/coat_film_thickness_out", 15, 1), ("uplift_class/coat_film_ior_out", 16, 1), ("uplift_class/scatter_color_out", 17, 3)];
 
 /// Evaluates `mx_pattern` for every point of a structure-of-arrays batch: `geom` holds
 /// `GEOMETRY_COLUMNS` columns, `inputs` `INPUT_COLUMNS`, `outputs` `OUTPUT_COLUMNS`, all of one
@@ -382,7 +388,10 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
     let mx_x29 = &inputs[29][..mx_n];
     let mx_x30 = &inputs[30][..mx_n];
     let mx_x31 = &inputs[31][..mx_n];
-    let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5, mx_o6, mx_o7, mx_o8, mx_o9, mx_o10, mx_o11, mx_o12, mx_o13, mx_o14, mx_o15, mx_o16, mx_o17] = outputs else { unreachable!() };
+    let mx_x32 = &inputs[32][..mx_n];
+    let mx_x33 = &inputs[33][..mx_n];
+    let mx_x34 = &inputs[34][..mx_n];
+    let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5, mx_o6, mx_o7, mx_o8, mx_o9, mx_o10, mx_o11, mx_o12, mx_o13, mx_o14, mx_o15, mx_o16, mx_o17, mx_o18, mx_o19] = outputs else { unreachable!() };
     let mx_o0 = &mut mx_o0[..mx_n];
     let mx_o1 = &mut mx_o1[..mx_n];
     let mx_o2 = &mut mx_o2[..mx_n];
@@ -401,6 +410,8 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
     let mx_o15 = &mut mx_o15[..mx_n];
     let mx_o16 = &mut mx_o16[..mx_n];
     let mx_o17 = &mut mx_o17[..mx_n];
+    let mx_o18 = &mut mx_o18[..mx_n];
+    let mx_o19 = &mut mx_o19[..mx_n];
     let _ = tex;
     const MX_CHUNK: usize = 64;
     let mut mx_start = 0usize;
@@ -459,9 +470,12 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
         let mx_x29 = &mx_x29[mx_start..mx_end];
         let mx_x30 = &mx_x30[mx_start..mx_end];
         let mx_x31 = &mx_x31[mx_start..mx_end];
+        let mx_x32 = &mx_x32[mx_start..mx_end];
+        let mx_x33 = &mx_x33[mx_start..mx_end];
+        let mx_x34 = &mx_x34[mx_start..mx_end];
         let mut mx_chunk = [[0.0f32; MX_CHUNK]; OUTPUT_COLUMNS];
         {
-            let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5, mx_o6, mx_o7, mx_o8, mx_o9, mx_o10, mx_o11, mx_o12, mx_o13, mx_o14, mx_o15, mx_o16, mx_o17] = &mut mx_chunk;
+            let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5, mx_o6, mx_o7, mx_o8, mx_o9, mx_o10, mx_o11, mx_o12, mx_o13, mx_o14, mx_o15, mx_o16, mx_o17, mx_o18, mx_o19] = &mut mx_chunk;
             for mx_i in 0..mx_len {
                 let mx_geom = mx_geometry {
                     texcoord: Vec2::new(mx_g0[mx_i], mx_g1[mx_i]),
@@ -494,19 +508,22 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
                     coat_u: mx_x16[mx_i],
                     coat_ior: mx_x17[mx_i],
                     coat_cell_u: mx_x18[mx_i],
-                    dust_full: mx_x19[mx_i],
-                    dust_thickness: mx_x20[mx_i],
-                    dust_full_u: mx_x21[mx_i],
-                    dust_part: mx_x22[mx_i],
-                    roughness: mx_x23[mx_i],
-                    exponent_t: mx_x24[mx_i],
-                    specular_random_u: mx_x25[mx_i],
-                    specular_r: mx_x26[mx_i],
-                    specular_g: mx_x27[mx_i],
-                    specular_b: mx_x28[mx_i],
-                    specular_scale: mx_x29[mx_i],
-                    metalness_flip_u: mx_x30[mx_i],
-                    metalness_cell: mx_x31[mx_i],
+                    film_u: mx_x19[mx_i],
+                    film_thickness: mx_x20[mx_i],
+                    film_ior: mx_x21[mx_i],
+                    dust_full: mx_x22[mx_i],
+                    dust_thickness: mx_x23[mx_i],
+                    dust_full_u: mx_x24[mx_i],
+                    dust_part: mx_x25[mx_i],
+                    roughness: mx_x26[mx_i],
+                    exponent_t: mx_x27[mx_i],
+                    specular_random_u: mx_x28[mx_i],
+                    specular_r: mx_x29[mx_i],
+                    specular_g: mx_x30[mx_i],
+                    specular_b: mx_x31[mx_i],
+                    specular_scale: mx_x32[mx_i],
+                    metalness_flip_u: mx_x33[mx_i],
+                    metalness_cell: mx_x34[mx_i],
                 };
                 let mx_out = mx_pattern(mx_geom, mx_inputs);
                 mx_o0[mx_i] = mx_out.uplift_class_reflectivity_out.x;
@@ -524,9 +541,11 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
                 mx_o12[mx_i] = mx_out.uplift_class_fuzz_thickness_out;
                 mx_o13[mx_i] = mx_out.uplift_class_coat_weight_out;
                 mx_o14[mx_i] = mx_out.uplift_class_coat_ior_out;
-                mx_o15[mx_i] = mx_out.uplift_class_scatter_color_out.x;
-                mx_o16[mx_i] = mx_out.uplift_class_scatter_color_out.y;
-                mx_o17[mx_i] = mx_out.uplift_class_scatter_color_out.z;
+                mx_o15[mx_i] = mx_out.uplift_class_coat_film_thickness_out;
+                mx_o16[mx_i] = mx_out.uplift_class_coat_film_ior_out;
+                mx_o17[mx_i] = mx_out.uplift_class_scatter_color_out.x;
+                mx_o18[mx_i] = mx_out.uplift_class_scatter_color_out.y;
+                mx_o19[mx_i] = mx_out.uplift_class_scatter_color_out.z;
             }
         }
         mx_o0[mx_start..mx_end].copy_from_slice(&mx_chunk[0][..mx_len]);
@@ -547,6 +566,8 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
         mx_o15[mx_start..mx_end].copy_from_slice(&mx_chunk[15][..mx_len]);
         mx_o16[mx_start..mx_end].copy_from_slice(&mx_chunk[16][..mx_len]);
         mx_o17[mx_start..mx_end].copy_from_slice(&mx_chunk[17][..mx_len]);
+        mx_o18[mx_start..mx_end].copy_from_slice(&mx_chunk[18][..mx_len]);
+        mx_o19[mx_start..mx_end].copy_from_slice(&mx_chunk[19][..mx_len]);
         mx_start = mx_end;
     }
 }

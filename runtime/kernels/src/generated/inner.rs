@@ -42,6 +42,9 @@ pub struct MxInputs {
     pub coat_u: f32,
     pub coat_ior: f32,
     pub coat_cell_u: f32,
+    pub film_u: f32,
+    pub film_thickness: f32,
+    pub film_ior: f32,
     pub fuzz_weight: f32,
     pub fuzz_thickness: f32,
     pub inner_weight: f32,
@@ -76,6 +79,8 @@ pub struct MxOutputs {
     pub uplift_class_subcutaneous_roughness_out: f32,
     pub uplift_class_coat_weight_out: f32,
     pub uplift_class_coat_ior_out: f32,
+    pub uplift_class_coat_film_thickness_out: f32,
+    pub uplift_class_coat_film_ior_out: f32,
     pub uplift_class_scatter_color_out: Vec3,
 }
 
@@ -261,24 +266,25 @@ pub fn mx_pattern(_geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let v74_ = mx_ifgreater_float(0.9f32, inputs.coat_cell_u, 1.0f32, 0.0f32);
     let v75_ = mx_ifgreater_float(0.6666667f32, inputs.coat_u, v74_, 0.0f32);
     let v77_ = mx_ifgreater_float(0.6666667f32, inputs.coat_u, inputs.coat_ior, 1.5f32);
-    let v79_ = mx_luminance_color3_(v16_, Vec3::new(0.2126f32, 0.7152f32, 0.0722f32));
-    let v81_ = mx_mix_color3_(v79_, v16_, inputs.scatter_desaturation);
-    MxOutputs { uplift_class_reflectivity_out: v22_, uplift_class_edge_color_out: v24_, uplift_class_metalness_out: v32_, uplift_class_core_roughness_out: v41_, uplift_class_haze_roughness_out: v49_, uplift_class_haze_weight_out: v63_, uplift_class_specular_ior_out: inputs.specular_ior, uplift_class_fuzz_weight_out: inputs.fuzz_weight, uplift_class_fuzz_thickness_out: inputs.fuzz_thickness, uplift_class_inner_weight_out: inputs.inner_weight, uplift_class_inner_thickness_out: inputs.inner_thickness, uplift_class_subcutaneous_weight_out: 1.0f32, uplift_class_subcutaneous_roughness_out: v70_, uplift_class_coat_weight_out: v75_, uplift_class_coat_ior_out: v77_, uplift_class_scatter_color_out: v81_ }
+    let v81_ = mx_ifgreater_float(0.5f32, inputs.film_u, inputs.film_thickness, 0.0f32);
+    let v84_ = mx_luminance_color3_(v16_, Vec3::new(0.2126f32, 0.7152f32, 0.0722f32));
+    let v86_ = mx_mix_color3_(v84_, v16_, inputs.scatter_desaturation);
+    MxOutputs { uplift_class_reflectivity_out: v22_, uplift_class_edge_color_out: v24_, uplift_class_metalness_out: v32_, uplift_class_core_roughness_out: v41_, uplift_class_haze_roughness_out: v49_, uplift_class_haze_weight_out: v63_, uplift_class_specular_ior_out: inputs.specular_ior, uplift_class_fuzz_weight_out: inputs.fuzz_weight, uplift_class_fuzz_thickness_out: inputs.fuzz_thickness, uplift_class_inner_weight_out: inputs.inner_weight, uplift_class_inner_thickness_out: inputs.inner_thickness, uplift_class_subcutaneous_weight_out: 1.0f32, uplift_class_subcutaneous_roughness_out: v70_, uplift_class_coat_weight_out: v75_, uplift_class_coat_ior_out: v77_, uplift_class_coat_film_thickness_out: v81_, uplift_class_coat_film_ior_out: inputs.film_ior, uplift_class_scatter_color_out: v86_ }
 }
 
 /// Columns of `geom`: texcoord (2), then position, normal and tangent, each in object and world
 /// space (3 each). Bitangents are normal × tangent.
 pub const GEOMETRY_COLUMNS: usize = 20;
 /// Columns of `inputs`: the interface inputs' components.
-pub const INPUT_COLUMNS: usize = 26;
+pub const INPUT_COLUMNS: usize = 29;
 /// Columns of `outputs`: the outputs' components.
-pub const OUTPUT_COLUMNS: usize = 22;
+pub const OUTPUT_COLUMNS: usize = 24;
 /// Textures the kernel reads through `MxTextures`, indices `0..TEXTURE_COUNT`.
 pub const TEXTURE_COUNT: usize = 0;
 /// Interface inputs: (name, first column, components).
-pub const INPUTS: &[(&str, usize, usize)] = &[("hue", 0, 1), ("saturation_u", 1, 1), ("value", 2, 1), ("pure_u", 3, 1), ("metalness_dielectric", 4, 1), ("edge_exponent", 5, 1), ("haze_boost", 6, 1), ("specular_ior", 7, 1), ("coat_u", 8, 1), ("coat_ior", 9, 1), ("coat_cell_u", 10, 1), ("fuzz_weight", 11, 1), ("fuzz_thickness", 12, 1), ("inner_weight", 13, 1), ("inner_thickness", 14, 1), ("scatter_desaturation", 15, 1), ("subcutaneous_alpha_sqrt", 16, 1), ("roughness", 17, 1), ("exponent_t", 18, 1), ("specular_random_u", 19, 1), ("specular_r", 20, 1), ("specular_g", 21, 1), ("specular_b", 22, 1), ("specular_scale", 23, 1), ("metalness_flip_u", 24, 1), ("metalness_cell", 25, 1)];
+pub const INPUTS: &[(&str, usize, usize)] = &[("hue", 0, 1), ("saturation_u", 1, 1), ("value", 2, 1), ("pure_u", 3, 1), ("metalness_dielectric", 4, 1), ("edge_exponent", 5, 1), ("haze_boost", 6, 1), ("specular_ior", 7, 1), ("coat_u", 8, 1), ("coat_ior", 9, 1), ("coat_cell_u", 10, 1), ("film_u", 11, 1), ("film_thickness", 12, 1), ("film_ior", 13, 1), ("fuzz_weight", 14, 1), ("fuzz_thickness", 15, 1), ("inner_weight", 16, 1), ("inner_thickness", 17, 1), ("scatter_desaturation", 18, 1), ("subcutaneous_alpha_sqrt", 19, 1), ("roughness", 20, 1), ("exponent_t", 21, 1), ("specular_random_u", 22, 1), ("specular_r", 23, 1), ("specular_g", 24, 1), ("specular_b", 25, 1), ("specular_scale", 26, 1), ("metalness_flip_u", 27, 1), ("metalness_cell", 28, 1)];
 /// Outputs: (name, first column, components).
-pub const OUTPUTS: &[(&str, usize, usize)] = &[("uplift_class/reflectivity_out", 0, 3), ("uplift_class/edge_color_out", 3, 3), ("uplift_class/metalness_out", 6, 1), ("uplift_class/core_roughness_out", 7, 1), ("uplift_class/haze_roughness_out", 8, 1), ("uplift_class/haze_weight_out", 9, 1), ("uplift_class/specular_ior_out", 10, 1), ("uplift_class/fuzz_weight_out", 11, 1), ("uplift_class/fuzz_thickness_out", 12, 1), ("uplift_class/inner_weight_out", 13, 1), ("uplift_class/inner_thickness_out", 14, 1), ("uplift_class/subcutaneous_weight_out", 15, 1), ("uplift_class/subcutaneous_roughness_out", 16, 1), ("uplift_class/coat_weight_out", 17, 1), ("uplift_class/coat_ior_out", 18, 1), ("uplift_class/scatter_color_out", 19, 3)];
+pub const OUTPUTS: &[(&str, usize, usize)] = &[("uplift_class/reflectivity_out", 0, 3), ("uplift_class/edge_color_out", 3, 3), ("uplift_class/metalness_out", 6, 1), ("uplift_class/core_roughness_out", 7, 1), ("uplift_class/haze_roughness_out", 8, 1), ("uplift_class/haze_weight_out", 9, 1), ("uplift_class/specular_ior_out", 10, 1), ("uplift_class/fuzz_weight_out", 11, 1), ("uplift_class/fuzz_thickness_out", 12, 1), ("uplift_class/inner_weight_out", 13, 1), ("uplift_class/inner_thickness_out", 14, 1), ("uplift_class/subcutaneous_weight_out", 15, 1), ("uplift_class/subcutaneous_roughness_out", 16, 1), ("uplift_class/coat_weight_out", 17, 1), ("uplift_class/coat_ior_out", 18, 1), ("uplift_class/coat_film_thickness_out", 19, 1), ("uplift_class/coat_film_ior_out", 20, 1), ("uplift_class/scatter_color_out", 21, 3)];
 
 /// Evaluates `mx_pattern` for every point of a structure-of-arrays batch: `geom` holds
 /// `GEOMETRY_COLUMNS` columns, `inputs` `INPUT_COLUMNS`, `outputs` `OUTPUT_COLUMNS`, all of one
@@ -350,7 +356,10 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
     let mx_x23 = &inputs[23][..mx_n];
     let mx_x24 = &inputs[24][..mx_n];
     let mx_x25 = &inputs[25][..mx_n];
-    let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5, mx_o6, mx_o7, mx_o8, mx_o9, mx_o10, mx_o11, mx_o12, mx_o13, mx_o14, mx_o15, mx_o16, mx_o17, mx_o18, mx_o19, mx_o20, mx_o21] = outputs else { unreachable!() };
+    let mx_x26 = &inputs[26][..mx_n];
+    let mx_x27 = &inputs[27][..mx_n];
+    let mx_x28 = &inputs[28][..mx_n];
+    let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5, mx_o6, mx_o7, mx_o8, mx_o9, mx_o10, mx_o11, mx_o12, mx_o13, mx_o14, mx_o15, mx_o16, mx_o17, mx_o18, mx_o19, mx_o20, mx_o21, mx_o22, mx_o23] = outputs else { unreachable!() };
     let mx_o0 = &mut mx_o0[..mx_n];
     let mx_o1 = &mut mx_o1[..mx_n];
     let mx_o2 = &mut mx_o2[..mx_n];
@@ -373,6 +382,8 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
     let mx_o19 = &mut mx_o19[..mx_n];
     let mx_o20 = &mut mx_o20[..mx_n];
     let mx_o21 = &mut mx_o21[..mx_n];
+    let mx_o22 = &mut mx_o22[..mx_n];
+    let mx_o23 = &mut mx_o23[..mx_n];
     let _ = tex;
     const MX_CHUNK: usize = 64;
     let mut mx_start = 0usize;
@@ -425,9 +436,12 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
         let mx_x23 = &mx_x23[mx_start..mx_end];
         let mx_x24 = &mx_x24[mx_start..mx_end];
         let mx_x25 = &mx_x25[mx_start..mx_end];
+        let mx_x26 = &mx_x26[mx_start..mx_end];
+        let mx_x27 = &mx_x27[mx_start..mx_end];
+        let mx_x28 = &mx_x28[mx_start..mx_end];
         let mut mx_chunk = [[0.0f32; MX_CHUNK]; OUTPUT_COLUMNS];
         {
-            let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5, mx_o6, mx_o7, mx_o8, mx_o9, mx_o10, mx_o11, mx_o12, mx_o13, mx_o14, mx_o15, mx_o16, mx_o17, mx_o18, mx_o19, mx_o20, mx_o21] = &mut mx_chunk;
+            let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5, mx_o6, mx_o7, mx_o8, mx_o9, mx_o10, mx_o11, mx_o12, mx_o13, mx_o14, mx_o15, mx_o16, mx_o17, mx_o18, mx_o19, mx_o20, mx_o21, mx_o22, mx_o23] = &mut mx_chunk;
             for mx_i in 0..mx_len {
                 let mx_geom = mx_geometry {
                     texcoord: Vec2::new(mx_g0[mx_i], mx_g1[mx_i]),
@@ -452,21 +466,24 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
                     coat_u: mx_x8[mx_i],
                     coat_ior: mx_x9[mx_i],
                     coat_cell_u: mx_x10[mx_i],
-                    fuzz_weight: mx_x11[mx_i],
-                    fuzz_thickness: mx_x12[mx_i],
-                    inner_weight: mx_x13[mx_i],
-                    inner_thickness: mx_x14[mx_i],
-                    scatter_desaturation: mx_x15[mx_i],
-                    subcutaneous_alpha_sqrt: mx_x16[mx_i],
-                    roughness: mx_x17[mx_i],
-                    exponent_t: mx_x18[mx_i],
-                    specular_random_u: mx_x19[mx_i],
-                    specular_r: mx_x20[mx_i],
-                    specular_g: mx_x21[mx_i],
-                    specular_b: mx_x22[mx_i],
-                    specular_scale: mx_x23[mx_i],
-                    metalness_flip_u: mx_x24[mx_i],
-                    metalness_cell: mx_x25[mx_i],
+                    film_u: mx_x11[mx_i],
+                    film_thickness: mx_x12[mx_i],
+                    film_ior: mx_x13[mx_i],
+                    fuzz_weight: mx_x14[mx_i],
+                    fuzz_thickness: mx_x15[mx_i],
+                    inner_weight: mx_x16[mx_i],
+                    inner_thickness: mx_x17[mx_i],
+                    scatter_desaturation: mx_x18[mx_i],
+                    subcutaneous_alpha_sqrt: mx_x19[mx_i],
+                    roughness: mx_x20[mx_i],
+                    exponent_t: mx_x21[mx_i],
+                    specular_random_u: mx_x22[mx_i],
+                    specular_r: mx_x23[mx_i],
+                    specular_g: mx_x24[mx_i],
+                    specular_b: mx_x25[mx_i],
+                    specular_scale: mx_x26[mx_i],
+                    metalness_flip_u: mx_x27[mx_i],
+                    metalness_cell: mx_x28[mx_i],
                 };
                 let mx_out = mx_pattern(mx_geom, mx_inputs);
                 mx_o0[mx_i] = mx_out.uplift_class_reflectivity_out.x;
@@ -488,9 +505,11 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
                 mx_o16[mx_i] = mx_out.uplift_class_subcutaneous_roughness_out;
                 mx_o17[mx_i] = mx_out.uplift_class_coat_weight_out;
                 mx_o18[mx_i] = mx_out.uplift_class_coat_ior_out;
-                mx_o19[mx_i] = mx_out.uplift_class_scatter_color_out.x;
-                mx_o20[mx_i] = mx_out.uplift_class_scatter_color_out.y;
-                mx_o21[mx_i] = mx_out.uplift_class_scatter_color_out.z;
+                mx_o19[mx_i] = mx_out.uplift_class_coat_film_thickness_out;
+                mx_o20[mx_i] = mx_out.uplift_class_coat_film_ior_out;
+                mx_o21[mx_i] = mx_out.uplift_class_scatter_color_out.x;
+                mx_o22[mx_i] = mx_out.uplift_class_scatter_color_out.y;
+                mx_o23[mx_i] = mx_out.uplift_class_scatter_color_out.z;
             }
         }
         mx_o0[mx_start..mx_end].copy_from_slice(&mx_chunk[0][..mx_len]);
@@ -515,6 +534,8 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
         mx_o19[mx_start..mx_end].copy_from_slice(&mx_chunk[19][..mx_len]);
         mx_o20[mx_start..mx_end].copy_from_slice(&mx_chunk[20][..mx_len]);
         mx_o21[mx_start..mx_end].copy_from_slice(&mx_chunk[21][..mx_len]);
+        mx_o22[mx_start..mx_end].copy_from_slice(&mx_chunk[22][..mx_len]);
+        mx_o23[mx_start..mx_end].copy_from_slice(&mx_chunk[23][..mx_len]);
         mx_start = mx_end;
     }
 }

@@ -107,6 +107,8 @@ pub struct MxInputs {
     pub fuzz_thickness: f32,
     pub coat_weight: f32,
     pub coat_ior: f32,
+    pub coat_film_thickness: f32,
+    pub coat_film_ior: f32,
     pub inner_weight: f32,
     pub inner_thickness: f32,
     pub scatter_color: Vec3,
@@ -1053,45 +1055,45 @@ pub fn mx_layer_bsdf(cl_11: mx_closure, top: BSDF, base: BSDF) -> BSDF {
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl1_ = mx_closure_new(1i32, inputs.wv, Vec3::new(0.0f32, 0.0f32, 1.0f32), Vec3::splat(0.0f32));
-    let v19_ = mx_max_float(inputs.fuzz_thickness, 0.02f32);
+    let v21_ = mx_max_float(inputs.fuzz_thickness, 0.02f32);
     let v29_ = mx_artistic_ior(inputs.reflectivity, inputs.edge_color);
     let v30_ = v29_.ior;
     let v31_ = v29_.extinction;
     let v32_ = mx_combine2_vector2_(inputs.haze_roughness, inputs.haze_roughness);
-    let v34_ = mx_combine2_vector2_(inputs.core_roughness, inputs.core_roughness);
-    let v40_ = mx_max_float(inputs.inner_thickness, 0.02f32);
-    let v42_ = mx_combine2_vector2_(inputs.subcutaneous_roughness, inputs.subcutaneous_roughness);
+    let v36_ = mx_combine2_vector2_(inputs.core_roughness, inputs.core_roughness);
+    let v42_ = mx_max_float(inputs.inner_thickness, 0.02f32);
+    let v44_ = mx_combine2_vector2_(inputs.subcutaneous_roughness, inputs.subcutaneous_roughness);
     let _e32 = mx_closure_for_lobe(cl1_, 575837063u32);
-    let v21_ = mx_sheen_bsdf(_e32, inputs.fuzz_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), v19_, geom_1.normal_world, 0i32);
+    let v23_ = mx_sheen_bsdf(_e32, inputs.fuzz_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), v21_, geom_1.normal_world, 0i32);
     let _e42 = mx_closure_for_lobe(cl1_, 711050092u32);
-    let v27_ = mx_dielectric_bsdf(_e42, inputs.coat_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.coat_ior, Vec2::new(0.01f32, 0.01f32), false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v27_ = mx_dielectric_bsdf(_e42, inputs.coat_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.coat_ior, Vec2::new(0.01f32, 0.01f32), false, inputs.coat_film_thickness, inputs.coat_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e61 = mx_closure_for_lobe(cl1_, 2407334386u32);
-    let v33_ = mx_conductor_bsdf(_e61, 1.0f32, v30_, v31_, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
+    let v35_ = mx_conductor_bsdf(_e61, 1.0f32, v30_, v31_, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
     let _e71 = mx_closure_for_lobe(cl1_, 4181856127u32);
-    let v35_ = mx_conductor_bsdf(_e71, 1.0f32, v30_, v31_, v34_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
+    let v37_ = mx_conductor_bsdf(_e71, 1.0f32, v30_, v31_, v36_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
     let _e81 = mx_closure_for_lobe(cl1_, 100289679u32);
-    let v36_ = mx_mix_bsdf(_e81, v33_, v35_, inputs.haze_weight);
+    let v38_ = mx_mix_bsdf(_e81, v35_, v37_, inputs.haze_weight);
     let _e85 = mx_closure_for_lobe(cl1_, 257921297u32);
-    let v37_ = mx_dielectric_bsdf(_e85, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v39_ = mx_dielectric_bsdf(_e85, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e101 = mx_closure_for_lobe(cl1_, 2697017240u32);
-    let v38_ = mx_dielectric_bsdf(_e101, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v34_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v40_ = mx_dielectric_bsdf(_e101, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v36_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e117 = mx_closure_for_lobe(cl1_, 2175277739u32);
-    let v39_ = mx_mix_bsdf(_e117, v37_, v38_, inputs.haze_weight);
+    let v41_ = mx_mix_bsdf(_e117, v39_, v40_, inputs.haze_weight);
     let _e121 = mx_closure_for_lobe(cl1_, 2140428231u32);
-    let v41_ = mx_sheen_bsdf(_e121, inputs.inner_weight, inputs.scatter_color, v40_, geom_1.normal_world, 0i32);
+    let v43_ = mx_sheen_bsdf(_e121, inputs.inner_weight, inputs.scatter_color, v42_, geom_1.normal_world, 0i32);
     let _e128 = mx_closure_for_lobe(cl1_, 3452003231u32);
-    let v43_ = mx_dielectric_bsdf(_e128, inputs.subcutaneous_weight, inputs.scatter_color, inputs.specular_ior, v42_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v45_ = mx_dielectric_bsdf(_e128, inputs.subcutaneous_weight, inputs.scatter_color, inputs.specular_ior, v44_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e141 = mx_closure_for_lobe(cl1_, 2774413006u32);
-    let v44_ = mx_layer_bsdf(_e141, v41_, v43_);
+    let v46_ = mx_layer_bsdf(_e141, v43_, v45_);
     let _e144 = mx_closure_for_lobe(cl1_, 3262708222u32);
-    let v45_ = mx_layer_bsdf(_e144, v39_, v44_);
+    let v47_ = mx_layer_bsdf(_e144, v41_, v46_);
     let _e147 = mx_closure_for_lobe(cl1_, 4238484515u32);
-    let v46_ = mx_mix_bsdf(_e147, v36_, v45_, inputs.metalness);
+    let v48_ = mx_mix_bsdf(_e147, v38_, v47_, inputs.metalness);
     let _e151 = mx_closure_for_lobe(cl1_, 211147556u32);
-    let v47_ = mx_layer_bsdf(_e151, v27_, v46_);
+    let v49_ = mx_layer_bsdf(_e151, v27_, v48_);
     let _e154 = mx_closure_for_lobe(cl1_, 2233972744u32);
-    let v48_ = mx_layer_bsdf(_e154, v21_, v47_);
-    MxOutputs { albedo: v48_.response, throughput: v48_.throughput }
+    let v50_ = mx_layer_bsdf(_e154, v23_, v49_);
+    MxOutputs { albedo: v50_.response, throughput: v50_.throughput }
 }
 
 #[inline(always)]
@@ -1133,13 +1135,13 @@ const fn wgsl_vec4_from_vec3_f32(a: Vec3, b: f32) -> Vec4 {
 /// space (3 each). Bitangents are normal × tangent.
 pub const GEOMETRY_COLUMNS: usize = 20;
 /// Columns of `inputs`: the interface inputs' components.
-pub const INPUT_COLUMNS: usize = 25;
+pub const INPUT_COLUMNS: usize = 27;
 /// Columns of `outputs`: the outputs' components.
 pub const OUTPUT_COLUMNS: usize = 6;
 /// Textures the kernel reads through `MxTextures`, indices `0..TEXTURE_COUNT`.
 pub const TEXTURE_COUNT: usize = 0;
 /// Interface inputs: (name, first column, components).
-pub const INPUTS: &[(&str, usize, usize)] = &[("wv", 0, 3), ("reflectivity", 3, 3), ("edge_color", 6, 3), ("metalness", 9, 1), ("core_roughness", 10, 1), ("haze_roughness", 11, 1), ("haze_weight", 12, 1), ("specular_ior", 13, 1), ("fuzz_weight", 14, 1), ("fuzz_thickness", 15, 1), ("coat_weight", 16, 1), ("coat_ior", 17, 1), ("inner_weight", 18, 1), ("inner_thickness", 19, 1), ("scatter_color", 20, 3), ("subcutaneous_weight", 23, 1), ("subcutaneous_roughness", 24, 1)];
+pub const INPUTS: &[(&str, usize, usize)] = &[("wv", 0, 3), ("reflectivity", 3, 3), ("edge_color", 6, 3), ("metalness", 9, 1), ("core_roughness", 10, 1), ("haze_roughness", 11, 1), ("haze_weight", 12, 1), ("specular_ior", 13, 1), ("fuzz_weight", 14, 1), ("fuzz_thickness", 15, 1), ("coat_weight", 16, 1), ("coat_ior", 17, 1), ("coat_film_thickness", 18, 1), ("coat_film_ior", 19, 1), ("inner_weight", 20, 1), ("inner_thickness", 21, 1), ("scatter_color", 22, 3), ("subcutaneous_weight", 25, 1), ("subcutaneous_roughness", 26, 1)];
 /// Outputs: (name, first column, components).
 pub const OUTPUTS: &[(&str, usize, usize)] = &[("albedo", 0, 3), ("throughput", 3, 3)];
 
@@ -1212,6 +1214,8 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
     let mx_x22 = &inputs[22][..mx_n];
     let mx_x23 = &inputs[23][..mx_n];
     let mx_x24 = &inputs[24][..mx_n];
+    let mx_x25 = &inputs[25][..mx_n];
+    let mx_x26 = &inputs[26][..mx_n];
     let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5] = outputs else { unreachable!() };
     let mx_o0 = &mut mx_o0[..mx_n];
     let mx_o1 = &mut mx_o1[..mx_n];
@@ -1270,6 +1274,8 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
         let mx_x22 = &mx_x22[mx_start..mx_end];
         let mx_x23 = &mx_x23[mx_start..mx_end];
         let mx_x24 = &mx_x24[mx_start..mx_end];
+        let mx_x25 = &mx_x25[mx_start..mx_end];
+        let mx_x26 = &mx_x26[mx_start..mx_end];
         let mut mx_chunk = [[0.0f32; MX_CHUNK]; OUTPUT_COLUMNS];
         {
             let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5] = &mut mx_chunk;
@@ -1298,11 +1304,13 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
                     fuzz_thickness: mx_x15[mx_i],
                     coat_weight: mx_x16[mx_i],
                     coat_ior: mx_x17[mx_i],
-                    inner_weight: mx_x18[mx_i],
-                    inner_thickness: mx_x19[mx_i],
-                    scatter_color: Vec3::new(mx_x20[mx_i], mx_x21[mx_i], mx_x22[mx_i]),
-                    subcutaneous_weight: mx_x23[mx_i],
-                    subcutaneous_roughness: mx_x24[mx_i],
+                    coat_film_thickness: mx_x18[mx_i],
+                    coat_film_ior: mx_x19[mx_i],
+                    inner_weight: mx_x20[mx_i],
+                    inner_thickness: mx_x21[mx_i],
+                    scatter_color: Vec3::new(mx_x22[mx_i], mx_x23[mx_i], mx_x24[mx_i]),
+                    subcutaneous_weight: mx_x25[mx_i],
+                    subcutaneous_roughness: mx_x26[mx_i],
                 };
                 let mx_out = mx_pattern(mx_geom, mx_inputs);
                 mx_o0[mx_i] = mx_out.albedo.x;

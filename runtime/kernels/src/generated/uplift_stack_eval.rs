@@ -108,6 +108,8 @@ pub struct MxInputs {
     pub fuzz_thickness: f32,
     pub coat_weight: f32,
     pub coat_ior: f32,
+    pub coat_film_thickness: f32,
+    pub coat_film_ior: f32,
     pub inner_weight: f32,
     pub inner_thickness: f32,
     pub scatter_color: Vec3,
@@ -1054,45 +1056,45 @@ pub fn mx_layer_bsdf(cl_11: mx_closure, top: BSDF, base: BSDF) -> BSDF {
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl0_ = mx_closure_new(0i32, inputs.wv, inputs.wl, Vec3::splat(0.0f32));
-    let v19_ = mx_max_float(inputs.fuzz_thickness, 0.02f32);
+    let v21_ = mx_max_float(inputs.fuzz_thickness, 0.02f32);
     let v29_ = mx_artistic_ior(inputs.reflectivity, inputs.edge_color);
     let v30_ = v29_.ior;
     let v31_ = v29_.extinction;
     let v32_ = mx_combine2_vector2_(inputs.haze_roughness, inputs.haze_roughness);
-    let v34_ = mx_combine2_vector2_(inputs.core_roughness, inputs.core_roughness);
-    let v40_ = mx_max_float(inputs.inner_thickness, 0.02f32);
-    let v42_ = mx_combine2_vector2_(inputs.subcutaneous_roughness, inputs.subcutaneous_roughness);
+    let v36_ = mx_combine2_vector2_(inputs.core_roughness, inputs.core_roughness);
+    let v42_ = mx_max_float(inputs.inner_thickness, 0.02f32);
+    let v44_ = mx_combine2_vector2_(inputs.subcutaneous_roughness, inputs.subcutaneous_roughness);
     let _e29 = mx_closure_for_lobe(cl0_, 575837063u32);
-    let v21_ = mx_sheen_bsdf(_e29, inputs.fuzz_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), v19_, geom_1.normal_world, 0i32);
+    let v23_ = mx_sheen_bsdf(_e29, inputs.fuzz_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), v21_, geom_1.normal_world, 0i32);
     let _e39 = mx_closure_for_lobe(cl0_, 711050092u32);
-    let v27_ = mx_dielectric_bsdf(_e39, inputs.coat_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.coat_ior, Vec2::new(0.01f32, 0.01f32), false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v27_ = mx_dielectric_bsdf(_e39, inputs.coat_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.coat_ior, Vec2::new(0.01f32, 0.01f32), false, inputs.coat_film_thickness, inputs.coat_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e58 = mx_closure_for_lobe(cl0_, 2407334386u32);
-    let v33_ = mx_conductor_bsdf(_e58, 1.0f32, v30_, v31_, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
+    let v35_ = mx_conductor_bsdf(_e58, 1.0f32, v30_, v31_, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
     let _e68 = mx_closure_for_lobe(cl0_, 4181856127u32);
-    let v35_ = mx_conductor_bsdf(_e68, 1.0f32, v30_, v31_, v34_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
+    let v37_ = mx_conductor_bsdf(_e68, 1.0f32, v30_, v31_, v36_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
     let _e78 = mx_closure_for_lobe(cl0_, 100289679u32);
-    let v36_ = mx_mix_bsdf(_e78, v33_, v35_, inputs.haze_weight);
+    let v38_ = mx_mix_bsdf(_e78, v35_, v37_, inputs.haze_weight);
     let _e82 = mx_closure_for_lobe(cl0_, 257921297u32);
-    let v37_ = mx_dielectric_bsdf(_e82, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v39_ = mx_dielectric_bsdf(_e82, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e98 = mx_closure_for_lobe(cl0_, 2697017240u32);
-    let v38_ = mx_dielectric_bsdf(_e98, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v34_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v40_ = mx_dielectric_bsdf(_e98, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v36_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e114 = mx_closure_for_lobe(cl0_, 2175277739u32);
-    let v39_ = mx_mix_bsdf(_e114, v37_, v38_, inputs.haze_weight);
+    let v41_ = mx_mix_bsdf(_e114, v39_, v40_, inputs.haze_weight);
     let _e118 = mx_closure_for_lobe(cl0_, 2140428231u32);
-    let v41_ = mx_sheen_bsdf(_e118, inputs.inner_weight, inputs.scatter_color, v40_, geom_1.normal_world, 0i32);
+    let v43_ = mx_sheen_bsdf(_e118, inputs.inner_weight, inputs.scatter_color, v42_, geom_1.normal_world, 0i32);
     let _e125 = mx_closure_for_lobe(cl0_, 3452003231u32);
-    let v43_ = mx_dielectric_bsdf(_e125, inputs.subcutaneous_weight, inputs.scatter_color, inputs.specular_ior, v42_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v45_ = mx_dielectric_bsdf(_e125, inputs.subcutaneous_weight, inputs.scatter_color, inputs.specular_ior, v44_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e138 = mx_closure_for_lobe(cl0_, 2774413006u32);
-    let v44_ = mx_layer_bsdf(_e138, v41_, v43_);
+    let v46_ = mx_layer_bsdf(_e138, v43_, v45_);
     let _e141 = mx_closure_for_lobe(cl0_, 3262708222u32);
-    let v45_ = mx_layer_bsdf(_e141, v39_, v44_);
+    let v47_ = mx_layer_bsdf(_e141, v41_, v46_);
     let _e144 = mx_closure_for_lobe(cl0_, 4238484515u32);
-    let v46_ = mx_mix_bsdf(_e144, v36_, v45_, inputs.metalness);
+    let v48_ = mx_mix_bsdf(_e144, v38_, v47_, inputs.metalness);
     let _e148 = mx_closure_for_lobe(cl0_, 211147556u32);
-    let v47_ = mx_layer_bsdf(_e148, v27_, v46_);
+    let v49_ = mx_layer_bsdf(_e148, v27_, v48_);
     let _e151 = mx_closure_for_lobe(cl0_, 2233972744u32);
-    let v48_ = mx_layer_bsdf(_e151, v21_, v47_);
-    MxOutputs { response: v48_.response, throughput: v48_.throughput }
+    let v50_ = mx_layer_bsdf(_e151, v23_, v49_);
+    MxOutputs { response: v50_.response, throughput: v50_.throughput }
 }
 
 #[inline(always)]
@@ -1134,13 +1136,13 @@ const fn wgsl_vec4_from_vec3_f32(a: Vec3, b: f32) -> Vec4 {
 /// space (3 each). Bitangents are normal × tangent.
 pub const GEOMETRY_COLUMNS: usize = 20;
 /// Columns of `inputs`: the interface inputs' components.
-pub const INPUT_COLUMNS: usize = 28;
+pub const INPUT_COLUMNS: usize = 30;
 /// Columns of `outputs`: the outputs' components.
 pub const OUTPUT_COLUMNS: usize = 6;
 /// Textures the kernel reads through `MxTextures`, indices `0..TEXTURE_COUNT`.
 pub const TEXTURE_COUNT: usize = 0;
 /// Interface inputs: (name, first column, components).
-pub const INPUTS: &[(&str, usize, usize)] = &[("wv", 0, 3), ("wl", 3, 3), ("reflectivity", 6, 3), ("edge_color", 9, 3), ("metalness", 12, 1), ("core_roughness", 13, 1), ("haze_roughness", 14, 1), ("haze_weight", 15, 1), ("specular_ior", 16, 1), ("fuzz_weight", 17, 1), ("fuzz_thickness", 18, 1), ("coat_weight", 19, 1), ("coat_ior", 20, 1), ("inner_weight", 21, 1), ("inner_thickness", 22, 1), ("scatter_color", 23, 3), ("subcutaneous_weight", 26, 1), ("subcutaneous_roughness", 27, 1)];
+pub const INPUTS: &[(&str, usize, usize)] = &[("wv", 0, 3), ("wl", 3, 3), ("reflectivity", 6, 3), ("edge_color", 9, 3), ("metalness", 12, 1), ("core_roughness", 13, 1), ("haze_roughness", 14, 1), ("haze_weight", 15, 1), ("specular_ior", 16, 1), ("fuzz_weight", 17, 1), ("fuzz_thickness", 18, 1), ("coat_weight", 19, 1), ("coat_ior", 20, 1), ("coat_film_thickness", 21, 1), ("coat_film_ior", 22, 1), ("inner_weight", 23, 1), ("inner_thickness", 24, 1), ("scatter_color", 25, 3), ("subcutaneous_weight", 28, 1), ("subcutaneous_roughness", 29, 1)];
 /// Outputs: (name, first column, components).
 pub const OUTPUTS: &[(&str, usize, usize)] = &[("response", 0, 3), ("throughput", 3, 3)];
 
@@ -1216,6 +1218,8 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
     let mx_x25 = &inputs[25][..mx_n];
     let mx_x26 = &inputs[26][..mx_n];
     let mx_x27 = &inputs[27][..mx_n];
+    let mx_x28 = &inputs[28][..mx_n];
+    let mx_x29 = &inputs[29][..mx_n];
     let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5] = outputs else { unreachable!() };
     let mx_o0 = &mut mx_o0[..mx_n];
     let mx_o1 = &mut mx_o1[..mx_n];
@@ -1277,6 +1281,8 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
         let mx_x25 = &mx_x25[mx_start..mx_end];
         let mx_x26 = &mx_x26[mx_start..mx_end];
         let mx_x27 = &mx_x27[mx_start..mx_end];
+        let mx_x28 = &mx_x28[mx_start..mx_end];
+        let mx_x29 = &mx_x29[mx_start..mx_end];
         let mut mx_chunk = [[0.0f32; MX_CHUNK]; OUTPUT_COLUMNS];
         {
             let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5] = &mut mx_chunk;
@@ -1306,11 +1312,13 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
                     fuzz_thickness: mx_x18[mx_i],
                     coat_weight: mx_x19[mx_i],
                     coat_ior: mx_x20[mx_i],
-                    inner_weight: mx_x21[mx_i],
-                    inner_thickness: mx_x22[mx_i],
-                    scatter_color: Vec3::new(mx_x23[mx_i], mx_x24[mx_i], mx_x25[mx_i]),
-                    subcutaneous_weight: mx_x26[mx_i],
-                    subcutaneous_roughness: mx_x27[mx_i],
+                    coat_film_thickness: mx_x21[mx_i],
+                    coat_film_ior: mx_x22[mx_i],
+                    inner_weight: mx_x23[mx_i],
+                    inner_thickness: mx_x24[mx_i],
+                    scatter_color: Vec3::new(mx_x25[mx_i], mx_x26[mx_i], mx_x27[mx_i]),
+                    subcutaneous_weight: mx_x28[mx_i],
+                    subcutaneous_roughness: mx_x29[mx_i],
                 };
                 let mx_out = mx_pattern(mx_geom, mx_inputs);
                 mx_o0[mx_i] = mx_out.response.x;

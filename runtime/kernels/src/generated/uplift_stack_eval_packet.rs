@@ -176,6 +176,8 @@ pub struct MxInputs<S: Simd> {
     pub fuzz_thickness: S::F,
     pub coat_weight: S::F,
     pub coat_ior: S::F,
+    pub coat_film_thickness: S::F,
+    pub coat_film_ior: S::F,
     pub inner_weight: S::F,
     pub inner_thickness: S::F,
     pub scatter_color: [S::F; 3],
@@ -187,7 +189,7 @@ impl<S: Simd> MxInputs<S> {
     #[inline(always)]
     #[allow(unused_parens)]
     pub fn select(m: S::M, on: Self, off: Self) -> Self {
-        MxInputs { wv: uplift_simd::vector::select_all::<S, 3>(m, on.wv, off.wv), wl: uplift_simd::vector::select_all::<S, 3>(m, on.wl, off.wl), reflectivity: uplift_simd::vector::select_all::<S, 3>(m, on.reflectivity, off.reflectivity), edge_color: uplift_simd::vector::select_all::<S, 3>(m, on.edge_color, off.edge_color), metalness: m.select(on.metalness, off.metalness), core_roughness: m.select(on.core_roughness, off.core_roughness), haze_roughness: m.select(on.haze_roughness, off.haze_roughness), haze_weight: m.select(on.haze_weight, off.haze_weight), specular_ior: m.select(on.specular_ior, off.specular_ior), fuzz_weight: m.select(on.fuzz_weight, off.fuzz_weight), fuzz_thickness: m.select(on.fuzz_thickness, off.fuzz_thickness), coat_weight: m.select(on.coat_weight, off.coat_weight), coat_ior: m.select(on.coat_ior, off.coat_ior), inner_weight: m.select(on.inner_weight, off.inner_weight), inner_thickness: m.select(on.inner_thickness, off.inner_thickness), scatter_color: uplift_simd::vector::select_all::<S, 3>(m, on.scatter_color, off.scatter_color), subcutaneous_weight: m.select(on.subcutaneous_weight, off.subcutaneous_weight), subcutaneous_roughness: m.select(on.subcutaneous_roughness, off.subcutaneous_roughness) }
+        MxInputs { wv: uplift_simd::vector::select_all::<S, 3>(m, on.wv, off.wv), wl: uplift_simd::vector::select_all::<S, 3>(m, on.wl, off.wl), reflectivity: uplift_simd::vector::select_all::<S, 3>(m, on.reflectivity, off.reflectivity), edge_color: uplift_simd::vector::select_all::<S, 3>(m, on.edge_color, off.edge_color), metalness: m.select(on.metalness, off.metalness), core_roughness: m.select(on.core_roughness, off.core_roughness), haze_roughness: m.select(on.haze_roughness, off.haze_roughness), haze_weight: m.select(on.haze_weight, off.haze_weight), specular_ior: m.select(on.specular_ior, off.specular_ior), fuzz_weight: m.select(on.fuzz_weight, off.fuzz_weight), fuzz_thickness: m.select(on.fuzz_thickness, off.fuzz_thickness), coat_weight: m.select(on.coat_weight, off.coat_weight), coat_ior: m.select(on.coat_ior, off.coat_ior), coat_film_thickness: m.select(on.coat_film_thickness, off.coat_film_thickness), coat_film_ior: m.select(on.coat_film_ior, off.coat_film_ior), inner_weight: m.select(on.inner_weight, off.inner_weight), inner_thickness: m.select(on.inner_thickness, off.inner_thickness), scatter_color: uplift_simd::vector::select_all::<S, 3>(m, on.scatter_color, off.scatter_color), subcutaneous_weight: m.select(on.subcutaneous_weight, off.subcutaneous_weight), subcutaneous_roughness: m.select(on.subcutaneous_roughness, off.subcutaneous_roughness) }
     }
 }
 
@@ -2313,9 +2315,11 @@ pub fn mx_pattern<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>) ->
     let _e44 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e45 = inputs.coat_ior;
     let _e48 = [s.splat(0.01f32), s.splat(0.01f32)];
+    let _e50 = inputs.coat_film_thickness;
+    let _e51 = inputs.coat_film_ior;
     let _e52 = geom_1.normal_world;
     let _e53 = geom_1.tangent_world;
-    let _e56 = s.outline(#[inline(always)] || mx_dielectric_bsdf(s, _e39, _e40, _e44, _e45, _e48, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e52, _e53, s.splat_i(0i32), s.splat_i(0i32)));
+    let _e56 = s.outline(#[inline(always)] || mx_dielectric_bsdf(s, _e39, _e40, _e44, _e45, _e48, s.first_lanes(0), _e50, _e51, _e52, _e53, s.splat_i(0i32), s.splat_i(0i32)));
     let _e58 = mx_closure_for_lobe(s, _e7, s.splat_u(2407334386u32));
     let _e63 = geom_1.normal_world;
     let _e64 = geom_1.tangent_world;
@@ -3661,67 +3665,26 @@ pub fn mx_fresnel_conductor_g18<S: Simd>(s: S, cos_theta_7: S::F, n_5: [S::F; 3]
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_conductor_polarized_p19<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S::F; 3], k: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
-    let tp = tp.fit::<S>(6);
-    let _e5 = cos_theta_2.max(s.splat(0.0f32)).min(s.splat(1.0f32));
-    let _e6 = (_e5 * _e5);
-    let _e8 = (-_e5).mul_add(_e5, s.splat(1.0f32));
-    let _e11 = [tp.f(s, 0), tp.f(s, 1), tp.f(s, 2)];
-    let _e12 = [_e8; 3];
-    let _e13 = uplift_simd::vector::sub::<S, 3>(_e11, _e12);
-    let _e14 = uplift_simd::vector::mul::<S, 3>(_e13, _e13);
-    let _e17 = [tp.f(s, 3), tp.f(s, 4), tp.f(s, 5)];
-    let _e18 = uplift_simd::vector::add::<S, 3>(_e14, _e17);
-    let _e19 = uplift_simd::vector::map::<S, 3>(_e18, |x| x.sqrt());
-    let _e20 = [_e6; 3];
-    let _e21 = uplift_simd::vector::add::<S, 3>(_e19, _e20);
-    let _e22 = uplift_simd::vector::add::<S, 3>(_e19, _e13);
-    let _e24 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e22);
-    let _e26 = [s.splat(0.0f32); 3];
-    let _e27 = uplift_simd::vector::zip::<S, 3>(_e24, _e26, |x, y| x.max(y));
-    let _e28 = uplift_simd::vector::map::<S, 3>(_e27, |x| x.sqrt());
-    let _e30 = (s.splat(2.0f32) * _e5);
-    let _e31 = uplift_simd::vector::mul::<S, 3>([_e30; 3], _e28);
-    let _e32 = uplift_simd::vector::sub::<S, 3>(_e21, _e31);
-    let _e33 = uplift_simd::vector::add::<S, 3>(_e21, _e31);
-    let _e35 = [s.splat(1e-30f32); 3];
-    let _e36 = uplift_simd::vector::zip::<S, 3>(_e33, _e35, |x, y| x.max(y));
-    let _e37 = uplift_simd::vector::zip::<S, 3>(_e32, _e36, |x, y| x * y.rcp());
-    let _e38 = uplift_simd::vector::mul::<S, 3>([_e6; 3], _e19);
-    let _e39 = (_e8 * _e8);
-    let _e40 = [_e39; 3];
-    let _e41 = uplift_simd::vector::add::<S, 3>(_e38, _e40);
-    let _e42 = uplift_simd::vector::mul::<S, 3>(_e31, [_e8; 3]);
-    let _e43 = uplift_simd::vector::sub::<S, 3>(_e41, _e42);
-    let _e44 = uplift_simd::vector::mul::<S, 3>(_e37, _e43);
-    let _e45 = uplift_simd::vector::add::<S, 3>(_e41, _e42);
-    let _e47 = [s.splat(1e-30f32); 3];
-    let _e48 = uplift_simd::vector::zip::<S, 3>(_e45, _e47, |x, y| x.max(y));
-    let _e49 = uplift_simd::vector::zip::<S, 3>(_e44, _e48, |x, y| x * y.rcp());
-    let _e50 = mx_polarized { p: _e49, s_: _e37 };
-    return _e50;
+pub fn mx_thin_film_cos_p19<S: Simd>(s: S, cos_theta_1: S::F, eta2_: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let tp = tp.fit::<S>(1);
+    let _e4 = cos_theta_1.max(s.splat(0.0f32)).min(s.splat(1.0f32));
+    let _e5 = (_e4 * _e4);
+    let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
+    let _e8 = tp.f(s, 0);
+    let _e9 = (_e7 * (_e8).rcp());
+    let _e11 = (s.splat(1.0f32) - _e9);
+    let _e13 = { let (x, y) = (_e11, s.splat(0.0f32)); x.max(y) };
+    let _e14 = { let x = _e13; x.sqrt() };
+    return _e14;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_conductor_polarized_g19<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S::F; 3], k: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
-    assert!(tg.len() >= 6 * S::LANES, "the tape is shorter than the pass's slots");
-    let _e9 = uplift_simd::vector::mul::<S, 3>(n_1, n_1);
-    let _e10 = uplift_simd::vector::mul::<S, 3>(k, k);
-    let _e11 = uplift_simd::vector::sub::<S, 3>(_e9, _e10);
-    uplift_simd::tape::put(s, tg, 0, _e11[0]);
-    uplift_simd::tape::put(s, tg, 1, _e11[1]);
-    uplift_simd::tape::put(s, tg, 2, _e11[2]);
-    let _e16 = uplift_simd::vector::mul::<S, 3>([s.splat(4.0f32); 3], _e9);
-    let _e17 = uplift_simd::vector::mul::<S, 3>(_e16, _e10);
-    uplift_simd::tape::put(s, tg, 3, _e17[0]);
-    uplift_simd::tape::put(s, tg, 4, _e17[1]);
-    uplift_simd::tape::put(s, tg, 5, _e17[2]);
-    let _e26 = [s.splat(0.0f32); 3];
-    let _e35 = [s.splat(1e-30f32); 3];
-    let _e47 = [s.splat(1e-30f32); 3];
-    let _e50 = mx_polarized { p: [s.splat(0.0); 3], s_: [s.splat(0.0); 3] };
-    return _e50;
+pub fn mx_thin_film_cos_g19<S: Simd>(s: S, cos_theta_1: S::F, eta2_: S::F, tg: &mut [f32]) -> S::F {
+    assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e8 = (eta2_ * eta2_);
+    uplift_simd::tape::put(s, tg, 0, _e8);
+    return s.splat(0.0);
 }
 
 #[inline(always)]
@@ -3849,25 +3812,132 @@ pub fn mx_fresnel_conductor_phase_polarized_g20<S: Simd>(s: S, cos_theta_3: S::F
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_airy_conductor_p21<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+pub fn mx_fresnel_dielectric_polarized_p21<S: Simd>(s: S, cos_theta_4: S::F, eta_1: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 2] {
+    let tp = tp.fit::<S>(1);
+    let _e4 = cos_theta_4.max(s.splat(0.0f32)).min(s.splat(1.0f32));
+    let _e5 = (_e4 * _e4);
+    let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
+    let _e8 = tp.f(s, 0);
+    let _e9 = eta_1.mul_add(eta_1, -_e7);
+    let _e11 = { let (x, y) = (_e9, s.splat(0.0f32)); x.max(y) };
+    let _e12 = _e4.mul_add(_e4, _e11);
+    let _e13 = { let x = _e11; x.sqrt() };
+    let _e15 = (s.splat(2.0f32) * _e13);
+    let _e16 = (_e15 * _e4);
+    let _e17 = (-_e15).mul_add(_e4, _e12);
+    let _e18 = _e15.mul_add(_e4, _e12);
+    let _e20 = { let (x, y) = (_e18, s.splat(1e-30f32)); x.max(y) };
+    let _e21 = (_e17 * (_e20).rcp());
+    let _e22 = (_e5 * _e11);
+    let _e23 = (_e7 * _e7);
+    let _e24 = _e5.mul_add(_e11, _e23);
+    let _e25 = (_e16 * _e7);
+    let _e26 = (-_e16).mul_add(_e7, _e24);
+    let _e27 = (_e21 * _e26);
+    let _e28 = _e16.mul_add(_e7, _e24);
+    let _e30 = { let (x, y) = (_e28, s.splat(1e-30f32)); x.max(y) };
+    let _e31 = (_e27 * (_e30).rcp());
+    let _e32 = [_e31, _e21];
+    return _e32;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_dielectric_polarized_g21<S: Simd>(s: S, cos_theta_4: S::F, eta_1: S::F, tg: &mut [f32]) -> [S::F; 2] {
+    assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e8 = (eta_1 * eta_1);
+    uplift_simd::tape::put(s, tg, 0, _e8);
+    return [s.splat(0.0); 2];
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_airy_reflectance_p22<S: Simd>(s: S, cos_theta_5: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+    let tp = tp.fit::<S>(4);
+    let _e6 = mx_fresnel_dielectric_polarized_p21(s, cos_theta_5, eta2_2, tp.at::<S>(3));
+    let _e12 = tp.f(s, 0);
+    let _e14 = cos_theta_5.lt(_e12);
+    let _e16 = _e14.select(s.splat(0.0f32), s.splat(3.1415927f32));
+    let _e18 = tp.f(s, 1);
+    let _e19 = (_e18 * cos_t);
+    let _e21 = tp.f(s, 2);
+    let _e22 = (_e19 * _e21);
+    let _e24 = (_e22 * s.splat(1e-9f32));
+    let _e25 = _e6[0];
+    let _e26 = r23_1.p;
+    let _e27 = phi23_.p;
+    let _e28 = [_e16; 3];
+    let _e29 = uplift_simd::vector::add::<S, 3>(_e27, _e28);
+    let _e30 = mx_airy_polarization(s, _e25, _e26, _e29, _e24);
+    let _e31 = _e6[1];
+    let _e32 = r23_1.s_;
+    let _e33 = phi23_.s_;
+    let _e35 = [s.splat(3.1415927f32); 3];
+    let _e36 = uplift_simd::vector::add::<S, 3>(_e33, _e35);
+    let _e37 = mx_airy_polarization(s, _e31, _e32, _e36, _e24);
+    let _e38 = uplift_simd::vector::add::<S, 3>(_e30, _e37);
+    let _e40 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e38);
+    let _e41 = _e40[0];
+    let _e45 = [s.splat(2.3706744f32), s.splat(-0.513885f32), s.splat(0.0052982f32)];
+    let _e46 = uplift_simd::vector::mul::<S, 3>([_e41; 3], _e45);
+    let _e47 = _e40[1];
+    let _e51 = [s.splat(-0.9000405f32), s.splat(1.4253036f32), s.splat(-0.0146949f32)];
+    let _e52 = uplift_simd::vector::mul::<S, 3>([_e47; 3], _e51);
+    let _e53 = uplift_simd::vector::add::<S, 3>(_e46, _e52);
+    let _e54 = _e40[2];
+    let _e58 = [s.splat(-0.4706338f32), s.splat(0.0885814f32), s.splat(1.0093968f32)];
+    let _e59 = uplift_simd::vector::mul::<S, 3>([_e54; 3], _e58);
+    let _e60 = uplift_simd::vector::add::<S, 3>(_e53, _e59);
+    let _e62 = [s.splat(0.0f32); 3];
+    let _e64 = [s.splat(1.0f32); 3];
+    let _e65 = uplift_simd::vector::zip::<S, 3>(uplift_simd::vector::zip::<S, 3>(_e60, _e62, |x, y| x.max(y)), _e64, |x, y| x.min(y));
+    return _e65;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_airy_reflectance_g22<S: Simd>(s: S, cos_theta_5: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>, tg: &mut [f32]) -> [S::F; 3] {
+    assert!(tg.len() >= 4 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e6 = mx_fresnel_dielectric_polarized_g21(s, cos_theta_5, eta2_2, &mut tg[3 * S::LANES..]);
+    let _e7 = (eta2_2 * eta2_2);
+    let _e9 = eta2_2.mul_add(eta2_2, s.splat(1.0f32));
+    let _e10 = { let x = _e9; x.sqrt() };
+    let _e12 = (s.splat(1.0f32) * (_e10).rcp());
+    uplift_simd::tape::put(s, tg, 0, _e12);
+    let _e18 = (s.splat(2.0f32) * eta2_2);
+    uplift_simd::tape::put(s, tg, 1, _e18);
+    let _e21 = { let (x, y) = (thickness, s.splat(0.0f32)); x.max(y) };
+    uplift_simd::tape::put(s, tg, 2, _e21);
+    let _e35 = [s.splat(3.1415927f32); 3];
+    let _e45 = [s.splat(2.3706744f32), s.splat(-0.513885f32), s.splat(0.0052982f32)];
+    let _e51 = [s.splat(-0.9000405f32), s.splat(1.4253036f32), s.splat(-0.0146949f32)];
+    let _e58 = [s.splat(-0.4706338f32), s.splat(0.0885814f32), s.splat(1.0093968f32)];
+    let _e62 = [s.splat(0.0f32); 3];
+    let _e64 = [s.splat(1.0f32); 3];
+    return [s.splat(0.0); 3];
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_airy_conductor_p23<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
     let tp = tp.fit::<S>(39);
     let _e6 = tp.f(s, 0);
-    let _e7 = mx_thin_film_cos_p7(s, cos_theta_6, _e6, tp.at::<S>(7));
+    let _e7 = mx_thin_film_cos_p19(s, cos_theta_6, _e6, tp.at::<S>(7));
     let _e9 = [tp.f(s, 1), tp.f(s, 2), tp.f(s, 3)];
     let _e11 = [tp.f(s, 4), tp.f(s, 5), tp.f(s, 6)];
-    let _e12 = mx_fresnel_conductor_polarized_p19(s, _e7, _e9, _e11, tp.at::<S>(8));
+    let _e12 = mx_fresnel_conductor_polarized_p8(s, _e7, _e9, _e11, tp.at::<S>(8));
     let _e13 = mx_fresnel_conductor_phase_polarized_p20(s, _e7, _e6, n_2, k_1, tp.at::<S>(14));
-    let _e14 = mx_airy_reflectance_p11(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, tp.at::<S>(35));
+    let _e14 = mx_airy_reflectance_p22(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, tp.at::<S>(35));
     return _e14;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_airy_conductor_g21<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tg: &mut [f32]) -> [S::F; 3] {
+pub fn mx_fresnel_airy_conductor_g23<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tg: &mut [f32]) -> [S::F; 3] {
     assert!(tg.len() >= 39 * S::LANES, "the tape is shorter than the pass's slots");
     let _e6 = { let (x, y) = (film_ior, s.splat(1.0f32)); x.max(y) };
     uplift_simd::tape::put(s, tg, 0, _e6);
-    let _e7 = mx_thin_film_cos_g7(s, cos_theta_6, _e6, &mut tg[7 * S::LANES..]);
+    let _e7 = mx_thin_film_cos_g19(s, cos_theta_6, _e6, &mut tg[7 * S::LANES..]);
     let _e8 = [_e6; 3];
     let _e9 = uplift_simd::vector::zip::<S, 3>(n_2, _e8, |x, y| x * y.rcp());
     uplift_simd::tape::put(s, tg, 1, _e9[0]);
@@ -3878,18 +3948,18 @@ pub fn mx_fresnel_airy_conductor_g21<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::
     uplift_simd::tape::put(s, tg, 4, _e11[0]);
     uplift_simd::tape::put(s, tg, 5, _e11[1]);
     uplift_simd::tape::put(s, tg, 6, _e11[2]);
-    let _e12 = mx_fresnel_conductor_polarized_g19(s, _e7, _e9, _e11, &mut tg[8 * S::LANES..]);
+    let _e12 = mx_fresnel_conductor_polarized_g8(s, _e7, _e9, _e11, &mut tg[8 * S::LANES..]);
     let _e13 = s.outline(#[inline(always)] || mx_fresnel_conductor_phase_polarized_g20(s, _e7, _e6, n_2, k_1, &mut tg[14 * S::LANES..]));
-    let _e14 = mx_airy_reflectance_g11(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, &mut tg[35 * S::LANES..]);
+    let _e14 = mx_airy_reflectance_g22(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, &mut tg[35 * S::LANES..]);
     return _e14;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_conductor_fresnel_p22<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S::F; 3], thickness_3: S::F, film_ior_2: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+pub fn mx_conductor_fresnel_p24<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S::F; 3], thickness_3: S::F, film_ior_2: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
     let tp = tp.fit::<S>(46);
     let _e5 = if (!(thickness_3.gt(s.splat(0.0f32)))).any() { mx_fresnel_conductor_p18(s, vh, n_6, k_5, tp.at::<S>(1)) } else { [s.splat(0.0); 3] };
-    let _e6 = if (thickness_3.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_p21(s, vh, n_6, k_5, thickness_3, film_ior_2, tp.at::<S>(7)) } else { [s.splat(0.0); 3] };
+    let _e6 = if (thickness_3.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_p23(s, vh, n_6, k_5, thickness_3, film_ior_2, tp.at::<S>(7)) } else { [s.splat(0.0); 3] };
     let _e8 = tp.m(s, 0);
     let _e9 = uplift_simd::vector::select_all::<S, 3>(_e8, _e6, _e5);
     return _e9;
@@ -3897,10 +3967,10 @@ pub fn mx_conductor_fresnel_p22<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_conductor_fresnel_g22<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S::F; 3], thickness_3: S::F, film_ior_2: S::F, tg: &mut [f32]) -> [S::F; 3] {
+pub fn mx_conductor_fresnel_g24<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S::F; 3], thickness_3: S::F, film_ior_2: S::F, tg: &mut [f32]) -> [S::F; 3] {
     assert!(tg.len() >= 46 * S::LANES, "the tape is shorter than the pass's slots");
     let _e5 = if (!(thickness_3.gt(s.splat(0.0f32)))).any() { mx_fresnel_conductor_g18(s, vh, n_6, k_5, &mut tg[1 * S::LANES..]) } else { [s.splat(0.0); 3] };
-    let _e6 = if (thickness_3.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_g21(s, vh, n_6, k_5, thickness_3, film_ior_2, &mut tg[7 * S::LANES..]) } else { [s.splat(0.0); 3] };
+    let _e6 = if (thickness_3.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_g23(s, vh, n_6, k_5, thickness_3, film_ior_2, &mut tg[7 * S::LANES..]) } else { [s.splat(0.0); 3] };
     let _e8 = thickness_3.gt(s.splat(0.0f32));
     uplift_simd::tape::put_m(s, tg, 0, _e8);
     return [s.splat(0.0); 3];
@@ -3908,7 +3978,7 @@ pub fn mx_conductor_fresnel_g22<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_smith_s_p23<S: Simd>(s: S, w_1: [S::F; 3], a_1: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+pub fn mx_ggx_smith_s_p25<S: Simd>(s: S, w_1: [S::F; 3], a_1: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
     let tp = tp.fit::<S>(2);
     let _e2 = w_1[2];
     let _e4 = { let (x, y) = (_e2, s.splat(1e-8f32)); x.max(y) };
@@ -3935,7 +4005,7 @@ pub fn mx_ggx_smith_s_p23<S: Simd>(s: S, w_1: [S::F; 3], a_1: [S::F; 2], tp: upl
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_smith_s_g23<S: Simd>(s: S, w_1: [S::F; 3], a_1: [S::F; 2], tg: &mut [f32]) -> S::F {
+pub fn mx_ggx_smith_s_g25<S: Simd>(s: S, w_1: [S::F; 3], a_1: [S::F; 2], tg: &mut [f32]) -> S::F {
     assert!(tg.len() >= 2 * S::LANES, "the tape is shorter than the pass's slots");
     let _e6 = a_1[0];
     let _e7 = a_1[0];
@@ -3950,7 +4020,7 @@ pub fn mx_ggx_smith_s_g23<S: Simd>(s: S, w_1: [S::F; 3], a_1: [S::F; 2], tg: &mu
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_d_p24<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+pub fn mx_ggx_d_p26<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
     let tp = tp.fit::<S>(1);
     let _e2 = a_2[0];
     let _e3 = a_2[1];
@@ -3978,7 +4048,7 @@ pub fn mx_ggx_d_p24<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tp: uplift_si
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_d_g24<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tg: &mut [f32]) -> S::F {
+pub fn mx_ggx_d_g26<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tg: &mut [f32]) -> S::F {
     assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
     let _e2 = a_2[0];
     let _e3 = a_2[1];
@@ -3992,7 +4062,7 @@ pub fn mx_ggx_d_g24<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tg: &mut [f32
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_reflection_p25<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3: [S::F; 3], a_3: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+pub fn mx_ggx_reflection_p27<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3: [S::F; 3], a_3: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
     let tp = tp.fit::<S>(5);
     let _e4 = v_8[2];
     let _e6 = tp.f(s, 0);
@@ -4000,11 +4070,11 @@ pub fn mx_ggx_reflection_p25<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3:
     let _e9 = { let (x, y) = (_e7, s.splat(1e-8f32)); x.max(y) };
     let _e10 = tp.f(s, 1);
     let _e11 = (_e9 * _e10);
-    let _e12 = if (!(l_4[2].le(s.splat(0.0f32)))).any() { mx_ggx_smith_s_p23(s, l_4, a_3, tp.at::<S>(2)) } else { s.splat(0.0) };
+    let _e12 = if (!(l_4[2].le(s.splat(0.0f32)))).any() { mx_ggx_smith_s_p25(s, l_4, a_3, tp.at::<S>(2)) } else { s.splat(0.0) };
     let _e13 = (_e6 * _e12);
     let _e14 = _e9.mul_add(_e10, _e13);
     let _e16 = (s.splat(2.0f32) * _e14);
-    let _e17 = if (!(l_4[2].le(s.splat(0.0f32)))).any() { mx_ggx_d_p24(s, h_3, a_3, tp.at::<S>(4)) } else { s.splat(0.0) };
+    let _e17 = if (!(l_4[2].le(s.splat(0.0f32)))).any() { mx_ggx_d_p26(s, h_3, a_3, tp.at::<S>(4)) } else { s.splat(0.0) };
     let _e18 = (_e17 * _e9);
     let _e19 = (_e18 * (_e16).rcp());
     let _e20 = l_4[2];
@@ -4015,24 +4085,24 @@ pub fn mx_ggx_reflection_p25<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3:
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_reflection_g25<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3: [S::F; 3], a_3: [S::F; 2], tg: &mut [f32]) -> S::F {
+pub fn mx_ggx_reflection_g27<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3: [S::F; 3], a_3: [S::F; 2], tg: &mut [f32]) -> S::F {
     assert!(tg.len() >= 5 * S::LANES, "the tape is shorter than the pass's slots");
     let _e4 = v_8[2];
     let _e6 = { let (x, y) = (_e4, s.splat(1e-8f32)); x.max(y) };
     uplift_simd::tape::put(s, tg, 0, _e6);
     let _e10 = mx_ggx_smith_s(s, v_8, a_3);
     uplift_simd::tape::put(s, tg, 1, _e10);
-    let _e12 = mx_ggx_smith_s_g23(s, l_4, a_3, &mut tg[2 * S::LANES..]);
-    let _e17 = mx_ggx_d_g24(s, h_3, a_3, &mut tg[4 * S::LANES..]);
+    let _e12 = mx_ggx_smith_s_g25(s, l_4, a_3, &mut tg[2 * S::LANES..]);
+    let _e17 = mx_ggx_d_g26(s, h_3, a_3, &mut tg[4 * S::LANES..]);
     return s.splat(0.0);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_pdf_p26<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+pub fn mx_ggx_pdf_p28<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
     let tp = tp.fit::<S>(2);
     let _e3 = v_9[2];
-    let _e6 = if (!((uplift_simd::vector::dot::<S, 3>(v_9, h_4).le(s.splat(0.0f32)) | h_4[2].le(s.splat(0.0f32))))).any() { mx_ggx_d_p24(s, h_4, a_4, tp.at::<S>(1)) } else { s.splat(0.0) };
+    let _e6 = if (!((uplift_simd::vector::dot::<S, 3>(v_9, h_4).le(s.splat(0.0f32)) | h_4[2].le(s.splat(0.0f32))))).any() { mx_ggx_d_p26(s, h_4, a_4, tp.at::<S>(1)) } else { s.splat(0.0) };
     let _e10 = tp.f(s, 0);
     let _e11 = (_e6 * (_e10).rcp());
     let _e12 = uplift_simd::vector::dot::<S, 3>(v_9, h_4);
@@ -4046,11 +4116,11 @@ pub fn mx_ggx_pdf_p26<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F;
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_pdf_g26<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2], tg: &mut [f32]) -> S::F {
+pub fn mx_ggx_pdf_g28<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2], tg: &mut [f32]) -> S::F {
     assert!(tg.len() >= 2 * S::LANES, "the tape is shorter than the pass's slots");
     let _e3 = v_9[2];
     let _e5 = { let (x, y) = (_e3, s.splat(1e-8f32)); x.max(y) };
-    let _e6 = mx_ggx_d_g24(s, h_4, a_4, &mut tg[1 * S::LANES..]);
+    let _e6 = mx_ggx_d_g26(s, h_4, a_4, &mut tg[1 * S::LANES..]);
     let _e7 = mx_ggx_smith_s(s, v_9, a_4);
     let _e8 = (_e5 + _e7);
     let _e10 = (s.splat(2.0f32) * _e8);
@@ -4060,7 +4130,7 @@ pub fn mx_ggx_pdf_g26<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F;
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_with_pdf_p27<S: Simd>(s: S, response: [S::F; 3], throughput_1: [S::F; 3], c_2: S::F, pdf: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_lobe_with_pdf_p29<S: Simd>(s: S, response: [S::F; 3], throughput_1: [S::F; 3], c_2: S::F, pdf: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(1);
     let _e5 = tp.f(s, 0);
     let _e7 = { let (x, y) = (pdf, s.splat(0.0f32)); x.max(y) };
@@ -4072,7 +4142,7 @@ pub fn mx_lobe_with_pdf_p27<S: Simd>(s: S, response: [S::F; 3], throughput_1: [S
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_with_pdf_g27<S: Simd>(s: S, response: [S::F; 3], throughput_1: [S::F; 3], c_2: S::F, pdf: S::F, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_lobe_with_pdf_g29<S: Simd>(s: S, response: [S::F; 3], throughput_1: [S::F; 3], c_2: S::F, pdf: S::F, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
     let _e5 = { let (x, y) = (c_2, s.splat(0.0f32)); x.max(y) };
     uplift_simd::tape::put(s, tg, 0, _e5);
@@ -4082,7 +4152,7 @@ pub fn mx_lobe_with_pdf_g27<S: Simd>(s: S, response: [S::F; 3], throughput_1: [S
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_conductor_bsdf_p28<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F, ior_1: [S::F; 3], extinction: [S::F; 3], roughness_5: [S::F; 2], retroreflective_2: S::M, thinfilm_thickness_1: S::F, thinfilm_ior_1: S::F, normal_4: [S::F; 3], tangent_3: [S::F; 3], distribution_1: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_conductor_bsdf_p30<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F, ior_1: [S::F; 3], extinction: [S::F; 3], roughness_5: [S::F; 2], retroreflective_2: S::M, thinfilm_thickness_1: S::F, thinfilm_ior_1: S::F, normal_4: [S::F; 3], tangent_3: [S::F; 3], distribution_1: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(186);
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
@@ -4106,10 +4176,10 @@ pub fn mx_conductor_bsdf_p28<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
         let _e42 = mx_half_vector(s, _e41, _e40);
         let _e43 = [tp.f(s, 30), tp.f(s, 31), tp.f(s, 32)];
         let _e44 = uplift_simd::vector::dot::<S, 3>(_e43, _e42);
-        let _e45 = mx_conductor_fresnel_p22(s, _e44, _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, tp.at::<S>(81));
+        let _e45 = mx_conductor_fresnel_p24(s, _e44, _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, tp.at::<S>(81));
         let _e46 = [tp.f(s, 33), tp.f(s, 34), tp.f(s, 35)];
         let _e47 = [tp.f(s, 36), tp.f(s, 37)];
-        let _e48 = mx_ggx_reflection_p25(s, _e46, _e40, _e42, _e47, tp.at::<S>(127));
+        let _e48 = mx_ggx_reflection_p27(s, _e46, _e40, _e42, _e47, tp.at::<S>(127));
         let _e49 = (_e11 * _e48);
         let _e50 = uplift_simd::vector::mul::<S, 3>([_e49; 3], _e45);
         let _e51 = uplift_simd::vector::mul::<S, 3>(_e50, _e36);
@@ -4142,24 +4212,24 @@ pub fn mx_conductor_bsdf_p28<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
     let _e77 = mx_half_vector(s, _e76, _e75);
     let _e78 = [tp.f(s, 67), tp.f(s, 68), tp.f(s, 69)];
     let _e79 = uplift_simd::vector::dot::<S, 3>(_e78, _e77);
-    let _e80 = mx_conductor_fresnel_p22(s, _e79, _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, tp.at::<S>(132));
+    let _e80 = mx_conductor_fresnel_p24(s, _e79, _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, tp.at::<S>(132));
     let _e81 = [tp.f(s, 70), tp.f(s, 71), tp.f(s, 72)];
     let _e82 = [tp.f(s, 73), tp.f(s, 74)];
-    let _e83 = mx_ggx_reflection_p25(s, _e81, _e75, _e77, _e82, tp.at::<S>(178));
+    let _e83 = mx_ggx_reflection_p27(s, _e81, _e75, _e77, _e82, tp.at::<S>(178));
     let _e84 = (_e11 * _e83);
     let _e85 = uplift_simd::vector::mul::<S, 3>([_e84; 3], _e80);
     let _e86 = uplift_simd::vector::mul::<S, 3>(_e85, _e36);
     let _e87 = tp.f(s, 75);
     let _e88 = [tp.f(s, 76), tp.f(s, 77), tp.f(s, 78)];
     let _e89 = [tp.f(s, 79), tp.f(s, 80)];
-    let _e90 = mx_ggx_pdf_p26(s, _e88, _e77, _e89, tp.at::<S>(183));
-    let _e91 = mx_lobe_with_pdf_p27(s, _e86, _e13, _e87, _e90, tp.at::<S>(185));
+    let _e90 = mx_ggx_pdf_p28(s, _e88, _e77, _e89, tp.at::<S>(183));
+    let _e91 = mx_lobe_with_pdf_p29(s, _e86, _e13, _e87, _e90, tp.at::<S>(185));
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_conductor_bsdf_g28<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F, ior_1: [S::F; 3], extinction: [S::F; 3], roughness_5: [S::F; 2], retroreflective_2: S::M, thinfilm_thickness_1: S::F, thinfilm_ior_1: S::F, normal_4: [S::F; 3], tangent_3: [S::F; 3], distribution_1: S::I, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_conductor_bsdf_g30<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F, ior_1: [S::F; 3], extinction: [S::F; 3], roughness_5: [S::F; 2], retroreflective_2: S::M, thinfilm_thickness_1: S::F, thinfilm_ior_1: S::F, normal_4: [S::F; 3], tangent_3: [S::F; 3], distribution_1: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 186 * S::LANES, "the tape is shorter than the pass's slots");
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
@@ -4220,7 +4290,7 @@ pub fn mx_conductor_bsdf_g28<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
         uplift_simd::tape::put(s, tg, 30, _e43[0]);
         uplift_simd::tape::put(s, tg, 31, _e43[1]);
         uplift_simd::tape::put(s, tg, 32, _e43[2]);
-        let _e45 = mx_conductor_fresnel_g22(s, s.splat(0.0), _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, &mut tg[81 * S::LANES..]);
+        let _e45 = mx_conductor_fresnel_g24(s, s.splat(0.0), _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, &mut tg[81 * S::LANES..]);
         let _e46 = _e14.v;
         uplift_simd::tape::put(s, tg, 33, _e46[0]);
         uplift_simd::tape::put(s, tg, 34, _e46[1]);
@@ -4228,7 +4298,7 @@ pub fn mx_conductor_bsdf_g28<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
         let _e47 = _e14.a;
         uplift_simd::tape::put(s, tg, 36, _e47[0]);
         uplift_simd::tape::put(s, tg, 37, _e47[1]);
-        let _e48 = mx_ggx_reflection_g25(s, _e46, [s.splat(0.0); 3], [s.splat(0.0); 3], _e47, &mut tg[127 * S::LANES..]);
+        let _e48 = mx_ggx_reflection_g27(s, _e46, [s.splat(0.0); 3], [s.splat(0.0); 3], _e47, &mut tg[127 * S::LANES..]);
         let _e52 = mx_bsdf_empty(s);
         let _e53 = _e52.lobe;
         uplift_simd::tape::put(s, tg, 38, _e53[0]);
@@ -4300,7 +4370,7 @@ pub fn mx_conductor_bsdf_g28<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
     uplift_simd::tape::put(s, tg, 67, _e78[0]);
     uplift_simd::tape::put(s, tg, 68, _e78[1]);
     uplift_simd::tape::put(s, tg, 69, _e78[2]);
-    let _e80 = mx_conductor_fresnel_g22(s, s.splat(0.0), _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, &mut tg[132 * S::LANES..]);
+    let _e80 = mx_conductor_fresnel_g24(s, s.splat(0.0), _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, &mut tg[132 * S::LANES..]);
     let _e81 = _e14.v;
     uplift_simd::tape::put(s, tg, 70, _e81[0]);
     uplift_simd::tape::put(s, tg, 71, _e81[1]);
@@ -4308,7 +4378,7 @@ pub fn mx_conductor_bsdf_g28<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
     let _e82 = _e14.a;
     uplift_simd::tape::put(s, tg, 73, _e82[0]);
     uplift_simd::tape::put(s, tg, 74, _e82[1]);
-    let _e83 = mx_ggx_reflection_g25(s, _e81, [s.splat(0.0); 3], [s.splat(0.0); 3], _e82, &mut tg[178 * S::LANES..]);
+    let _e83 = mx_ggx_reflection_g27(s, _e81, [s.splat(0.0); 3], [s.splat(0.0); 3], _e82, &mut tg[178 * S::LANES..]);
     let _e87 = mx_luminance_rgb(s, _e63);
     uplift_simd::tape::put(s, tg, 75, _e87);
     let _e88 = _e14.v;
@@ -4318,14 +4388,14 @@ pub fn mx_conductor_bsdf_g28<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
     let _e89 = _e14.a;
     uplift_simd::tape::put(s, tg, 79, _e89[0]);
     uplift_simd::tape::put(s, tg, 80, _e89[1]);
-    let _e90 = mx_ggx_pdf_g26(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[183 * S::LANES..]);
-    let _e91 = mx_lobe_with_pdf_g27(s, [s.splat(0.0); 3], _e13, _e87, _e90, &mut tg[185 * S::LANES..]);
+    let _e90 = mx_ggx_pdf_g28(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[183 * S::LANES..]);
+    let _e91 = mx_lobe_with_pdf_g29(s, [s.splat(0.0); 3], _e13, _e87, _e90, &mut tg[185 * S::LANES..]);
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_combine_p29<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b: [S::F; 4], wb: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 4] {
+pub fn mx_lobe_combine_p31<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b: [S::F; 4], wb: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 4] {
     let tp = tp.fit::<S>(5);
     let mut _ret: [S::F; 4] = [s.splat(0.0); 4];
     let mut _done = s.first_lanes(0);
@@ -4365,7 +4435,7 @@ pub fn mx_lobe_combine_p29<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], w
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_combine_g29<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b: [S::F; 4], wb: S::F, tg: &mut [f32]) -> [S::F; 4] {
+pub fn mx_lobe_combine_g31<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b: [S::F; 4], wb: S::F, tg: &mut [f32]) -> [S::F; 4] {
     assert!(tg.len() >= 5 * S::LANES, "the tape is shorter than the pass's slots");
     let mut _ret: [S::F; 4] = [s.splat(0.0); 4];
     let mut _done = s.first_lanes(0);
@@ -4391,7 +4461,7 @@ pub fn mx_lobe_combine_g29<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], w
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_mix_bsdf_p30<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_mix_bsdf_p32<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(10);
     let _e4 = tp.f(s, 0);
     let _e5 = bg.response;
@@ -4403,14 +4473,14 @@ pub fn mx_mix_bsdf_p30<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSD
     let _e11 = fg.lobe;
     let _e12 = bg.lobe;
     let _e14 = tp.f(s, 4);
-    let _e15 = mx_lobe_combine_p29(s, cl_10, _e11, _e4, _e12, _e14, tp.at::<S>(5));
+    let _e15 = mx_lobe_combine_p31(s, cl_10, _e11, _e4, _e12, _e14, tp.at::<S>(5));
     let _e16 = BSDF { response: _e7, throughput: _e10, lobe: _e15 };
     return _e16;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_mix_bsdf_g30<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_mix_bsdf_g32<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 10 * S::LANES, "the tape is shorter than the pass's slots");
     let _e4 = mx_mix_amount(s, mix);
     uplift_simd::tape::put(s, tg, 0, _e4);
@@ -4422,14 +4492,239 @@ pub fn mx_mix_bsdf_g30<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSD
     uplift_simd::tape::put(s, tg, 3, _e10[2]);
     let _e14 = (s.splat(1.0f32) - _e4);
     uplift_simd::tape::put(s, tg, 4, _e14);
-    let _e15 = mx_lobe_combine_g29(s, cl_10, [s.splat(0.0); 4], _e4, [s.splat(0.0); 4], _e14, &mut tg[5 * S::LANES..]);
+    let _e15 = mx_lobe_combine_g31(s, cl_10, [s.splat(0.0); 4], _e4, [s.splat(0.0); 4], _e14, &mut tg[5 * S::LANES..]);
     let _e16 = BSDF { response: [s.splat(0.0); 3], throughput: _e10, lobe: _e15 };
     return _e16;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_dielectric_bsdf_p31<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_fresnel_conductor_polarized_p33<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S::F; 3], k: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
+    let tp = tp.fit::<S>(6);
+    let _e5 = cos_theta_2.max(s.splat(0.0f32)).min(s.splat(1.0f32));
+    let _e6 = (_e5 * _e5);
+    let _e8 = (-_e5).mul_add(_e5, s.splat(1.0f32));
+    let _e11 = [tp.f(s, 0), tp.f(s, 1), tp.f(s, 2)];
+    let _e12 = [_e8; 3];
+    let _e13 = uplift_simd::vector::sub::<S, 3>(_e11, _e12);
+    let _e14 = uplift_simd::vector::mul::<S, 3>(_e13, _e13);
+    let _e17 = [tp.f(s, 3), tp.f(s, 4), tp.f(s, 5)];
+    let _e18 = uplift_simd::vector::add::<S, 3>(_e14, _e17);
+    let _e19 = uplift_simd::vector::map::<S, 3>(_e18, |x| x.sqrt());
+    let _e20 = [_e6; 3];
+    let _e21 = uplift_simd::vector::add::<S, 3>(_e19, _e20);
+    let _e22 = uplift_simd::vector::add::<S, 3>(_e19, _e13);
+    let _e24 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e22);
+    let _e26 = [s.splat(0.0f32); 3];
+    let _e27 = uplift_simd::vector::zip::<S, 3>(_e24, _e26, |x, y| x.max(y));
+    let _e28 = uplift_simd::vector::map::<S, 3>(_e27, |x| x.sqrt());
+    let _e30 = (s.splat(2.0f32) * _e5);
+    let _e31 = uplift_simd::vector::mul::<S, 3>([_e30; 3], _e28);
+    let _e32 = uplift_simd::vector::sub::<S, 3>(_e21, _e31);
+    let _e33 = uplift_simd::vector::add::<S, 3>(_e21, _e31);
+    let _e35 = [s.splat(1e-30f32); 3];
+    let _e36 = uplift_simd::vector::zip::<S, 3>(_e33, _e35, |x, y| x.max(y));
+    let _e37 = uplift_simd::vector::zip::<S, 3>(_e32, _e36, |x, y| x * y.rcp());
+    let _e38 = uplift_simd::vector::mul::<S, 3>([_e6; 3], _e19);
+    let _e39 = (_e8 * _e8);
+    let _e40 = [_e39; 3];
+    let _e41 = uplift_simd::vector::add::<S, 3>(_e38, _e40);
+    let _e42 = uplift_simd::vector::mul::<S, 3>(_e31, [_e8; 3]);
+    let _e43 = uplift_simd::vector::sub::<S, 3>(_e41, _e42);
+    let _e44 = uplift_simd::vector::mul::<S, 3>(_e37, _e43);
+    let _e45 = uplift_simd::vector::add::<S, 3>(_e41, _e42);
+    let _e47 = [s.splat(1e-30f32); 3];
+    let _e48 = uplift_simd::vector::zip::<S, 3>(_e45, _e47, |x, y| x.max(y));
+    let _e49 = uplift_simd::vector::zip::<S, 3>(_e44, _e48, |x, y| x * y.rcp());
+    let _e50 = mx_polarized { p: _e49, s_: _e37 };
+    return _e50;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_conductor_polarized_g33<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S::F; 3], k: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
+    assert!(tg.len() >= 6 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e9 = uplift_simd::vector::mul::<S, 3>(n_1, n_1);
+    let _e10 = uplift_simd::vector::mul::<S, 3>(k, k);
+    let _e11 = uplift_simd::vector::sub::<S, 3>(_e9, _e10);
+    uplift_simd::tape::put(s, tg, 0, _e11[0]);
+    uplift_simd::tape::put(s, tg, 1, _e11[1]);
+    uplift_simd::tape::put(s, tg, 2, _e11[2]);
+    let _e16 = uplift_simd::vector::mul::<S, 3>([s.splat(4.0f32); 3], _e9);
+    let _e17 = uplift_simd::vector::mul::<S, 3>(_e16, _e10);
+    uplift_simd::tape::put(s, tg, 3, _e17[0]);
+    uplift_simd::tape::put(s, tg, 4, _e17[1]);
+    uplift_simd::tape::put(s, tg, 5, _e17[2]);
+    let _e26 = [s.splat(0.0f32); 3];
+    let _e35 = [s.splat(1e-30f32); 3];
+    let _e47 = [s.splat(1e-30f32); 3];
+    let _e50 = mx_polarized { p: [s.splat(0.0); 3], s_: [s.splat(0.0); 3] };
+    return _e50;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_conductor_phase_polarized_p34<S: Simd>(s: S, cos_theta_3: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
+    let tp = tp.fit::<S>(21);
+    let _e5 = [s.splat(1e-6f32); 3];
+    let _e8 = (cos_theta_3 * cos_theta_3);
+    let _e10 = (-cos_theta_3).mul_add(cos_theta_3, s.splat(1.0f32));
+    let _e13 = [s.splat(1.0f32); 3];
+    let _e16 = [tp.f(s, 0), tp.f(s, 1), tp.f(s, 2)];
+    let _e17 = tp.f(s, 3);
+    let _e18 = (_e17 * _e10);
+    let _e19 = [_e18; 3];
+    let _e20 = uplift_simd::vector::sub::<S, 3>(_e16, _e19);
+    let _e21 = uplift_simd::vector::mul::<S, 3>(_e20, _e20);
+    let _e30 = [tp.f(s, 4), tp.f(s, 5), tp.f(s, 6)];
+    let _e31 = uplift_simd::vector::add::<S, 3>(_e21, _e30);
+    let _e32 = uplift_simd::vector::map::<S, 3>(_e31, |x| x.sqrt());
+    let _e33 = uplift_simd::vector::add::<S, 3>(_e20, _e32);
+    let _e35 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e33);
+    let _e37 = [s.splat(0.0f32); 3];
+    let _e38 = uplift_simd::vector::zip::<S, 3>(_e35, _e37, |x, y| x.max(y));
+    let _e39 = uplift_simd::vector::map::<S, 3>(_e38, |x| x.sqrt());
+    let _e40 = uplift_simd::vector::sub::<S, 3>(_e32, _e20);
+    let _e42 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e40);
+    let _e44 = [s.splat(0.0f32); 3];
+    let _e45 = uplift_simd::vector::zip::<S, 3>(_e42, _e44, |x, y| x.max(y));
+    let _e46 = uplift_simd::vector::map::<S, 3>(_e45, |x| x.sqrt());
+    let _e47 = (eta1_ * cos_theta_3);
+    let _e49 = tp.f(s, 7);
+    let _e50 = uplift_simd::vector::mul::<S, 3>([_e49; 3], _e46);
+    let _e51 = uplift_simd::vector::mul::<S, 3>(_e50, [cos_theta_3; 3]);
+    let _e52 = uplift_simd::vector::mul::<S, 3>(_e39, _e39);
+    let _e53 = uplift_simd::vector::mul::<S, 3>(_e46, _e46);
+    let _e54 = uplift_simd::vector::add::<S, 3>(_e52, _e53);
+    let _e55 = (_e47 * _e47);
+    let _e56 = [_e55; 3];
+    let _e57 = uplift_simd::vector::sub::<S, 3>(_e54, _e56);
+    let _e58 = mx_fast_atan2_vec3_(s, _e51, _e57);
+    let _e61 = [s.splat(1.0f32); 3];
+    let _e64 = [tp.f(s, 8), tp.f(s, 9), tp.f(s, 10)];
+    let _e65 = uplift_simd::vector::mul::<S, 3>(_e64, [cos_theta_3; 3]);
+    let _e69 = [tp.f(s, 11), tp.f(s, 12), tp.f(s, 13)];
+    let _e70 = uplift_simd::vector::mul::<S, 3>(_e69, [cos_theta_3; 3]);
+    let _e72 = [tp.f(s, 14), tp.f(s, 15), tp.f(s, 16)];
+    let _e73 = uplift_simd::vector::mul::<S, 3>(_e72, _e39);
+    let _e75 = [s.splat(1.0f32); 3];
+    let _e77 = [tp.f(s, 17), tp.f(s, 18), tp.f(s, 19)];
+    let _e78 = uplift_simd::vector::mul::<S, 3>(_e77, _e46);
+    let _e79 = uplift_simd::vector::sub::<S, 3>(_e73, _e78);
+    let _e80 = uplift_simd::vector::mul::<S, 3>(_e70, _e79);
+    let _e81 = uplift_simd::vector::mul::<S, 3>(_e65, _e65);
+    let _e82 = tp.f(s, 20);
+    let _e83 = uplift_simd::vector::mul::<S, 3>(_e39, _e39);
+    let _e84 = uplift_simd::vector::mul::<S, 3>(_e46, _e46);
+    let _e85 = uplift_simd::vector::add::<S, 3>(_e83, _e84);
+    let _e86 = uplift_simd::vector::mul::<S, 3>([_e82; 3], _e85);
+    let _e87 = uplift_simd::vector::sub::<S, 3>(_e81, _e86);
+    let _e88 = mx_fast_atan2_vec3_(s, _e80, _e87);
+    let _e89 = mx_polarized { p: _e88, s_: _e58 };
+    return _e89;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_conductor_phase_polarized_g34<S: Simd>(s: S, cos_theta_3: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
+    assert!(tg.len() >= 21 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e5 = [s.splat(1e-6f32); 3];
+    let _e6 = uplift_simd::vector::zip::<S, 3>(eta2_1, _e5, |x, y| x.max(y));
+    let _e7 = uplift_simd::vector::zip::<S, 3>(kappa2_, _e6, |x, y| x * y.rcp());
+    let _e11 = uplift_simd::vector::mul::<S, 3>(_e6, _e6);
+    let _e13 = [s.splat(1.0f32); 3];
+    let _e14 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
+    let _e15 = uplift_simd::vector::sub::<S, 3>(_e13, _e14);
+    let _e16 = uplift_simd::vector::mul::<S, 3>(_e11, _e15);
+    uplift_simd::tape::put(s, tg, 0, _e16[0]);
+    uplift_simd::tape::put(s, tg, 1, _e16[1]);
+    uplift_simd::tape::put(s, tg, 2, _e16[2]);
+    let _e17 = (eta1_ * eta1_);
+    uplift_simd::tape::put(s, tg, 3, _e17);
+    let _e23 = uplift_simd::vector::mul::<S, 3>([s.splat(2.0f32); 3], _e6);
+    let _e24 = uplift_simd::vector::mul::<S, 3>(_e23, _e6);
+    let _e25 = uplift_simd::vector::mul::<S, 3>(_e24, _e7);
+    let _e27 = uplift_simd::vector::mul::<S, 3>([s.splat(2.0f32); 3], _e6);
+    let _e28 = uplift_simd::vector::mul::<S, 3>(_e27, _e6);
+    let _e29 = uplift_simd::vector::mul::<S, 3>(_e28, _e7);
+    let _e30 = uplift_simd::vector::mul::<S, 3>(_e25, _e29);
+    uplift_simd::tape::put(s, tg, 4, _e30[0]);
+    uplift_simd::tape::put(s, tg, 5, _e30[1]);
+    uplift_simd::tape::put(s, tg, 6, _e30[2]);
+    let _e37 = [s.splat(0.0f32); 3];
+    let _e44 = [s.splat(0.0f32); 3];
+    let _e49 = (s.splat(2.0f32) * eta1_);
+    uplift_simd::tape::put(s, tg, 7, _e49);
+    let _e59 = uplift_simd::vector::mul::<S, 3>(_e6, _e6);
+    let _e61 = [s.splat(1.0f32); 3];
+    let _e62 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
+    let _e63 = uplift_simd::vector::add::<S, 3>(_e61, _e62);
+    let _e64 = uplift_simd::vector::mul::<S, 3>(_e59, _e63);
+    uplift_simd::tape::put(s, tg, 8, _e64[0]);
+    uplift_simd::tape::put(s, tg, 9, _e64[1]);
+    uplift_simd::tape::put(s, tg, 10, _e64[2]);
+    let _e67 = (s.splat(2.0f32) * eta1_);
+    let _e68 = uplift_simd::vector::mul::<S, 3>([_e67; 3], _e6);
+    let _e69 = uplift_simd::vector::mul::<S, 3>(_e68, _e6);
+    uplift_simd::tape::put(s, tg, 11, _e69[0]);
+    uplift_simd::tape::put(s, tg, 12, _e69[1]);
+    uplift_simd::tape::put(s, tg, 13, _e69[2]);
+    let _e72 = uplift_simd::vector::mul::<S, 3>([s.splat(2.0f32); 3], _e7);
+    uplift_simd::tape::put(s, tg, 14, _e72[0]);
+    uplift_simd::tape::put(s, tg, 15, _e72[1]);
+    uplift_simd::tape::put(s, tg, 16, _e72[2]);
+    let _e75 = [s.splat(1.0f32); 3];
+    let _e76 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
+    let _e77 = uplift_simd::vector::sub::<S, 3>(_e75, _e76);
+    uplift_simd::tape::put(s, tg, 17, _e77[0]);
+    uplift_simd::tape::put(s, tg, 18, _e77[1]);
+    uplift_simd::tape::put(s, tg, 19, _e77[2]);
+    let _e82 = (eta1_ * eta1_);
+    uplift_simd::tape::put(s, tg, 20, _e82);
+    let _e89 = mx_polarized { p: [s.splat(0.0); 3], s_: [s.splat(0.0); 3] };
+    return _e89;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_airy_conductor_p35<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+    let tp = tp.fit::<S>(39);
+    let _e6 = tp.f(s, 0);
+    let _e7 = mx_thin_film_cos_p19(s, cos_theta_6, _e6, tp.at::<S>(7));
+    let _e9 = [tp.f(s, 1), tp.f(s, 2), tp.f(s, 3)];
+    let _e11 = [tp.f(s, 4), tp.f(s, 5), tp.f(s, 6)];
+    let _e12 = mx_fresnel_conductor_polarized_p33(s, _e7, _e9, _e11, tp.at::<S>(8));
+    let _e13 = mx_fresnel_conductor_phase_polarized_p34(s, _e7, _e6, n_2, k_1, tp.at::<S>(14));
+    let _e14 = mx_airy_reflectance_p22(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, tp.at::<S>(35));
+    return _e14;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_airy_conductor_g35<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tg: &mut [f32]) -> [S::F; 3] {
+    assert!(tg.len() >= 39 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e6 = { let (x, y) = (film_ior, s.splat(1.0f32)); x.max(y) };
+    uplift_simd::tape::put(s, tg, 0, _e6);
+    let _e7 = mx_thin_film_cos_g19(s, cos_theta_6, _e6, &mut tg[7 * S::LANES..]);
+    let _e8 = [_e6; 3];
+    let _e9 = uplift_simd::vector::zip::<S, 3>(n_2, _e8, |x, y| x * y.rcp());
+    uplift_simd::tape::put(s, tg, 1, _e9[0]);
+    uplift_simd::tape::put(s, tg, 2, _e9[1]);
+    uplift_simd::tape::put(s, tg, 3, _e9[2]);
+    let _e10 = [_e6; 3];
+    let _e11 = uplift_simd::vector::zip::<S, 3>(k_1, _e10, |x, y| x * y.rcp());
+    uplift_simd::tape::put(s, tg, 4, _e11[0]);
+    uplift_simd::tape::put(s, tg, 5, _e11[1]);
+    uplift_simd::tape::put(s, tg, 6, _e11[2]);
+    let _e12 = mx_fresnel_conductor_polarized_g33(s, _e7, _e9, _e11, &mut tg[8 * S::LANES..]);
+    let _e13 = s.outline(#[inline(always)] || mx_fresnel_conductor_phase_polarized_g34(s, _e7, _e6, n_2, k_1, &mut tg[14 * S::LANES..]));
+    let _e14 = mx_airy_reflectance_g22(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, &mut tg[35 * S::LANES..]);
+    return _e14;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_dielectric_bsdf_p36<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(135);
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
@@ -4478,11 +4773,11 @@ pub fn mx_dielectric_bsdf_p31<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e69 = uplift_simd::vector::dot::<S, 3>(_e68, _e67);
     let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_p6(s, _e69, _e18, tp.at::<S>(86)) } else { s.splat(0.0) };
     let _e71 = [_e70; 3];
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_p12(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(88)) } else { [s.splat(0.0); 3] };
+    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_p35(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(88)) } else { [s.splat(0.0); 3] };
     let _e73 = uplift_simd::vector::select_all::<S, 3>(_e23, _e72, _e71);
     let _e74 = [tp.f(s, 70), tp.f(s, 71), tp.f(s, 72)];
     let _e75 = [tp.f(s, 73), tp.f(s, 74)];
-    let _e76 = mx_ggx_reflection_p25(s, _e74, _e65, _e67, _e75, tp.at::<S>(127));
+    let _e76 = mx_ggx_reflection_p27(s, _e74, _e65, _e67, _e75, tp.at::<S>(127));
     let _e77 = (_e12 * _e76);
     let _e78 = uplift_simd::vector::mul::<S, 3>([_e77; 3], _e73);
     let _e79 = uplift_simd::vector::mul::<S, 3>(_e78, _e38);
@@ -4500,14 +4795,14 @@ pub fn mx_dielectric_bsdf_p31<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e87 = tp.f(s, 80);
     let _e88 = [tp.f(s, 81), tp.f(s, 82), tp.f(s, 83)];
     let _e89 = [tp.f(s, 84), tp.f(s, 85)];
-    let _e90 = mx_ggx_pdf_p26(s, _e88, _e67, _e89, tp.at::<S>(132));
+    let _e90 = mx_ggx_pdf_p28(s, _e88, _e67, _e89, tp.at::<S>(132));
     let _e91 = mx_lobe_with_pdf_p4(s, _e80, _e51, _e87, _e90, tp.at::<S>(134));
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_dielectric_bsdf_g31<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_dielectric_bsdf_g36<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 135 * S::LANES, "the tape is shorter than the pass's slots");
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
@@ -4644,7 +4939,7 @@ pub fn mx_dielectric_bsdf_g31<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     uplift_simd::tape::put(s, tg, 68, _e68[1]);
     uplift_simd::tape::put(s, tg, 69, _e68[2]);
     let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_g6(s, s.splat(0.0), _e18, &mut tg[86 * S::LANES..]) } else { s.splat(0.0) };
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_g12(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[88 * S::LANES..]) } else { [s.splat(0.0); 3] };
+    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_g35(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[88 * S::LANES..]) } else { [s.splat(0.0); 3] };
     let _e74 = _e16.v;
     uplift_simd::tape::put(s, tg, 70, _e74[0]);
     uplift_simd::tape::put(s, tg, 71, _e74[1]);
@@ -4652,7 +4947,7 @@ pub fn mx_dielectric_bsdf_g31<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e75 = _e16.a;
     uplift_simd::tape::put(s, tg, 73, _e75[0]);
     uplift_simd::tape::put(s, tg, 74, _e75[1]);
-    let _e76 = mx_ggx_reflection_g25(s, _e74, [s.splat(0.0); 3], [s.splat(0.0); 3], _e75, &mut tg[127 * S::LANES..]);
+    let _e76 = mx_ggx_reflection_g27(s, _e74, [s.splat(0.0); 3], [s.splat(0.0); 3], _e75, &mut tg[127 * S::LANES..]);
     let _e81 = cl_7.context;
     let _e83 = _e81.eq(s.splat_i(0i32));
     uplift_simd::tape::put_m(s, tg, 75, _e83);
@@ -4678,14 +4973,14 @@ pub fn mx_dielectric_bsdf_g31<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e89 = _e16.a;
     uplift_simd::tape::put(s, tg, 84, _e89[0]);
     uplift_simd::tape::put(s, tg, 85, _e89[1]);
-    let _e90 = mx_ggx_pdf_g26(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[132 * S::LANES..]);
+    let _e90 = mx_ggx_pdf_g28(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[132 * S::LANES..]);
     let _e91 = mx_lobe_with_pdf_g4(s, [s.splat(0.0); 3], _e51, _e87, _e90, &mut tg[134 * S::LANES..]);
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_mix_bsdf_p32<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_mix_bsdf_p37<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(10);
     let _e4 = tp.f(s, 0);
     let _e5 = bg.response;
@@ -4697,14 +4992,14 @@ pub fn mx_mix_bsdf_p32<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSD
     let _e11 = fg.lobe;
     let _e12 = bg.lobe;
     let _e14 = tp.f(s, 4);
-    let _e15 = mx_lobe_combine_p29(s, cl_10, _e11, _e4, _e12, _e14, tp.at::<S>(5));
+    let _e15 = mx_lobe_combine_p31(s, cl_10, _e11, _e4, _e12, _e14, tp.at::<S>(5));
     let _e16 = BSDF { response: _e7, throughput: _e10, lobe: _e15 };
     return _e16;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_mix_bsdf_g32<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_mix_bsdf_g37<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 10 * S::LANES, "the tape is shorter than the pass's slots");
     let _e4 = mx_mix_amount(s, mix);
     uplift_simd::tape::put(s, tg, 0, _e4);
@@ -4716,14 +5011,14 @@ pub fn mx_mix_bsdf_g32<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSD
     uplift_simd::tape::put(s, tg, 3, _e10[2]);
     let _e14 = (s.splat(1.0f32) - _e4);
     uplift_simd::tape::put(s, tg, 4, _e14);
-    let _e15 = mx_lobe_combine_g29(s, cl_10, [s.splat(0.0); 4], _e4, [s.splat(0.0); 4], _e14, &mut tg[5 * S::LANES..]);
+    let _e15 = mx_lobe_combine_g31(s, cl_10, [s.splat(0.0); 4], _e4, [s.splat(0.0); 4], _e14, &mut tg[5 * S::LANES..]);
     let _e16 = BSDF { response: [s.splat(0.0); 3], throughput: _e10, lobe: _e15 };
     return _e16;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_sheen_bsdf_p33<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color: [S::F; 3], roughness_1: S::F, normal_1: [S::F; 3], mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_sheen_bsdf_p38<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color: [S::F; 3], roughness_1: S::F, normal_1: [S::F; 3], mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(62);
     let mut e_1: S::F = s.splat(0.0);
     let mut norm: S::F = s.splat(1.0f32);
@@ -4827,7 +5122,7 @@ pub fn mx_sheen_bsdf_p33<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_sheen_bsdf_g33<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color: [S::F; 3], roughness_1: S::F, normal_1: [S::F; 3], mode: S::I, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_sheen_bsdf_g38<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color: [S::F; 3], roughness_1: S::F, normal_1: [S::F; 3], mode: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 62 * S::LANES, "the tape is shorter than the pass's slots");
     let mut e_1: S::F = s.splat(0.0);
     let mut norm: S::F = s.splat(1.0f32);
@@ -5031,7 +5326,7 @@ pub fn mx_sheen_bsdf_g33<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_dielectric_bsdf_p34<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_dielectric_bsdf_p39<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(135);
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
@@ -5080,11 +5375,11 @@ pub fn mx_dielectric_bsdf_p34<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e69 = uplift_simd::vector::dot::<S, 3>(_e68, _e67);
     let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_p6(s, _e69, _e18, tp.at::<S>(86)) } else { s.splat(0.0) };
     let _e71 = [_e70; 3];
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_p12(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(88)) } else { [s.splat(0.0); 3] };
+    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_p35(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(88)) } else { [s.splat(0.0); 3] };
     let _e73 = uplift_simd::vector::select_all::<S, 3>(_e23, _e72, _e71);
     let _e74 = [tp.f(s, 70), tp.f(s, 71), tp.f(s, 72)];
     let _e75 = [tp.f(s, 73), tp.f(s, 74)];
-    let _e76 = mx_ggx_reflection_p25(s, _e74, _e65, _e67, _e75, tp.at::<S>(127));
+    let _e76 = mx_ggx_reflection_p27(s, _e74, _e65, _e67, _e75, tp.at::<S>(127));
     let _e77 = (_e12 * _e76);
     let _e78 = uplift_simd::vector::mul::<S, 3>([_e77; 3], _e73);
     let _e79 = uplift_simd::vector::mul::<S, 3>(_e78, _e38);
@@ -5102,14 +5397,14 @@ pub fn mx_dielectric_bsdf_p34<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e87 = tp.f(s, 80);
     let _e88 = [tp.f(s, 81), tp.f(s, 82), tp.f(s, 83)];
     let _e89 = [tp.f(s, 84), tp.f(s, 85)];
-    let _e90 = mx_ggx_pdf_p26(s, _e88, _e67, _e89, tp.at::<S>(132));
+    let _e90 = mx_ggx_pdf_p28(s, _e88, _e67, _e89, tp.at::<S>(132));
     let _e91 = mx_lobe_with_pdf_p4(s, _e80, _e51, _e87, _e90, tp.at::<S>(134));
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_dielectric_bsdf_g34<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_dielectric_bsdf_g39<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 135 * S::LANES, "the tape is shorter than the pass's slots");
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
@@ -5246,7 +5541,7 @@ pub fn mx_dielectric_bsdf_g34<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     uplift_simd::tape::put(s, tg, 68, _e68[1]);
     uplift_simd::tape::put(s, tg, 69, _e68[2]);
     let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_g6(s, s.splat(0.0), _e18, &mut tg[86 * S::LANES..]) } else { s.splat(0.0) };
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_g12(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[88 * S::LANES..]) } else { [s.splat(0.0); 3] };
+    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_g35(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[88 * S::LANES..]) } else { [s.splat(0.0); 3] };
     let _e74 = _e16.v;
     uplift_simd::tape::put(s, tg, 70, _e74[0]);
     uplift_simd::tape::put(s, tg, 71, _e74[1]);
@@ -5254,7 +5549,7 @@ pub fn mx_dielectric_bsdf_g34<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e75 = _e16.a;
     uplift_simd::tape::put(s, tg, 73, _e75[0]);
     uplift_simd::tape::put(s, tg, 74, _e75[1]);
-    let _e76 = mx_ggx_reflection_g25(s, _e74, [s.splat(0.0); 3], [s.splat(0.0); 3], _e75, &mut tg[127 * S::LANES..]);
+    let _e76 = mx_ggx_reflection_g27(s, _e74, [s.splat(0.0); 3], [s.splat(0.0); 3], _e75, &mut tg[127 * S::LANES..]);
     let _e81 = cl_7.context;
     let _e83 = _e81.eq(s.splat_i(0i32));
     uplift_simd::tape::put_m(s, tg, 75, _e83);
@@ -5280,14 +5575,14 @@ pub fn mx_dielectric_bsdf_g34<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e89 = _e16.a;
     uplift_simd::tape::put(s, tg, 84, _e89[0]);
     uplift_simd::tape::put(s, tg, 85, _e89[1]);
-    let _e90 = mx_ggx_pdf_g26(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[132 * S::LANES..]);
+    let _e90 = mx_ggx_pdf_g28(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[132 * S::LANES..]);
     let _e91 = mx_lobe_with_pdf_g4(s, [s.splat(0.0); 3], _e51, _e87, _e90, &mut tg[134 * S::LANES..]);
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_combine_p35<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b: [S::F; 4], wb: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 4] {
+pub fn mx_lobe_combine_p40<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b: [S::F; 4], wb: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 4] {
     let tp = tp.fit::<S>(5);
     let mut _ret: [S::F; 4] = [s.splat(0.0); 4];
     let mut _done = s.first_lanes(0);
@@ -5327,7 +5622,7 @@ pub fn mx_lobe_combine_p35<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], w
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_combine_g35<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b: [S::F; 4], wb: S::F, tg: &mut [f32]) -> [S::F; 4] {
+pub fn mx_lobe_combine_g40<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b: [S::F; 4], wb: S::F, tg: &mut [f32]) -> [S::F; 4] {
     assert!(tg.len() >= 5 * S::LANES, "the tape is shorter than the pass's slots");
     let mut _ret: [S::F; 4] = [s.splat(0.0); 4];
     let mut _done = s.first_lanes(0);
@@ -5353,7 +5648,7 @@ pub fn mx_lobe_combine_g35<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], w
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_layer_bsdf_p36<S: Simd>(s: S, cl_11: mx_closure<S>, top: BSDF<S>, base: BSDF<S>, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_layer_bsdf_p41<S: Simd>(s: S, cl_11: mx_closure<S>, top: BSDF<S>, base: BSDF<S>, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(9);
     let _e3 = top.throughput;
     let _e6 = tp.f(s, 0);
@@ -5367,14 +5662,14 @@ pub fn mx_layer_bsdf_p36<S: Simd>(s: S, cl_11: mx_closure<S>, top: BSDF<S>, base
     let _e14 = [tp.f(s, 1), tp.f(s, 2), tp.f(s, 3)];
     let _e15 = top.lobe;
     let _e17 = base.lobe;
-    let _e18 = mx_lobe_combine_p35(s, cl_11, _e15, s.splat(1.0f32), _e17, _e6, tp.at::<S>(4));
+    let _e18 = mx_lobe_combine_p40(s, cl_11, _e15, s.splat(1.0f32), _e17, _e6, tp.at::<S>(4));
     let _e19 = BSDF { response: _e11, throughput: _e14, lobe: _e18 };
     return _e19;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_layer_bsdf_g36<S: Simd>(s: S, cl_11: mx_closure<S>, top: BSDF<S>, base: BSDF<S>, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_layer_bsdf_g41<S: Simd>(s: S, cl_11: mx_closure<S>, top: BSDF<S>, base: BSDF<S>, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 9 * S::LANES, "the tape is shorter than the pass's slots");
     let _e3 = top.throughput;
     let _e4 = mx_luminance_rgb(s, _e3);
@@ -5387,14 +5682,14 @@ pub fn mx_layer_bsdf_g36<S: Simd>(s: S, cl_11: mx_closure<S>, top: BSDF<S>, base
     uplift_simd::tape::put(s, tg, 1, _e14[0]);
     uplift_simd::tape::put(s, tg, 2, _e14[1]);
     uplift_simd::tape::put(s, tg, 3, _e14[2]);
-    let _e18 = mx_lobe_combine_g35(s, cl_11, [s.splat(0.0); 4], s.splat(1.0f32), [s.splat(0.0); 4], _e6, &mut tg[4 * S::LANES..]);
+    let _e18 = mx_lobe_combine_g40(s, cl_11, [s.splat(0.0); 4], s.splat(1.0f32), [s.splat(0.0); 4], _e6, &mut tg[4 * S::LANES..]);
     let _e19 = BSDF { response: [s.splat(0.0); 3], throughput: _e14, lobe: _e18 };
     return _e19;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_pattern_p37<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>, tp: uplift_simd::tape::TapeRow<'_>) -> MxOutputs<S> {
+pub fn mx_pattern_p42<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>, tp: uplift_simd::tape::TapeRow<'_>) -> MxOutputs<S> {
     let tp = tp.fit::<S>(1125);
     let _e3 = inputs.wv;
     let _e4 = inputs.wl;
@@ -5427,58 +5722,60 @@ pub fn mx_pattern_p37<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
     let _e44 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e45 = inputs.coat_ior;
     let _e48 = [s.splat(0.01f32), s.splat(0.01f32)];
+    let _e50 = inputs.coat_film_thickness;
+    let _e51 = inputs.coat_film_ior;
     let _e52 = geom_1.normal_world;
     let _e53 = geom_1.tangent_world;
-    let _e56 = mx_dielectric_bsdf_p17(s, _e39, _e40, _e44, _e45, _e48, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e52, _e53, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(85));
+    let _e56 = mx_dielectric_bsdf_p17(s, _e39, _e40, _e44, _e45, _e48, s.first_lanes(0), _e50, _e51, _e52, _e53, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(85));
     let _e58 = mx_closure_for_lobe(s, _e7, s.splat_u(2407334386u32));
     let _e63 = geom_1.normal_world;
     let _e64 = geom_1.tangent_world;
-    let _e66 = mx_conductor_bsdf_p28(s, _e58, s.splat(1.0f32), _e14, _e15, _e18, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e63, _e64, s.splat_i(0i32), tp.at::<S>(220));
+    let _e66 = mx_conductor_bsdf_p30(s, _e58, s.splat(1.0f32), _e14, _e15, _e18, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e63, _e64, s.splat_i(0i32), tp.at::<S>(220));
     let _e68 = mx_closure_for_lobe(s, _e7, s.splat_u(4181856127u32));
     let _e73 = geom_1.normal_world;
     let _e74 = geom_1.tangent_world;
-    let _e76 = mx_conductor_bsdf_p28(s, _e68, s.splat(1.0f32), _e14, _e15, _e21, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e73, _e74, s.splat_i(0i32), tp.at::<S>(406));
+    let _e76 = mx_conductor_bsdf_p30(s, _e68, s.splat(1.0f32), _e14, _e15, _e21, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e73, _e74, s.splat_i(0i32), tp.at::<S>(406));
     let _e78 = mx_closure_for_lobe(s, _e7, s.splat_u(100289679u32));
     let _e79 = inputs.haze_weight;
-    let _e80 = mx_mix_bsdf_p30(s, _e78, _e66, _e76, _e79, tp.at::<S>(592));
+    let _e80 = mx_mix_bsdf_p32(s, _e78, _e66, _e76, _e79, tp.at::<S>(592));
     let _e82 = mx_closure_for_lobe(s, _e7, s.splat_u(257921297u32));
     let _e87 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e88 = inputs.specular_ior;
     let _e92 = geom_1.normal_world;
     let _e93 = geom_1.tangent_world;
-    let _e96 = mx_dielectric_bsdf_p31(s, _e82, s.splat(1.0f32), _e87, _e88, _e18, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e92, _e93, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(602));
+    let _e96 = mx_dielectric_bsdf_p36(s, _e82, s.splat(1.0f32), _e87, _e88, _e18, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e92, _e93, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(602));
     let _e98 = mx_closure_for_lobe(s, _e7, s.splat_u(2697017240u32));
     let _e103 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e104 = inputs.specular_ior;
     let _e108 = geom_1.normal_world;
     let _e109 = geom_1.tangent_world;
-    let _e112 = mx_dielectric_bsdf_p31(s, _e98, s.splat(1.0f32), _e103, _e104, _e21, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e108, _e109, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(737));
+    let _e112 = mx_dielectric_bsdf_p36(s, _e98, s.splat(1.0f32), _e103, _e104, _e21, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e108, _e109, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(737));
     let _e114 = mx_closure_for_lobe(s, _e7, s.splat_u(2175277739u32));
     let _e115 = inputs.haze_weight;
-    let _e116 = mx_mix_bsdf_p32(s, _e114, _e96, _e112, _e115, tp.at::<S>(872));
+    let _e116 = mx_mix_bsdf_p37(s, _e114, _e96, _e112, _e115, tp.at::<S>(872));
     let _e118 = mx_closure_for_lobe(s, _e7, s.splat_u(2140428231u32));
     let _e119 = inputs.inner_weight;
     let _e120 = inputs.scatter_color;
     let _e121 = geom_1.normal_world;
-    let _e123 = mx_sheen_bsdf_p33(s, _e118, _e119, _e120, _e24, _e121, s.splat_i(0i32), tp.at::<S>(882));
+    let _e123 = mx_sheen_bsdf_p38(s, _e118, _e119, _e120, _e24, _e121, s.splat_i(0i32), tp.at::<S>(882));
     let _e125 = mx_closure_for_lobe(s, _e7, s.splat_u(3452003231u32));
     let _e126 = inputs.subcutaneous_weight;
     let _e127 = inputs.scatter_color;
     let _e128 = inputs.specular_ior;
     let _e132 = geom_1.normal_world;
     let _e133 = geom_1.tangent_world;
-    let _e136 = mx_dielectric_bsdf_p34(s, _e125, _e126, _e127, _e128, _e27, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e132, _e133, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(944));
+    let _e136 = mx_dielectric_bsdf_p39(s, _e125, _e126, _e127, _e128, _e27, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e132, _e133, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(944));
     let _e138 = mx_closure_for_lobe(s, _e7, s.splat_u(2774413006u32));
-    let _e139 = mx_layer_bsdf_p36(s, _e138, _e123, _e136, tp.at::<S>(1079));
+    let _e139 = mx_layer_bsdf_p41(s, _e138, _e123, _e136, tp.at::<S>(1079));
     let _e141 = mx_closure_for_lobe(s, _e7, s.splat_u(3262708222u32));
-    let _e142 = mx_layer_bsdf_p36(s, _e141, _e116, _e139, tp.at::<S>(1088));
+    let _e142 = mx_layer_bsdf_p41(s, _e141, _e116, _e139, tp.at::<S>(1088));
     let _e144 = mx_closure_for_lobe(s, _e7, s.splat_u(4238484515u32));
     let _e145 = inputs.metalness;
-    let _e146 = mx_mix_bsdf_p32(s, _e144, _e80, _e142, _e145, tp.at::<S>(1097));
+    let _e146 = mx_mix_bsdf_p37(s, _e144, _e80, _e142, _e145, tp.at::<S>(1097));
     let _e148 = mx_closure_for_lobe(s, _e7, s.splat_u(211147556u32));
-    let _e149 = mx_layer_bsdf_p36(s, _e148, _e56, _e146, tp.at::<S>(1107));
+    let _e149 = mx_layer_bsdf_p41(s, _e148, _e56, _e146, tp.at::<S>(1107));
     let _e151 = mx_closure_for_lobe(s, _e7, s.splat_u(2233972744u32));
-    let _e152 = mx_layer_bsdf_p36(s, _e151, _e37, _e149, tp.at::<S>(1116));
+    let _e152 = mx_layer_bsdf_p41(s, _e151, _e37, _e149, tp.at::<S>(1116));
     let _e153 = _e152.response;
     let _e154 = [tp.f(s, 14), tp.f(s, 15), tp.f(s, 16)];
     let _e155 = MxOutputs { response: _e153, throughput: _e154 };
@@ -5487,7 +5784,7 @@ pub fn mx_pattern_p37<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_pattern_g37<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>, tg: &mut [f32]) -> MxOutputs<S> {
+pub fn mx_pattern_g42<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>, tg: &mut [f32]) -> MxOutputs<S> {
     assert!(tg.len() >= 1125 * S::LANES, "the tape is shorter than the pass's slots");
     let _e3 = inputs.wv;
     let _e6 = [s.splat(0.0f32); 3];
@@ -5534,58 +5831,60 @@ pub fn mx_pattern_g37<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
     let _e44 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e45 = inputs.coat_ior;
     let _e48 = [s.splat(0.01f32), s.splat(0.01f32)];
+    let _e50 = inputs.coat_film_thickness;
+    let _e51 = inputs.coat_film_ior;
     let _e52 = geom_1.normal_world;
     let _e53 = geom_1.tangent_world;
-    let _e56 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g17(s, _e39, _e40, _e44, _e45, _e48, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e52, _e53, s.splat_i(0i32), s.splat_i(0i32), &mut tg[85 * S::LANES..]));
+    let _e56 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g17(s, _e39, _e40, _e44, _e45, _e48, s.first_lanes(0), _e50, _e51, _e52, _e53, s.splat_i(0i32), s.splat_i(0i32), &mut tg[85 * S::LANES..]));
     let _e58 = mx_closure_for_lobe(s, _e7, s.splat_u(2407334386u32));
     let _e63 = geom_1.normal_world;
     let _e64 = geom_1.tangent_world;
-    let _e66 = s.outline(#[inline(always)] || mx_conductor_bsdf_g28(s, _e58, s.splat(1.0f32), _e14, _e15, _e18, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e63, _e64, s.splat_i(0i32), &mut tg[220 * S::LANES..]));
+    let _e66 = s.outline(#[inline(always)] || mx_conductor_bsdf_g30(s, _e58, s.splat(1.0f32), _e14, _e15, _e18, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e63, _e64, s.splat_i(0i32), &mut tg[220 * S::LANES..]));
     let _e68 = mx_closure_for_lobe(s, _e7, s.splat_u(4181856127u32));
     let _e73 = geom_1.normal_world;
     let _e74 = geom_1.tangent_world;
-    let _e76 = s.outline(#[inline(always)] || mx_conductor_bsdf_g28(s, _e68, s.splat(1.0f32), _e14, _e15, _e21, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e73, _e74, s.splat_i(0i32), &mut tg[406 * S::LANES..]));
+    let _e76 = s.outline(#[inline(always)] || mx_conductor_bsdf_g30(s, _e68, s.splat(1.0f32), _e14, _e15, _e21, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e73, _e74, s.splat_i(0i32), &mut tg[406 * S::LANES..]));
     let _e78 = mx_closure_for_lobe(s, _e7, s.splat_u(100289679u32));
     let _e79 = inputs.haze_weight;
-    let _e80 = mx_mix_bsdf_g30(s, _e78, _e66, _e76, _e79, &mut tg[592 * S::LANES..]);
+    let _e80 = mx_mix_bsdf_g32(s, _e78, _e66, _e76, _e79, &mut tg[592 * S::LANES..]);
     let _e82 = mx_closure_for_lobe(s, _e7, s.splat_u(257921297u32));
     let _e87 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e88 = inputs.specular_ior;
     let _e92 = geom_1.normal_world;
     let _e93 = geom_1.tangent_world;
-    let _e96 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g31(s, _e82, s.splat(1.0f32), _e87, _e88, _e18, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e92, _e93, s.splat_i(0i32), s.splat_i(0i32), &mut tg[602 * S::LANES..]));
+    let _e96 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g36(s, _e82, s.splat(1.0f32), _e87, _e88, _e18, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e92, _e93, s.splat_i(0i32), s.splat_i(0i32), &mut tg[602 * S::LANES..]));
     let _e98 = mx_closure_for_lobe(s, _e7, s.splat_u(2697017240u32));
     let _e103 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e104 = inputs.specular_ior;
     let _e108 = geom_1.normal_world;
     let _e109 = geom_1.tangent_world;
-    let _e112 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g31(s, _e98, s.splat(1.0f32), _e103, _e104, _e21, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e108, _e109, s.splat_i(0i32), s.splat_i(0i32), &mut tg[737 * S::LANES..]));
+    let _e112 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g36(s, _e98, s.splat(1.0f32), _e103, _e104, _e21, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e108, _e109, s.splat_i(0i32), s.splat_i(0i32), &mut tg[737 * S::LANES..]));
     let _e114 = mx_closure_for_lobe(s, _e7, s.splat_u(2175277739u32));
     let _e115 = inputs.haze_weight;
-    let _e116 = mx_mix_bsdf_g32(s, _e114, _e96, _e112, _e115, &mut tg[872 * S::LANES..]);
+    let _e116 = mx_mix_bsdf_g37(s, _e114, _e96, _e112, _e115, &mut tg[872 * S::LANES..]);
     let _e118 = mx_closure_for_lobe(s, _e7, s.splat_u(2140428231u32));
     let _e119 = inputs.inner_weight;
     let _e120 = inputs.scatter_color;
     let _e121 = geom_1.normal_world;
-    let _e123 = s.outline(#[inline(always)] || mx_sheen_bsdf_g33(s, _e118, _e119, _e120, _e24, _e121, s.splat_i(0i32), &mut tg[882 * S::LANES..]));
+    let _e123 = s.outline(#[inline(always)] || mx_sheen_bsdf_g38(s, _e118, _e119, _e120, _e24, _e121, s.splat_i(0i32), &mut tg[882 * S::LANES..]));
     let _e125 = mx_closure_for_lobe(s, _e7, s.splat_u(3452003231u32));
     let _e126 = inputs.subcutaneous_weight;
     let _e127 = inputs.scatter_color;
     let _e128 = inputs.specular_ior;
     let _e132 = geom_1.normal_world;
     let _e133 = geom_1.tangent_world;
-    let _e136 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g34(s, _e125, _e126, _e127, _e128, _e27, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e132, _e133, s.splat_i(0i32), s.splat_i(0i32), &mut tg[944 * S::LANES..]));
+    let _e136 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g39(s, _e125, _e126, _e127, _e128, _e27, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e132, _e133, s.splat_i(0i32), s.splat_i(0i32), &mut tg[944 * S::LANES..]));
     let _e138 = mx_closure_for_lobe(s, _e7, s.splat_u(2774413006u32));
-    let _e139 = mx_layer_bsdf_g36(s, _e138, _e123, _e136, &mut tg[1079 * S::LANES..]);
+    let _e139 = mx_layer_bsdf_g41(s, _e138, _e123, _e136, &mut tg[1079 * S::LANES..]);
     let _e141 = mx_closure_for_lobe(s, _e7, s.splat_u(3262708222u32));
-    let _e142 = mx_layer_bsdf_g36(s, _e141, _e116, _e139, &mut tg[1088 * S::LANES..]);
+    let _e142 = mx_layer_bsdf_g41(s, _e141, _e116, _e139, &mut tg[1088 * S::LANES..]);
     let _e144 = mx_closure_for_lobe(s, _e7, s.splat_u(4238484515u32));
     let _e145 = inputs.metalness;
-    let _e146 = mx_mix_bsdf_g32(s, _e144, _e80, _e142, _e145, &mut tg[1097 * S::LANES..]);
+    let _e146 = mx_mix_bsdf_g37(s, _e144, _e80, _e142, _e145, &mut tg[1097 * S::LANES..]);
     let _e148 = mx_closure_for_lobe(s, _e7, s.splat_u(211147556u32));
-    let _e149 = mx_layer_bsdf_g36(s, _e148, _e56, _e146, &mut tg[1107 * S::LANES..]);
+    let _e149 = mx_layer_bsdf_g41(s, _e148, _e56, _e146, &mut tg[1107 * S::LANES..]);
     let _e151 = mx_closure_for_lobe(s, _e7, s.splat_u(2233972744u32));
-    let _e152 = mx_layer_bsdf_g36(s, _e151, _e37, _e149, &mut tg[1116 * S::LANES..]);
+    let _e152 = mx_layer_bsdf_g41(s, _e151, _e37, _e149, &mut tg[1116 * S::LANES..]);
     let _e154 = _e152.throughput;
     uplift_simd::tape::put(s, tg, 14, _e154[0]);
     uplift_simd::tape::put(s, tg, 15, _e154[1]);
@@ -5599,7 +5898,7 @@ pub fn mx_pattern_g37<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
 /// space (3 each). Bitangents are normal × tangent.
 pub const GEOMETRY_COLUMNS: usize = 20;
 /// Columns of `inputs`: the interface inputs' components.
-pub const INPUT_COLUMNS: usize = 28;
+pub const INPUT_COLUMNS: usize = 30;
 /// Columns of `outputs`: the outputs' components.
 pub const OUTPUT_COLUMNS: usize = 6;
 
@@ -5665,14 +5964,16 @@ pub fn mx_pattern_grouped_packets<S: Simd>(s: S, geom: &[&[f32]], inputs: &[&[f3
                 fuzz_thickness: mx_xg(18),
                 coat_weight: mx_xg(19),
                 coat_ior: mx_xg(20),
-                inner_weight: mx_xg(21),
-                inner_thickness: mx_xg(22),
-                scatter_color: [mx_xg(23), mx_xg(24), mx_xg(25)],
-                subcutaneous_weight: mx_xg(26),
-                subcutaneous_roughness: mx_xg(27),
+                coat_film_thickness: mx_xg(21),
+                coat_film_ior: mx_xg(22),
+                inner_weight: mx_xg(23),
+                inner_thickness: mx_xg(24),
+                scatter_color: [mx_xg(25), mx_xg(26), mx_xg(27)],
+                subcutaneous_weight: mx_xg(28),
+                subcutaneous_roughness: mx_xg(29),
             };
             // The group pass runs once per packet of groups: a function of its own per level.
-            let _ = s.outline(#[inline(always)] || mx_pattern_g37(s, mx_geom, mx_inputs, &mut mx_tape));
+            let _ = s.outline(#[inline(always)] || mx_pattern_g42(s, mx_geom, mx_inputs, &mut mx_tape));
         }
         for mx_j in 0..mx_g1 - mx_g0 {
             let mx_group = mx_g0 + mx_j;
@@ -5710,13 +6011,15 @@ pub fn mx_pattern_grouped_packets<S: Simd>(s: S, geom: &[&[f32]], inputs: &[&[f3
                     fuzz_thickness: mx_xs(18),
                     coat_weight: mx_xs(19),
                     coat_ior: mx_xs(20),
-                    inner_weight: mx_xs(21),
-                    inner_thickness: mx_xs(22),
-                    scatter_color: [mx_xs(23), mx_xs(24), mx_xs(25)],
-                    subcutaneous_weight: mx_xs(26),
-                    subcutaneous_roughness: mx_xs(27),
+                    coat_film_thickness: mx_xs(21),
+                    coat_film_ior: mx_xs(22),
+                    inner_weight: mx_xs(23),
+                    inner_thickness: mx_xs(24),
+                    scatter_color: [mx_xs(25), mx_xs(26), mx_xs(27)],
+                    subcutaneous_weight: mx_xs(28),
+                    subcutaneous_roughness: mx_xs(29),
                 };
-                let mx_out = mx_pattern_p37(s, mx_geom, mx_inputs, mx_row);
+                let mx_out = mx_pattern_p42(s, mx_geom, mx_inputs, mx_row);
                 s.store_partial(mx_out.response[0], &mut outputs[0][mx_start..mx_end]);
                 s.store_partial(mx_out.response[1], &mut outputs[1][mx_start..mx_end]);
                 s.store_partial(mx_out.response[2], &mut outputs[2][mx_start..mx_end]);

@@ -108,6 +108,8 @@ pub struct MxInputs {
     pub fuzz_thickness: f32,
     pub coat_weight: f32,
     pub coat_ior: f32,
+    pub coat_film_thickness: f32,
+    pub coat_film_ior: f32,
     pub inner_weight: f32,
     pub inner_thickness: f32,
     pub scatter_color: Vec3,
@@ -1061,77 +1063,77 @@ pub fn mx_layer_bsdf(cl_11: mx_closure, top: BSDF, base: BSDF) -> BSDF {
 #[inline(always)]
 pub fn mx_pattern(geom_1: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let cl2_ = mx_closure_new(2i32, inputs.wv, Vec3::new(0.0f32, 0.0f32, 1.0f32), inputs.u);
-    let v19_ = mx_max_float(inputs.fuzz_thickness, 0.02f32);
+    let v21_ = mx_max_float(inputs.fuzz_thickness, 0.02f32);
     let v29_ = mx_artistic_ior(inputs.reflectivity, inputs.edge_color);
     let v30_ = v29_.ior;
     let v31_ = v29_.extinction;
     let v32_ = mx_combine2_vector2_(inputs.haze_roughness, inputs.haze_roughness);
-    let v34_ = mx_combine2_vector2_(inputs.core_roughness, inputs.core_roughness);
-    let v40_ = mx_max_float(inputs.inner_thickness, 0.02f32);
-    let v42_ = mx_combine2_vector2_(inputs.subcutaneous_roughness, inputs.subcutaneous_roughness);
+    let v36_ = mx_combine2_vector2_(inputs.core_roughness, inputs.core_roughness);
+    let v42_ = mx_max_float(inputs.inner_thickness, 0.02f32);
+    let v44_ = mx_combine2_vector2_(inputs.subcutaneous_roughness, inputs.subcutaneous_roughness);
     let _e31 = mx_closure_for_lobe(cl2_, 575837063u32);
-    let v21_0_ = mx_sheen_bsdf(_e31, inputs.fuzz_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), v19_, geom_1.normal_world, 0i32);
+    let v23_0_ = mx_sheen_bsdf(_e31, inputs.fuzz_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), v21_, geom_1.normal_world, 0i32);
     let _e41 = mx_closure_for_lobe(cl2_, 711050092u32);
-    let v27_0_ = mx_dielectric_bsdf(_e41, inputs.coat_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.coat_ior, Vec2::new(0.01f32, 0.01f32), false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v27_0_ = mx_dielectric_bsdf(_e41, inputs.coat_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.coat_ior, Vec2::new(0.01f32, 0.01f32), false, inputs.coat_film_thickness, inputs.coat_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e60 = mx_closure_for_lobe(cl2_, 2407334386u32);
-    let v33_0_ = mx_conductor_bsdf(_e60, 1.0f32, v30_, v31_, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
+    let v35_0_ = mx_conductor_bsdf(_e60, 1.0f32, v30_, v31_, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
     let _e70 = mx_closure_for_lobe(cl2_, 4181856127u32);
-    let v35_0_ = mx_conductor_bsdf(_e70, 1.0f32, v30_, v31_, v34_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
+    let v37_0_ = mx_conductor_bsdf(_e70, 1.0f32, v30_, v31_, v36_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
     let _e80 = mx_closure_for_lobe(cl2_, 100289679u32);
-    let v36_0_ = mx_mix_bsdf(_e80, v33_0_, v35_0_, inputs.haze_weight);
+    let v38_0_ = mx_mix_bsdf(_e80, v35_0_, v37_0_, inputs.haze_weight);
     let _e84 = mx_closure_for_lobe(cl2_, 257921297u32);
-    let v37_0_ = mx_dielectric_bsdf(_e84, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v39_0_ = mx_dielectric_bsdf(_e84, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e100 = mx_closure_for_lobe(cl2_, 2697017240u32);
-    let v38_0_ = mx_dielectric_bsdf(_e100, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v34_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v40_0_ = mx_dielectric_bsdf(_e100, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v36_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e116 = mx_closure_for_lobe(cl2_, 2175277739u32);
-    let v39_0_ = mx_mix_bsdf(_e116, v37_0_, v38_0_, inputs.haze_weight);
+    let v41_0_ = mx_mix_bsdf(_e116, v39_0_, v40_0_, inputs.haze_weight);
     let _e120 = mx_closure_for_lobe(cl2_, 2140428231u32);
-    let v41_0_ = mx_sheen_bsdf(_e120, inputs.inner_weight, inputs.scatter_color, v40_, geom_1.normal_world, 0i32);
+    let v43_0_ = mx_sheen_bsdf(_e120, inputs.inner_weight, inputs.scatter_color, v42_, geom_1.normal_world, 0i32);
     let _e127 = mx_closure_for_lobe(cl2_, 3452003231u32);
-    let v43_0_ = mx_dielectric_bsdf(_e127, inputs.subcutaneous_weight, inputs.scatter_color, inputs.specular_ior, v42_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v45_0_ = mx_dielectric_bsdf(_e127, inputs.subcutaneous_weight, inputs.scatter_color, inputs.specular_ior, v44_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e140 = mx_closure_for_lobe(cl2_, 2774413006u32);
-    let v44_0_ = mx_layer_bsdf(_e140, v41_0_, v43_0_);
+    let v46_0_ = mx_layer_bsdf(_e140, v43_0_, v45_0_);
     let _e143 = mx_closure_for_lobe(cl2_, 3262708222u32);
-    let v45_0_ = mx_layer_bsdf(_e143, v39_0_, v44_0_);
+    let v47_0_ = mx_layer_bsdf(_e143, v41_0_, v46_0_);
     let _e146 = mx_closure_for_lobe(cl2_, 4238484515u32);
-    let v46_0_ = mx_mix_bsdf(_e146, v36_0_, v45_0_, inputs.metalness);
+    let v48_0_ = mx_mix_bsdf(_e146, v38_0_, v47_0_, inputs.metalness);
     let _e150 = mx_closure_for_lobe(cl2_, 211147556u32);
-    let v47_0_ = mx_layer_bsdf(_e150, v27_0_, v46_0_);
+    let v49_0_ = mx_layer_bsdf(_e150, v27_0_, v48_0_);
     let _e153 = mx_closure_for_lobe(cl2_, 2233972744u32);
-    let v48_0_ = mx_layer_bsdf(_e153, v21_0_, v47_0_);
-    let cl3_ = mx_closure_new(3i32, cl2_.wv, Vec3::new(v48_0_.lobe.x, v48_0_.lobe.y, v48_0_.lobe.z), cl2_.u);
+    let v50_0_ = mx_layer_bsdf(_e153, v23_0_, v49_0_);
+    let cl3_ = mx_closure_new(3i32, cl2_.wv, Vec3::new(v50_0_.lobe.x, v50_0_.lobe.y, v50_0_.lobe.z), cl2_.u);
     let _e162 = mx_closure_for_lobe(cl3_, 575837063u32);
-    let v21_1_ = mx_sheen_bsdf(_e162, inputs.fuzz_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), v19_, geom_1.normal_world, 0i32);
+    let v23_1_ = mx_sheen_bsdf(_e162, inputs.fuzz_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), v21_, geom_1.normal_world, 0i32);
     let _e172 = mx_closure_for_lobe(cl3_, 711050092u32);
-    let v27_1_ = mx_dielectric_bsdf(_e172, inputs.coat_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.coat_ior, Vec2::new(0.01f32, 0.01f32), false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v27_1_ = mx_dielectric_bsdf(_e172, inputs.coat_weight, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.coat_ior, Vec2::new(0.01f32, 0.01f32), false, inputs.coat_film_thickness, inputs.coat_film_ior, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e191 = mx_closure_for_lobe(cl3_, 2407334386u32);
-    let v33_1_ = mx_conductor_bsdf(_e191, 1.0f32, v30_, v31_, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
+    let v35_1_ = mx_conductor_bsdf(_e191, 1.0f32, v30_, v31_, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
     let _e201 = mx_closure_for_lobe(cl3_, 4181856127u32);
-    let v35_1_ = mx_conductor_bsdf(_e201, 1.0f32, v30_, v31_, v34_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
+    let v37_1_ = mx_conductor_bsdf(_e201, 1.0f32, v30_, v31_, v36_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32);
     let _e211 = mx_closure_for_lobe(cl3_, 100289679u32);
-    let v36_1_ = mx_mix_bsdf(_e211, v33_1_, v35_1_, inputs.haze_weight);
+    let v38_1_ = mx_mix_bsdf(_e211, v35_1_, v37_1_, inputs.haze_weight);
     let _e215 = mx_closure_for_lobe(cl3_, 257921297u32);
-    let v37_1_ = mx_dielectric_bsdf(_e215, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v39_1_ = mx_dielectric_bsdf(_e215, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v32_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e231 = mx_closure_for_lobe(cl3_, 2697017240u32);
-    let v38_1_ = mx_dielectric_bsdf(_e231, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v34_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v40_1_ = mx_dielectric_bsdf(_e231, 1.0f32, Vec3::new(1.0f32, 1.0f32, 1.0f32), inputs.specular_ior, v36_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e247 = mx_closure_for_lobe(cl3_, 2175277739u32);
-    let v39_1_ = mx_mix_bsdf(_e247, v37_1_, v38_1_, inputs.haze_weight);
+    let v41_1_ = mx_mix_bsdf(_e247, v39_1_, v40_1_, inputs.haze_weight);
     let _e251 = mx_closure_for_lobe(cl3_, 2140428231u32);
-    let v41_1_ = mx_sheen_bsdf(_e251, inputs.inner_weight, inputs.scatter_color, v40_, geom_1.normal_world, 0i32);
+    let v43_1_ = mx_sheen_bsdf(_e251, inputs.inner_weight, inputs.scatter_color, v42_, geom_1.normal_world, 0i32);
     let _e258 = mx_closure_for_lobe(cl3_, 3452003231u32);
-    let v43_1_ = mx_dielectric_bsdf(_e258, inputs.subcutaneous_weight, inputs.scatter_color, inputs.specular_ior, v42_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
+    let v45_1_ = mx_dielectric_bsdf(_e258, inputs.subcutaneous_weight, inputs.scatter_color, inputs.specular_ior, v44_, false, 0.0f32, 1.5f32, geom_1.normal_world, geom_1.tangent_world, 0i32, 0i32);
     let _e271 = mx_closure_for_lobe(cl3_, 2774413006u32);
-    let v44_1_ = mx_layer_bsdf(_e271, v41_1_, v43_1_);
+    let v46_1_ = mx_layer_bsdf(_e271, v43_1_, v45_1_);
     let _e274 = mx_closure_for_lobe(cl3_, 3262708222u32);
-    let v45_1_ = mx_layer_bsdf(_e274, v39_1_, v44_1_);
+    let v47_1_ = mx_layer_bsdf(_e274, v41_1_, v46_1_);
     let _e277 = mx_closure_for_lobe(cl3_, 4238484515u32);
-    let v46_1_ = mx_mix_bsdf(_e277, v36_1_, v45_1_, inputs.metalness);
+    let v48_1_ = mx_mix_bsdf(_e277, v38_1_, v47_1_, inputs.metalness);
     let _e281 = mx_closure_for_lobe(cl3_, 211147556u32);
-    let v47_1_ = mx_layer_bsdf(_e281, v27_1_, v46_1_);
+    let v49_1_ = mx_layer_bsdf(_e281, v27_1_, v48_1_);
     let _e284 = mx_closure_for_lobe(cl3_, 2233972744u32);
-    let v48_1_ = mx_layer_bsdf(_e284, v21_1_, v47_1_);
-    let _e287 = mx_closure_pdf(v48_1_);
-    MxOutputs { wl: cl3_.wl, pdf: _e287, response: v48_1_.response, throughput: v48_1_.throughput }
+    let v50_1_ = mx_layer_bsdf(_e284, v23_1_, v49_1_);
+    let _e287 = mx_closure_pdf(v50_1_);
+    MxOutputs { wl: cl3_.wl, pdf: _e287, response: v50_1_.response, throughput: v50_1_.throughput }
 }
 
 #[inline(always)]
@@ -1173,13 +1175,13 @@ const fn wgsl_vec4_from_vec3_f32(a: Vec3, b: f32) -> Vec4 {
 /// space (3 each). Bitangents are normal × tangent.
 pub const GEOMETRY_COLUMNS: usize = 20;
 /// Columns of `inputs`: the interface inputs' components.
-pub const INPUT_COLUMNS: usize = 28;
+pub const INPUT_COLUMNS: usize = 30;
 /// Columns of `outputs`: the outputs' components.
 pub const OUTPUT_COLUMNS: usize = 10;
 /// Textures the kernel reads through `MxTextures`, indices `0..TEXTURE_COUNT`.
 pub const TEXTURE_COUNT: usize = 0;
 /// Interface inputs: (name, first column, components).
-pub const INPUTS: &[(&str, usize, usize)] = &[("wv", 0, 3), ("u", 3, 3), ("reflectivity", 6, 3), ("edge_color", 9, 3), ("metalness", 12, 1), ("core_roughness", 13, 1), ("haze_roughness", 14, 1), ("haze_weight", 15, 1), ("specular_ior", 16, 1), ("fuzz_weight", 17, 1), ("fuzz_thickness", 18, 1), ("coat_weight", 19, 1), ("coat_ior", 20, 1), ("inner_weight", 21, 1), ("inner_thickness", 22, 1), ("scatter_color", 23, 3), ("subcutaneous_weight", 26, 1), ("subcutaneous_roughness", 27, 1)];
+pub const INPUTS: &[(&str, usize, usize)] = &[("wv", 0, 3), ("u", 3, 3), ("reflectivity", 6, 3), ("edge_color", 9, 3), ("metalness", 12, 1), ("core_roughness", 13, 1), ("haze_roughness", 14, 1), ("haze_weight", 15, 1), ("specular_ior", 16, 1), ("fuzz_weight", 17, 1), ("fuzz_thickness", 18, 1), ("coat_weight", 19, 1), ("coat_ior", 20, 1), ("coat_film_thickness", 21, 1), ("coat_film_ior", 22, 1), ("inner_weight", 23, 1), ("inner_thickness", 24, 1), ("scatter_color", 25, 3), ("subcutaneous_weight", 28, 1), ("subcutaneous_roughness", 29, 1)];
 /// Outputs: (name, first column, components).
 pub const OUTPUTS: &[(&str, usize, usize)] = &[("wl", 0, 3), ("pdf", 3, 1), ("response", 4, 3), ("throughput", 7, 3)];
 
@@ -1255,6 +1257,8 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
     let mx_x25 = &inputs[25][..mx_n];
     let mx_x26 = &inputs[26][..mx_n];
     let mx_x27 = &inputs[27][..mx_n];
+    let mx_x28 = &inputs[28][..mx_n];
+    let mx_x29 = &inputs[29][..mx_n];
     let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5, mx_o6, mx_o7, mx_o8, mx_o9] = outputs else { unreachable!() };
     let mx_o0 = &mut mx_o0[..mx_n];
     let mx_o1 = &mut mx_o1[..mx_n];
@@ -1320,6 +1324,8 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
         let mx_x25 = &mx_x25[mx_start..mx_end];
         let mx_x26 = &mx_x26[mx_start..mx_end];
         let mx_x27 = &mx_x27[mx_start..mx_end];
+        let mx_x28 = &mx_x28[mx_start..mx_end];
+        let mx_x29 = &mx_x29[mx_start..mx_end];
         let mut mx_chunk = [[0.0f32; MX_CHUNK]; OUTPUT_COLUMNS];
         {
             let [mx_o0, mx_o1, mx_o2, mx_o3, mx_o4, mx_o5, mx_o6, mx_o7, mx_o8, mx_o9] = &mut mx_chunk;
@@ -1349,11 +1355,13 @@ pub fn mx_pattern_batch(geom: &[&[f32]], inputs: &[&[f32]], outputs: &mut [&mut 
                     fuzz_thickness: mx_x18[mx_i],
                     coat_weight: mx_x19[mx_i],
                     coat_ior: mx_x20[mx_i],
-                    inner_weight: mx_x21[mx_i],
-                    inner_thickness: mx_x22[mx_i],
-                    scatter_color: Vec3::new(mx_x23[mx_i], mx_x24[mx_i], mx_x25[mx_i]),
-                    subcutaneous_weight: mx_x26[mx_i],
-                    subcutaneous_roughness: mx_x27[mx_i],
+                    coat_film_thickness: mx_x21[mx_i],
+                    coat_film_ior: mx_x22[mx_i],
+                    inner_weight: mx_x23[mx_i],
+                    inner_thickness: mx_x24[mx_i],
+                    scatter_color: Vec3::new(mx_x25[mx_i], mx_x26[mx_i], mx_x27[mx_i]),
+                    subcutaneous_weight: mx_x28[mx_i],
+                    subcutaneous_roughness: mx_x29[mx_i],
                 };
                 let mx_out = mx_pattern(mx_geom, mx_inputs);
                 mx_o0[mx_i] = mx_out.wl.x;

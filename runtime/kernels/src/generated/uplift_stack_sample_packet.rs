@@ -176,6 +176,8 @@ pub struct MxInputs<S: Simd> {
     pub fuzz_thickness: S::F,
     pub coat_weight: S::F,
     pub coat_ior: S::F,
+    pub coat_film_thickness: S::F,
+    pub coat_film_ior: S::F,
     pub inner_weight: S::F,
     pub inner_thickness: S::F,
     pub scatter_color: [S::F; 3],
@@ -187,7 +189,7 @@ impl<S: Simd> MxInputs<S> {
     #[inline(always)]
     #[allow(unused_parens)]
     pub fn select(m: S::M, on: Self, off: Self) -> Self {
-        MxInputs { wv: uplift_simd::vector::select_all::<S, 3>(m, on.wv, off.wv), u: uplift_simd::vector::select_all::<S, 3>(m, on.u, off.u), reflectivity: uplift_simd::vector::select_all::<S, 3>(m, on.reflectivity, off.reflectivity), edge_color: uplift_simd::vector::select_all::<S, 3>(m, on.edge_color, off.edge_color), metalness: m.select(on.metalness, off.metalness), core_roughness: m.select(on.core_roughness, off.core_roughness), haze_roughness: m.select(on.haze_roughness, off.haze_roughness), haze_weight: m.select(on.haze_weight, off.haze_weight), specular_ior: m.select(on.specular_ior, off.specular_ior), fuzz_weight: m.select(on.fuzz_weight, off.fuzz_weight), fuzz_thickness: m.select(on.fuzz_thickness, off.fuzz_thickness), coat_weight: m.select(on.coat_weight, off.coat_weight), coat_ior: m.select(on.coat_ior, off.coat_ior), inner_weight: m.select(on.inner_weight, off.inner_weight), inner_thickness: m.select(on.inner_thickness, off.inner_thickness), scatter_color: uplift_simd::vector::select_all::<S, 3>(m, on.scatter_color, off.scatter_color), subcutaneous_weight: m.select(on.subcutaneous_weight, off.subcutaneous_weight), subcutaneous_roughness: m.select(on.subcutaneous_roughness, off.subcutaneous_roughness) }
+        MxInputs { wv: uplift_simd::vector::select_all::<S, 3>(m, on.wv, off.wv), u: uplift_simd::vector::select_all::<S, 3>(m, on.u, off.u), reflectivity: uplift_simd::vector::select_all::<S, 3>(m, on.reflectivity, off.reflectivity), edge_color: uplift_simd::vector::select_all::<S, 3>(m, on.edge_color, off.edge_color), metalness: m.select(on.metalness, off.metalness), core_roughness: m.select(on.core_roughness, off.core_roughness), haze_roughness: m.select(on.haze_roughness, off.haze_roughness), haze_weight: m.select(on.haze_weight, off.haze_weight), specular_ior: m.select(on.specular_ior, off.specular_ior), fuzz_weight: m.select(on.fuzz_weight, off.fuzz_weight), fuzz_thickness: m.select(on.fuzz_thickness, off.fuzz_thickness), coat_weight: m.select(on.coat_weight, off.coat_weight), coat_ior: m.select(on.coat_ior, off.coat_ior), coat_film_thickness: m.select(on.coat_film_thickness, off.coat_film_thickness), coat_film_ior: m.select(on.coat_film_ior, off.coat_film_ior), inner_weight: m.select(on.inner_weight, off.inner_weight), inner_thickness: m.select(on.inner_thickness, off.inner_thickness), scatter_color: uplift_simd::vector::select_all::<S, 3>(m, on.scatter_color, off.scatter_color), subcutaneous_weight: m.select(on.subcutaneous_weight, off.subcutaneous_weight), subcutaneous_roughness: m.select(on.subcutaneous_roughness, off.subcutaneous_roughness) }
     }
 }
 
@@ -2330,9 +2332,11 @@ pub fn mx_pattern<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>) ->
     let _e46 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e47 = inputs.coat_ior;
     let _e50 = [s.splat(0.01f32), s.splat(0.01f32)];
+    let _e52 = inputs.coat_film_thickness;
+    let _e53 = inputs.coat_film_ior;
     let _e54 = geom_1.normal_world;
     let _e55 = geom_1.tangent_world;
-    let _e58 = s.outline(#[inline(always)] || mx_dielectric_bsdf(s, _e41, _e42, _e46, _e47, _e50, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e54, _e55, s.splat_i(0i32), s.splat_i(0i32)));
+    let _e58 = s.outline(#[inline(always)] || mx_dielectric_bsdf(s, _e41, _e42, _e46, _e47, _e50, s.first_lanes(0), _e52, _e53, _e54, _e55, s.splat_i(0i32), s.splat_i(0i32)));
     let _e60 = mx_closure_for_lobe(s, _e9, s.splat_u(2407334386u32));
     let _e65 = geom_1.normal_world;
     let _e66 = geom_1.tangent_world;
@@ -2397,9 +2401,11 @@ pub fn mx_pattern<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>) ->
     let _e177 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e178 = inputs.coat_ior;
     let _e181 = [s.splat(0.01f32), s.splat(0.01f32)];
+    let _e183 = inputs.coat_film_thickness;
+    let _e184 = inputs.coat_film_ior;
     let _e185 = geom_1.normal_world;
     let _e186 = geom_1.tangent_world;
-    let _e189 = s.outline(#[inline(always)] || mx_dielectric_bsdf(s, _e172, _e173, _e177, _e178, _e181, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e185, _e186, s.splat_i(0i32), s.splat_i(0i32)));
+    let _e189 = s.outline(#[inline(always)] || mx_dielectric_bsdf(s, _e172, _e173, _e177, _e178, _e181, s.first_lanes(0), _e183, _e184, _e185, _e186, s.splat_i(0i32), s.splat_i(0i32)));
     let _e191 = mx_closure_for_lobe(s, _e160, s.splat_u(2407334386u32));
     let _e196 = geom_1.normal_world;
     let _e197 = geom_1.tangent_world;
@@ -5952,67 +5958,26 @@ pub fn mx_fresnel_conductor_g41<S: Simd>(s: S, cos_theta_7: S::F, n_5: [S::F; 3]
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_conductor_polarized_p42<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S::F; 3], k: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
-    let tp = tp.fit::<S>(6);
-    let _e5 = cos_theta_2.max(s.splat(0.0f32)).min(s.splat(1.0f32));
-    let _e6 = (_e5 * _e5);
-    let _e8 = (-_e5).mul_add(_e5, s.splat(1.0f32));
-    let _e11 = [tp.f(s, 0), tp.f(s, 1), tp.f(s, 2)];
-    let _e12 = [_e8; 3];
-    let _e13 = uplift_simd::vector::sub::<S, 3>(_e11, _e12);
-    let _e14 = uplift_simd::vector::mul::<S, 3>(_e13, _e13);
-    let _e17 = [tp.f(s, 3), tp.f(s, 4), tp.f(s, 5)];
-    let _e18 = uplift_simd::vector::add::<S, 3>(_e14, _e17);
-    let _e19 = uplift_simd::vector::map::<S, 3>(_e18, |x| x.sqrt());
-    let _e20 = [_e6; 3];
-    let _e21 = uplift_simd::vector::add::<S, 3>(_e19, _e20);
-    let _e22 = uplift_simd::vector::add::<S, 3>(_e19, _e13);
-    let _e24 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e22);
-    let _e26 = [s.splat(0.0f32); 3];
-    let _e27 = uplift_simd::vector::zip::<S, 3>(_e24, _e26, |x, y| x.max(y));
-    let _e28 = uplift_simd::vector::map::<S, 3>(_e27, |x| x.sqrt());
-    let _e30 = (s.splat(2.0f32) * _e5);
-    let _e31 = uplift_simd::vector::mul::<S, 3>([_e30; 3], _e28);
-    let _e32 = uplift_simd::vector::sub::<S, 3>(_e21, _e31);
-    let _e33 = uplift_simd::vector::add::<S, 3>(_e21, _e31);
-    let _e35 = [s.splat(1e-30f32); 3];
-    let _e36 = uplift_simd::vector::zip::<S, 3>(_e33, _e35, |x, y| x.max(y));
-    let _e37 = uplift_simd::vector::zip::<S, 3>(_e32, _e36, |x, y| x * y.rcp());
-    let _e38 = uplift_simd::vector::mul::<S, 3>([_e6; 3], _e19);
-    let _e39 = (_e8 * _e8);
-    let _e40 = [_e39; 3];
-    let _e41 = uplift_simd::vector::add::<S, 3>(_e38, _e40);
-    let _e42 = uplift_simd::vector::mul::<S, 3>(_e31, [_e8; 3]);
-    let _e43 = uplift_simd::vector::sub::<S, 3>(_e41, _e42);
-    let _e44 = uplift_simd::vector::mul::<S, 3>(_e37, _e43);
-    let _e45 = uplift_simd::vector::add::<S, 3>(_e41, _e42);
-    let _e47 = [s.splat(1e-30f32); 3];
-    let _e48 = uplift_simd::vector::zip::<S, 3>(_e45, _e47, |x, y| x.max(y));
-    let _e49 = uplift_simd::vector::zip::<S, 3>(_e44, _e48, |x, y| x * y.rcp());
-    let _e50 = mx_polarized { p: _e49, s_: _e37 };
-    return _e50;
+pub fn mx_thin_film_cos_p42<S: Simd>(s: S, cos_theta_1: S::F, eta2_: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let tp = tp.fit::<S>(1);
+    let _e4 = cos_theta_1.max(s.splat(0.0f32)).min(s.splat(1.0f32));
+    let _e5 = (_e4 * _e4);
+    let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
+    let _e8 = tp.f(s, 0);
+    let _e9 = (_e7 * (_e8).rcp());
+    let _e11 = (s.splat(1.0f32) - _e9);
+    let _e13 = { let (x, y) = (_e11, s.splat(0.0f32)); x.max(y) };
+    let _e14 = { let x = _e13; x.sqrt() };
+    return _e14;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_conductor_polarized_g42<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S::F; 3], k: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
-    assert!(tg.len() >= 6 * S::LANES, "the tape is shorter than the pass's slots");
-    let _e9 = uplift_simd::vector::mul::<S, 3>(n_1, n_1);
-    let _e10 = uplift_simd::vector::mul::<S, 3>(k, k);
-    let _e11 = uplift_simd::vector::sub::<S, 3>(_e9, _e10);
-    uplift_simd::tape::put(s, tg, 0, _e11[0]);
-    uplift_simd::tape::put(s, tg, 1, _e11[1]);
-    uplift_simd::tape::put(s, tg, 2, _e11[2]);
-    let _e16 = uplift_simd::vector::mul::<S, 3>([s.splat(4.0f32); 3], _e9);
-    let _e17 = uplift_simd::vector::mul::<S, 3>(_e16, _e10);
-    uplift_simd::tape::put(s, tg, 3, _e17[0]);
-    uplift_simd::tape::put(s, tg, 4, _e17[1]);
-    uplift_simd::tape::put(s, tg, 5, _e17[2]);
-    let _e26 = [s.splat(0.0f32); 3];
-    let _e35 = [s.splat(1e-30f32); 3];
-    let _e47 = [s.splat(1e-30f32); 3];
-    let _e50 = mx_polarized { p: [s.splat(0.0); 3], s_: [s.splat(0.0); 3] };
-    return _e50;
+pub fn mx_thin_film_cos_g42<S: Simd>(s: S, cos_theta_1: S::F, eta2_: S::F, tg: &mut [f32]) -> S::F {
+    assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e8 = (eta2_ * eta2_);
+    uplift_simd::tape::put(s, tg, 0, _e8);
+    return s.splat(0.0);
 }
 
 #[inline(always)]
@@ -6140,25 +6105,132 @@ pub fn mx_fresnel_conductor_phase_polarized_g43<S: Simd>(s: S, cos_theta_3: S::F
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_airy_conductor_p44<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+pub fn mx_fresnel_dielectric_polarized_p44<S: Simd>(s: S, cos_theta_4: S::F, eta_1: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 2] {
+    let tp = tp.fit::<S>(1);
+    let _e4 = cos_theta_4.max(s.splat(0.0f32)).min(s.splat(1.0f32));
+    let _e5 = (_e4 * _e4);
+    let _e7 = (-_e4).mul_add(_e4, s.splat(1.0f32));
+    let _e8 = tp.f(s, 0);
+    let _e9 = eta_1.mul_add(eta_1, -_e7);
+    let _e11 = { let (x, y) = (_e9, s.splat(0.0f32)); x.max(y) };
+    let _e12 = _e4.mul_add(_e4, _e11);
+    let _e13 = { let x = _e11; x.sqrt() };
+    let _e15 = (s.splat(2.0f32) * _e13);
+    let _e16 = (_e15 * _e4);
+    let _e17 = (-_e15).mul_add(_e4, _e12);
+    let _e18 = _e15.mul_add(_e4, _e12);
+    let _e20 = { let (x, y) = (_e18, s.splat(1e-30f32)); x.max(y) };
+    let _e21 = (_e17 * (_e20).rcp());
+    let _e22 = (_e5 * _e11);
+    let _e23 = (_e7 * _e7);
+    let _e24 = _e5.mul_add(_e11, _e23);
+    let _e25 = (_e16 * _e7);
+    let _e26 = (-_e16).mul_add(_e7, _e24);
+    let _e27 = (_e21 * _e26);
+    let _e28 = _e16.mul_add(_e7, _e24);
+    let _e30 = { let (x, y) = (_e28, s.splat(1e-30f32)); x.max(y) };
+    let _e31 = (_e27 * (_e30).rcp());
+    let _e32 = [_e31, _e21];
+    return _e32;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_dielectric_polarized_g44<S: Simd>(s: S, cos_theta_4: S::F, eta_1: S::F, tg: &mut [f32]) -> [S::F; 2] {
+    assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e8 = (eta_1 * eta_1);
+    uplift_simd::tape::put(s, tg, 0, _e8);
+    return [s.splat(0.0); 2];
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_airy_reflectance_p45<S: Simd>(s: S, cos_theta_5: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+    let tp = tp.fit::<S>(4);
+    let _e6 = mx_fresnel_dielectric_polarized_p44(s, cos_theta_5, eta2_2, tp.at::<S>(3));
+    let _e12 = tp.f(s, 0);
+    let _e14 = cos_theta_5.lt(_e12);
+    let _e16 = _e14.select(s.splat(0.0f32), s.splat(3.1415927f32));
+    let _e18 = tp.f(s, 1);
+    let _e19 = (_e18 * cos_t);
+    let _e21 = tp.f(s, 2);
+    let _e22 = (_e19 * _e21);
+    let _e24 = (_e22 * s.splat(1e-9f32));
+    let _e25 = _e6[0];
+    let _e26 = r23_1.p;
+    let _e27 = phi23_.p;
+    let _e28 = [_e16; 3];
+    let _e29 = uplift_simd::vector::add::<S, 3>(_e27, _e28);
+    let _e30 = mx_airy_polarization(s, _e25, _e26, _e29, _e24);
+    let _e31 = _e6[1];
+    let _e32 = r23_1.s_;
+    let _e33 = phi23_.s_;
+    let _e35 = [s.splat(3.1415927f32); 3];
+    let _e36 = uplift_simd::vector::add::<S, 3>(_e33, _e35);
+    let _e37 = mx_airy_polarization(s, _e31, _e32, _e36, _e24);
+    let _e38 = uplift_simd::vector::add::<S, 3>(_e30, _e37);
+    let _e40 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e38);
+    let _e41 = _e40[0];
+    let _e45 = [s.splat(2.3706744f32), s.splat(-0.513885f32), s.splat(0.0052982f32)];
+    let _e46 = uplift_simd::vector::mul::<S, 3>([_e41; 3], _e45);
+    let _e47 = _e40[1];
+    let _e51 = [s.splat(-0.9000405f32), s.splat(1.4253036f32), s.splat(-0.0146949f32)];
+    let _e52 = uplift_simd::vector::mul::<S, 3>([_e47; 3], _e51);
+    let _e53 = uplift_simd::vector::add::<S, 3>(_e46, _e52);
+    let _e54 = _e40[2];
+    let _e58 = [s.splat(-0.4706338f32), s.splat(0.0885814f32), s.splat(1.0093968f32)];
+    let _e59 = uplift_simd::vector::mul::<S, 3>([_e54; 3], _e58);
+    let _e60 = uplift_simd::vector::add::<S, 3>(_e53, _e59);
+    let _e62 = [s.splat(0.0f32); 3];
+    let _e64 = [s.splat(1.0f32); 3];
+    let _e65 = uplift_simd::vector::zip::<S, 3>(uplift_simd::vector::zip::<S, 3>(_e60, _e62, |x, y| x.max(y)), _e64, |x, y| x.min(y));
+    return _e65;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_airy_reflectance_g45<S: Simd>(s: S, cos_theta_5: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>, tg: &mut [f32]) -> [S::F; 3] {
+    assert!(tg.len() >= 4 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e6 = mx_fresnel_dielectric_polarized_g44(s, cos_theta_5, eta2_2, &mut tg[3 * S::LANES..]);
+    let _e7 = (eta2_2 * eta2_2);
+    let _e9 = eta2_2.mul_add(eta2_2, s.splat(1.0f32));
+    let _e10 = { let x = _e9; x.sqrt() };
+    let _e12 = (s.splat(1.0f32) * (_e10).rcp());
+    uplift_simd::tape::put(s, tg, 0, _e12);
+    let _e18 = (s.splat(2.0f32) * eta2_2);
+    uplift_simd::tape::put(s, tg, 1, _e18);
+    let _e21 = { let (x, y) = (thickness, s.splat(0.0f32)); x.max(y) };
+    uplift_simd::tape::put(s, tg, 2, _e21);
+    let _e35 = [s.splat(3.1415927f32); 3];
+    let _e45 = [s.splat(2.3706744f32), s.splat(-0.513885f32), s.splat(0.0052982f32)];
+    let _e51 = [s.splat(-0.9000405f32), s.splat(1.4253036f32), s.splat(-0.0146949f32)];
+    let _e58 = [s.splat(-0.4706338f32), s.splat(0.0885814f32), s.splat(1.0093968f32)];
+    let _e62 = [s.splat(0.0f32); 3];
+    let _e64 = [s.splat(1.0f32); 3];
+    return [s.splat(0.0); 3];
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_airy_conductor_p46<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
     let tp = tp.fit::<S>(39);
     let _e6 = tp.f(s, 0);
-    let _e7 = mx_thin_film_cos_p30(s, cos_theta_6, _e6, tp.at::<S>(7));
+    let _e7 = mx_thin_film_cos_p42(s, cos_theta_6, _e6, tp.at::<S>(7));
     let _e9 = [tp.f(s, 1), tp.f(s, 2), tp.f(s, 3)];
     let _e11 = [tp.f(s, 4), tp.f(s, 5), tp.f(s, 6)];
-    let _e12 = mx_fresnel_conductor_polarized_p42(s, _e7, _e9, _e11, tp.at::<S>(8));
+    let _e12 = mx_fresnel_conductor_polarized_p31(s, _e7, _e9, _e11, tp.at::<S>(8));
     let _e13 = mx_fresnel_conductor_phase_polarized_p43(s, _e7, _e6, n_2, k_1, tp.at::<S>(14));
-    let _e14 = mx_airy_reflectance_p34(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, tp.at::<S>(35));
+    let _e14 = mx_airy_reflectance_p45(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, tp.at::<S>(35));
     return _e14;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_airy_conductor_g44<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tg: &mut [f32]) -> [S::F; 3] {
+pub fn mx_fresnel_airy_conductor_g46<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tg: &mut [f32]) -> [S::F; 3] {
     assert!(tg.len() >= 39 * S::LANES, "the tape is shorter than the pass's slots");
     let _e6 = { let (x, y) = (film_ior, s.splat(1.0f32)); x.max(y) };
     uplift_simd::tape::put(s, tg, 0, _e6);
-    let _e7 = mx_thin_film_cos_g30(s, cos_theta_6, _e6, &mut tg[7 * S::LANES..]);
+    let _e7 = mx_thin_film_cos_g42(s, cos_theta_6, _e6, &mut tg[7 * S::LANES..]);
     let _e8 = [_e6; 3];
     let _e9 = uplift_simd::vector::zip::<S, 3>(n_2, _e8, |x, y| x * y.rcp());
     uplift_simd::tape::put(s, tg, 1, _e9[0]);
@@ -6169,18 +6241,18 @@ pub fn mx_fresnel_airy_conductor_g44<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::
     uplift_simd::tape::put(s, tg, 4, _e11[0]);
     uplift_simd::tape::put(s, tg, 5, _e11[1]);
     uplift_simd::tape::put(s, tg, 6, _e11[2]);
-    let _e12 = mx_fresnel_conductor_polarized_g42(s, _e7, _e9, _e11, &mut tg[8 * S::LANES..]);
+    let _e12 = mx_fresnel_conductor_polarized_g31(s, _e7, _e9, _e11, &mut tg[8 * S::LANES..]);
     let _e13 = s.outline(#[inline(always)] || mx_fresnel_conductor_phase_polarized_g43(s, _e7, _e6, n_2, k_1, &mut tg[14 * S::LANES..]));
-    let _e14 = mx_airy_reflectance_g34(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, &mut tg[35 * S::LANES..]);
+    let _e14 = mx_airy_reflectance_g45(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, &mut tg[35 * S::LANES..]);
     return _e14;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_conductor_fresnel_p45<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S::F; 3], thickness_3: S::F, film_ior_2: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+pub fn mx_conductor_fresnel_p47<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S::F; 3], thickness_3: S::F, film_ior_2: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
     let tp = tp.fit::<S>(46);
     let _e5 = if (!(thickness_3.gt(s.splat(0.0f32)))).any() { mx_fresnel_conductor_p41(s, vh, n_6, k_5, tp.at::<S>(1)) } else { [s.splat(0.0); 3] };
-    let _e6 = if (thickness_3.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_p44(s, vh, n_6, k_5, thickness_3, film_ior_2, tp.at::<S>(7)) } else { [s.splat(0.0); 3] };
+    let _e6 = if (thickness_3.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_p46(s, vh, n_6, k_5, thickness_3, film_ior_2, tp.at::<S>(7)) } else { [s.splat(0.0); 3] };
     let _e8 = tp.m(s, 0);
     let _e9 = uplift_simd::vector::select_all::<S, 3>(_e8, _e6, _e5);
     return _e9;
@@ -6188,10 +6260,10 @@ pub fn mx_conductor_fresnel_p45<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_conductor_fresnel_g45<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S::F; 3], thickness_3: S::F, film_ior_2: S::F, tg: &mut [f32]) -> [S::F; 3] {
+pub fn mx_conductor_fresnel_g47<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S::F; 3], thickness_3: S::F, film_ior_2: S::F, tg: &mut [f32]) -> [S::F; 3] {
     assert!(tg.len() >= 46 * S::LANES, "the tape is shorter than the pass's slots");
     let _e5 = if (!(thickness_3.gt(s.splat(0.0f32)))).any() { mx_fresnel_conductor_g41(s, vh, n_6, k_5, &mut tg[1 * S::LANES..]) } else { [s.splat(0.0); 3] };
-    let _e6 = if (thickness_3.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_g44(s, vh, n_6, k_5, thickness_3, film_ior_2, &mut tg[7 * S::LANES..]) } else { [s.splat(0.0); 3] };
+    let _e6 = if (thickness_3.gt(s.splat(0.0f32))).any() { mx_fresnel_airy_conductor_g46(s, vh, n_6, k_5, thickness_3, film_ior_2, &mut tg[7 * S::LANES..]) } else { [s.splat(0.0); 3] };
     let _e8 = thickness_3.gt(s.splat(0.0f32));
     uplift_simd::tape::put_m(s, tg, 0, _e8);
     return [s.splat(0.0); 3];
@@ -6199,7 +6271,7 @@ pub fn mx_conductor_fresnel_g45<S: Simd>(s: S, vh: S::F, n_6: [S::F; 3], k_5: [S
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_smith_s_p46<S: Simd>(s: S, w_1: [S::F; 3], a_1: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+pub fn mx_ggx_smith_s_p48<S: Simd>(s: S, w_1: [S::F; 3], a_1: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
     let tp = tp.fit::<S>(2);
     let _e2 = w_1[2];
     let _e4 = { let (x, y) = (_e2, s.splat(1e-8f32)); x.max(y) };
@@ -6226,7 +6298,7 @@ pub fn mx_ggx_smith_s_p46<S: Simd>(s: S, w_1: [S::F; 3], a_1: [S::F; 2], tp: upl
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_smith_s_g46<S: Simd>(s: S, w_1: [S::F; 3], a_1: [S::F; 2], tg: &mut [f32]) -> S::F {
+pub fn mx_ggx_smith_s_g48<S: Simd>(s: S, w_1: [S::F; 3], a_1: [S::F; 2], tg: &mut [f32]) -> S::F {
     assert!(tg.len() >= 2 * S::LANES, "the tape is shorter than the pass's slots");
     let _e6 = a_1[0];
     let _e7 = a_1[0];
@@ -6241,7 +6313,7 @@ pub fn mx_ggx_smith_s_g46<S: Simd>(s: S, w_1: [S::F; 3], a_1: [S::F; 2], tg: &mu
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_d_p47<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+pub fn mx_ggx_d_p49<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
     let tp = tp.fit::<S>(1);
     let _e2 = a_2[0];
     let _e3 = a_2[1];
@@ -6269,7 +6341,7 @@ pub fn mx_ggx_d_p47<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tp: uplift_si
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_d_g47<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tg: &mut [f32]) -> S::F {
+pub fn mx_ggx_d_g49<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tg: &mut [f32]) -> S::F {
     assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
     let _e2 = a_2[0];
     let _e3 = a_2[1];
@@ -6283,7 +6355,7 @@ pub fn mx_ggx_d_g47<S: Simd>(s: S, h_2: [S::F; 3], a_2: [S::F; 2], tg: &mut [f32
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_reflection_p48<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3: [S::F; 3], a_3: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+pub fn mx_ggx_reflection_p50<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3: [S::F; 3], a_3: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
     let tp = tp.fit::<S>(5);
     let _e4 = v_8[2];
     let _e6 = tp.f(s, 0);
@@ -6291,11 +6363,11 @@ pub fn mx_ggx_reflection_p48<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3:
     let _e9 = { let (x, y) = (_e7, s.splat(1e-8f32)); x.max(y) };
     let _e10 = tp.f(s, 1);
     let _e11 = (_e9 * _e10);
-    let _e12 = if (!(l_4[2].le(s.splat(0.0f32)))).any() { mx_ggx_smith_s_p46(s, l_4, a_3, tp.at::<S>(2)) } else { s.splat(0.0) };
+    let _e12 = if (!(l_4[2].le(s.splat(0.0f32)))).any() { mx_ggx_smith_s_p48(s, l_4, a_3, tp.at::<S>(2)) } else { s.splat(0.0) };
     let _e13 = (_e6 * _e12);
     let _e14 = _e9.mul_add(_e10, _e13);
     let _e16 = (s.splat(2.0f32) * _e14);
-    let _e17 = if (!(l_4[2].le(s.splat(0.0f32)))).any() { mx_ggx_d_p47(s, h_3, a_3, tp.at::<S>(4)) } else { s.splat(0.0) };
+    let _e17 = if (!(l_4[2].le(s.splat(0.0f32)))).any() { mx_ggx_d_p49(s, h_3, a_3, tp.at::<S>(4)) } else { s.splat(0.0) };
     let _e18 = (_e17 * _e9);
     let _e19 = (_e18 * (_e16).rcp());
     let _e20 = l_4[2];
@@ -6306,21 +6378,21 @@ pub fn mx_ggx_reflection_p48<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3:
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_reflection_g48<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3: [S::F; 3], a_3: [S::F; 2], tg: &mut [f32]) -> S::F {
+pub fn mx_ggx_reflection_g50<S: Simd>(s: S, v_8: [S::F; 3], l_4: [S::F; 3], h_3: [S::F; 3], a_3: [S::F; 2], tg: &mut [f32]) -> S::F {
     assert!(tg.len() >= 5 * S::LANES, "the tape is shorter than the pass's slots");
     let _e4 = v_8[2];
     let _e6 = { let (x, y) = (_e4, s.splat(1e-8f32)); x.max(y) };
     uplift_simd::tape::put(s, tg, 0, _e6);
     let _e10 = mx_ggx_smith_s(s, v_8, a_3);
     uplift_simd::tape::put(s, tg, 1, _e10);
-    let _e12 = mx_ggx_smith_s_g46(s, l_4, a_3, &mut tg[2 * S::LANES..]);
-    let _e17 = mx_ggx_d_g47(s, h_3, a_3, &mut tg[4 * S::LANES..]);
+    let _e12 = mx_ggx_smith_s_g48(s, l_4, a_3, &mut tg[2 * S::LANES..]);
+    let _e17 = mx_ggx_d_g49(s, h_3, a_3, &mut tg[4 * S::LANES..]);
     return s.splat(0.0);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_sampled_p49<S: Simd>(s: S, cl_2: mx_closure<S>, throughput: [S::F; 3], wl_1: [S::F; 3], c: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_lobe_sampled_p51<S: Simd>(s: S, cl_2: mx_closure<S>, throughput: [S::F; 3], wl_1: [S::F; 3], c: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(2);
     let _e4 = if (c.gt(s.splat(1e-30f32))).any() { mx_race_uniform_p22(s, cl_2, tp.at::<S>(1)) } else { s.splat(0.0) };
     let _e5 = if (c.gt(s.splat(1e-30f32))).any() { mx_fast_log2_(s, _e4) } else { s.splat(0.0) };
@@ -6337,7 +6409,7 @@ pub fn mx_lobe_sampled_p49<S: Simd>(s: S, cl_2: mx_closure<S>, throughput: [S::F
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_sampled_g49<S: Simd>(s: S, cl_2: mx_closure<S>, throughput: [S::F; 3], wl_1: [S::F; 3], c: S::F, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_lobe_sampled_g51<S: Simd>(s: S, cl_2: mx_closure<S>, throughput: [S::F; 3], wl_1: [S::F; 3], c: S::F, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 2 * S::LANES, "the tape is shorter than the pass's slots");
     let _e4 = if (c.gt(s.splat(1e-30f32))).any() { mx_race_uniform_g22(s, cl_2, &mut tg[1 * S::LANES..]) } else { s.splat(0.0) };
     let _e11 = c.gt(s.splat(1e-30f32));
@@ -6349,7 +6421,7 @@ pub fn mx_lobe_sampled_g49<S: Simd>(s: S, cl_2: mx_closure<S>, throughput: [S::F
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_lobe_sample_p50<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_setup<S>, throughput_2: [S::F; 3], c_3: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_ggx_lobe_sample_p52<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_setup<S>, throughput_2: [S::F; 3], c_3: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(7);
     let mut l_3: [S::F; 3] = [s.splat(0.0); 3];
     let _e4 = s_.v;
@@ -6363,13 +6435,13 @@ pub fn mx_ggx_lobe_sample_p50<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_set
     let _e12 = s_.frame;
     let _e13 = l_3;
     let _e14 = mx_to_world(s, _e12, _e13);
-    let _e15 = mx_lobe_sampled_p49(s, cl_5, throughput_2, _e14, c_3, tp.at::<S>(5));
+    let _e15 = mx_lobe_sampled_p51(s, cl_5, throughput_2, _e14, c_3, tp.at::<S>(5));
     return _e15;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_lobe_sample_g50<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_setup<S>, throughput_2: [S::F; 3], c_3: S::F, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_ggx_lobe_sample_g52<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_setup<S>, throughput_2: [S::F; 3], c_3: S::F, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 7 * S::LANES, "the tape is shorter than the pass's slots");
     let mut l_3: [S::F; 3] = [s.splat(0.0); 3];
     let _e4 = s_.v;
@@ -6377,16 +6449,16 @@ pub fn mx_ggx_lobe_sample_g50<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_set
     let _e8 = mx_ggx_sample_vndf_g8(s, _e4, _e5, [s.splat(0.0); 2], &mut tg[0 * S::LANES..]);
     let _e9 = s_.v;
     let _e12 = s_.frame;
-    let _e15 = mx_lobe_sampled_g49(s, cl_5, throughput_2, [s.splat(0.0); 3], c_3, &mut tg[5 * S::LANES..]);
+    let _e15 = mx_lobe_sampled_g51(s, cl_5, throughput_2, [s.splat(0.0); 3], c_3, &mut tg[5 * S::LANES..]);
     return _e15;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_pdf_p51<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+pub fn mx_ggx_pdf_p53<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2], tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
     let tp = tp.fit::<S>(2);
     let _e3 = v_9[2];
-    let _e6 = if (!((uplift_simd::vector::dot::<S, 3>(v_9, h_4).le(s.splat(0.0f32)) | h_4[2].le(s.splat(0.0f32))))).any() { mx_ggx_d_p47(s, h_4, a_4, tp.at::<S>(1)) } else { s.splat(0.0) };
+    let _e6 = if (!((uplift_simd::vector::dot::<S, 3>(v_9, h_4).le(s.splat(0.0f32)) | h_4[2].le(s.splat(0.0f32))))).any() { mx_ggx_d_p49(s, h_4, a_4, tp.at::<S>(1)) } else { s.splat(0.0) };
     let _e10 = tp.f(s, 0);
     let _e11 = (_e6 * (_e10).rcp());
     let _e12 = uplift_simd::vector::dot::<S, 3>(v_9, h_4);
@@ -6400,11 +6472,11 @@ pub fn mx_ggx_pdf_p51<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F;
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_pdf_g51<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2], tg: &mut [f32]) -> S::F {
+pub fn mx_ggx_pdf_g53<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2], tg: &mut [f32]) -> S::F {
     assert!(tg.len() >= 2 * S::LANES, "the tape is shorter than the pass's slots");
     let _e3 = v_9[2];
     let _e5 = { let (x, y) = (_e3, s.splat(1e-8f32)); x.max(y) };
-    let _e6 = mx_ggx_d_g47(s, h_4, a_4, &mut tg[1 * S::LANES..]);
+    let _e6 = mx_ggx_d_g49(s, h_4, a_4, &mut tg[1 * S::LANES..]);
     let _e7 = mx_ggx_smith_s(s, v_9, a_4);
     let _e8 = (_e5 + _e7);
     let _e10 = (s.splat(2.0f32) * _e8);
@@ -6414,7 +6486,7 @@ pub fn mx_ggx_pdf_g51<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F;
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_with_pdf_p52<S: Simd>(s: S, response: [S::F; 3], throughput_1: [S::F; 3], c_2: S::F, pdf: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_lobe_with_pdf_p54<S: Simd>(s: S, response: [S::F; 3], throughput_1: [S::F; 3], c_2: S::F, pdf: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(1);
     let _e5 = tp.f(s, 0);
     let _e7 = { let (x, y) = (pdf, s.splat(0.0f32)); x.max(y) };
@@ -6426,7 +6498,7 @@ pub fn mx_lobe_with_pdf_p52<S: Simd>(s: S, response: [S::F; 3], throughput_1: [S
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_with_pdf_g52<S: Simd>(s: S, response: [S::F; 3], throughput_1: [S::F; 3], c_2: S::F, pdf: S::F, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_lobe_with_pdf_g54<S: Simd>(s: S, response: [S::F; 3], throughput_1: [S::F; 3], c_2: S::F, pdf: S::F, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
     let _e5 = { let (x, y) = (c_2, s.splat(0.0f32)); x.max(y) };
     uplift_simd::tape::put(s, tg, 0, _e5);
@@ -6436,7 +6508,7 @@ pub fn mx_lobe_with_pdf_g52<S: Simd>(s: S, response: [S::F; 3], throughput_1: [S
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_conductor_bsdf_p53<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F, ior_1: [S::F; 3], extinction: [S::F; 3], roughness_5: [S::F; 2], retroreflective_2: S::M, thinfilm_thickness_1: S::F, thinfilm_ior_1: S::F, normal_4: [S::F; 3], tangent_3: [S::F; 3], distribution_1: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_conductor_bsdf_p55<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F, ior_1: [S::F; 3], extinction: [S::F; 3], roughness_5: [S::F; 2], retroreflective_2: S::M, thinfilm_thickness_1: S::F, thinfilm_ior_1: S::F, normal_4: [S::F; 3], tangent_3: [S::F; 3], distribution_1: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(184);
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
@@ -6460,10 +6532,10 @@ pub fn mx_conductor_bsdf_p53<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
         let _e42 = mx_half_vector(s, _e41, _e40);
         let _e43 = [tp.f(s, 30), tp.f(s, 31), tp.f(s, 32)];
         let _e44 = uplift_simd::vector::dot::<S, 3>(_e43, _e42);
-        let _e45 = mx_conductor_fresnel_p45(s, _e44, _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, tp.at::<S>(72));
+        let _e45 = mx_conductor_fresnel_p47(s, _e44, _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, tp.at::<S>(72));
         let _e46 = [tp.f(s, 33), tp.f(s, 34), tp.f(s, 35)];
         let _e47 = [tp.f(s, 36), tp.f(s, 37)];
-        let _e48 = mx_ggx_reflection_p48(s, _e46, _e40, _e42, _e47, tp.at::<S>(118));
+        let _e48 = mx_ggx_reflection_p50(s, _e46, _e40, _e42, _e47, tp.at::<S>(118));
         let _e49 = (_e11 * _e48);
         let _e50 = uplift_simd::vector::mul::<S, 3>([_e49; 3], _e45);
         let _e51 = uplift_simd::vector::mul::<S, 3>(_e50, _e36);
@@ -6487,7 +6559,7 @@ pub fn mx_conductor_bsdf_p53<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
     let _m3 = _e72;
     if _m3.any() {
         let _e73 = tp.f(s, 54);
-        let _e74 = mx_ggx_lobe_sample_p50(s, cl_8, _e14, _e13, _e73, tp.at::<S>(123));
+        let _e74 = mx_ggx_lobe_sample_p52(s, cl_8, _e14, _e13, _e73, tp.at::<S>(123));
         _ret = BSDF::<S>::select((_m3 & !_done), _e74, _ret);
         _done = _done | _m3;
     }
@@ -6497,24 +6569,24 @@ pub fn mx_conductor_bsdf_p53<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
     let _e77 = mx_half_vector(s, _e76, _e75);
     let _e78 = [tp.f(s, 58), tp.f(s, 59), tp.f(s, 60)];
     let _e79 = uplift_simd::vector::dot::<S, 3>(_e78, _e77);
-    let _e80 = mx_conductor_fresnel_p45(s, _e79, _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, tp.at::<S>(130));
+    let _e80 = mx_conductor_fresnel_p47(s, _e79, _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, tp.at::<S>(130));
     let _e81 = [tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)];
     let _e82 = [tp.f(s, 64), tp.f(s, 65)];
-    let _e83 = mx_ggx_reflection_p48(s, _e81, _e75, _e77, _e82, tp.at::<S>(176));
+    let _e83 = mx_ggx_reflection_p50(s, _e81, _e75, _e77, _e82, tp.at::<S>(176));
     let _e84 = (_e11 * _e83);
     let _e85 = uplift_simd::vector::mul::<S, 3>([_e84; 3], _e80);
     let _e86 = uplift_simd::vector::mul::<S, 3>(_e85, _e36);
     let _e87 = tp.f(s, 66);
     let _e88 = [tp.f(s, 67), tp.f(s, 68), tp.f(s, 69)];
     let _e89 = [tp.f(s, 70), tp.f(s, 71)];
-    let _e90 = mx_ggx_pdf_p51(s, _e88, _e77, _e89, tp.at::<S>(181));
-    let _e91 = mx_lobe_with_pdf_p52(s, _e86, _e13, _e87, _e90, tp.at::<S>(183));
+    let _e90 = mx_ggx_pdf_p53(s, _e88, _e77, _e89, tp.at::<S>(181));
+    let _e91 = mx_lobe_with_pdf_p54(s, _e86, _e13, _e87, _e90, tp.at::<S>(183));
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_conductor_bsdf_g53<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F, ior_1: [S::F; 3], extinction: [S::F; 3], roughness_5: [S::F; 2], retroreflective_2: S::M, thinfilm_thickness_1: S::F, thinfilm_ior_1: S::F, normal_4: [S::F; 3], tangent_3: [S::F; 3], distribution_1: S::I, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_conductor_bsdf_g55<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F, ior_1: [S::F; 3], extinction: [S::F; 3], roughness_5: [S::F; 2], retroreflective_2: S::M, thinfilm_thickness_1: S::F, thinfilm_ior_1: S::F, normal_4: [S::F; 3], tangent_3: [S::F; 3], distribution_1: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 184 * S::LANES, "the tape is shorter than the pass's slots");
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
@@ -6575,7 +6647,7 @@ pub fn mx_conductor_bsdf_g53<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
         uplift_simd::tape::put(s, tg, 30, _e43[0]);
         uplift_simd::tape::put(s, tg, 31, _e43[1]);
         uplift_simd::tape::put(s, tg, 32, _e43[2]);
-        let _e45 = mx_conductor_fresnel_g45(s, s.splat(0.0), _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, &mut tg[72 * S::LANES..]);
+        let _e45 = mx_conductor_fresnel_g47(s, s.splat(0.0), _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, &mut tg[72 * S::LANES..]);
         let _e46 = _e14.v;
         uplift_simd::tape::put(s, tg, 33, _e46[0]);
         uplift_simd::tape::put(s, tg, 34, _e46[1]);
@@ -6583,7 +6655,7 @@ pub fn mx_conductor_bsdf_g53<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
         let _e47 = _e14.a;
         uplift_simd::tape::put(s, tg, 36, _e47[0]);
         uplift_simd::tape::put(s, tg, 37, _e47[1]);
-        let _e48 = mx_ggx_reflection_g48(s, _e46, [s.splat(0.0); 3], [s.splat(0.0); 3], _e47, &mut tg[118 * S::LANES..]);
+        let _e48 = mx_ggx_reflection_g50(s, _e46, [s.splat(0.0); 3], [s.splat(0.0); 3], _e47, &mut tg[118 * S::LANES..]);
         let _e52 = mx_bsdf_empty(s);
         let _e53 = _e52.lobe;
         uplift_simd::tape::put(s, tg, 38, _e53[0]);
@@ -6633,7 +6705,7 @@ pub fn mx_conductor_bsdf_g53<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
     if _m3.any() {
         let _e73 = mx_luminance_rgb(s, _e63);
         uplift_simd::tape::put(s, tg, 54, _e73);
-        let _e74 = mx_ggx_lobe_sample_g50(s, cl_8, _e14, _e13, _e73, &mut tg[123 * S::LANES..]);
+        let _e74 = mx_ggx_lobe_sample_g52(s, cl_8, _e14, _e13, _e73, &mut tg[123 * S::LANES..]);
         _ret = BSDF::<S>::select((_m3 & !_done), _e74, _ret);
         _done = _done | _m3;
     }
@@ -6646,7 +6718,7 @@ pub fn mx_conductor_bsdf_g53<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
     uplift_simd::tape::put(s, tg, 58, _e78[0]);
     uplift_simd::tape::put(s, tg, 59, _e78[1]);
     uplift_simd::tape::put(s, tg, 60, _e78[2]);
-    let _e80 = mx_conductor_fresnel_g45(s, s.splat(0.0), _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, &mut tg[130 * S::LANES..]);
+    let _e80 = mx_conductor_fresnel_g47(s, s.splat(0.0), _e19, _e24, thinfilm_thickness_1, thinfilm_ior_1, &mut tg[130 * S::LANES..]);
     let _e81 = _e14.v;
     uplift_simd::tape::put(s, tg, 61, _e81[0]);
     uplift_simd::tape::put(s, tg, 62, _e81[1]);
@@ -6654,7 +6726,7 @@ pub fn mx_conductor_bsdf_g53<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
     let _e82 = _e14.a;
     uplift_simd::tape::put(s, tg, 64, _e82[0]);
     uplift_simd::tape::put(s, tg, 65, _e82[1]);
-    let _e83 = mx_ggx_reflection_g48(s, _e81, [s.splat(0.0); 3], [s.splat(0.0); 3], _e82, &mut tg[176 * S::LANES..]);
+    let _e83 = mx_ggx_reflection_g50(s, _e81, [s.splat(0.0); 3], [s.splat(0.0); 3], _e82, &mut tg[176 * S::LANES..]);
     let _e87 = mx_luminance_rgb(s, _e63);
     uplift_simd::tape::put(s, tg, 66, _e87);
     let _e88 = _e14.v;
@@ -6664,14 +6736,14 @@ pub fn mx_conductor_bsdf_g53<S: Simd>(s: S, cl_8: mx_closure<S>, weight_2: S::F,
     let _e89 = _e14.a;
     uplift_simd::tape::put(s, tg, 70, _e89[0]);
     uplift_simd::tape::put(s, tg, 71, _e89[1]);
-    let _e90 = mx_ggx_pdf_g51(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[181 * S::LANES..]);
-    let _e91 = mx_lobe_with_pdf_g52(s, [s.splat(0.0); 3], _e13, _e87, _e90, &mut tg[183 * S::LANES..]);
+    let _e90 = mx_ggx_pdf_g53(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[181 * S::LANES..]);
+    let _e91 = mx_lobe_with_pdf_g54(s, [s.splat(0.0); 3], _e13, _e87, _e90, &mut tg[183 * S::LANES..]);
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_combine_p54<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b_1: [S::F; 4], wb: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 4] {
+pub fn mx_lobe_combine_p56<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b_1: [S::F; 4], wb: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 4] {
     let tp = tp.fit::<S>(5);
     let mut _ret: [S::F; 4] = [s.splat(0.0); 4];
     let mut _done = s.first_lanes(0);
@@ -6711,7 +6783,7 @@ pub fn mx_lobe_combine_p54<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], w
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_combine_g54<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b_1: [S::F; 4], wb: S::F, tg: &mut [f32]) -> [S::F; 4] {
+pub fn mx_lobe_combine_g56<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b_1: [S::F; 4], wb: S::F, tg: &mut [f32]) -> [S::F; 4] {
     assert!(tg.len() >= 5 * S::LANES, "the tape is shorter than the pass's slots");
     let mut _ret: [S::F; 4] = [s.splat(0.0); 4];
     let mut _done = s.first_lanes(0);
@@ -6737,7 +6809,7 @@ pub fn mx_lobe_combine_g54<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], w
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_mix_bsdf_p55<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_mix_bsdf_p57<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(10);
     let _e4 = tp.f(s, 0);
     let _e5 = bg.response;
@@ -6749,14 +6821,14 @@ pub fn mx_mix_bsdf_p55<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSD
     let _e11 = fg.lobe;
     let _e12 = bg.lobe;
     let _e14 = tp.f(s, 4);
-    let _e15 = mx_lobe_combine_p54(s, cl_10, _e11, _e4, _e12, _e14, tp.at::<S>(5));
+    let _e15 = mx_lobe_combine_p56(s, cl_10, _e11, _e4, _e12, _e14, tp.at::<S>(5));
     let _e16 = BSDF { response: _e7, throughput: _e10, lobe: _e15 };
     return _e16;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_mix_bsdf_g55<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_mix_bsdf_g57<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 10 * S::LANES, "the tape is shorter than the pass's slots");
     let _e4 = mx_mix_amount(s, mix);
     uplift_simd::tape::put(s, tg, 0, _e4);
@@ -6768,14 +6840,14 @@ pub fn mx_mix_bsdf_g55<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSD
     uplift_simd::tape::put(s, tg, 3, _e10[2]);
     let _e14 = (s.splat(1.0f32) - _e4);
     uplift_simd::tape::put(s, tg, 4, _e14);
-    let _e15 = mx_lobe_combine_g54(s, cl_10, [s.splat(0.0); 4], _e4, [s.splat(0.0); 4], _e14, &mut tg[5 * S::LANES..]);
+    let _e15 = mx_lobe_combine_g56(s, cl_10, [s.splat(0.0); 4], _e4, [s.splat(0.0); 4], _e14, &mut tg[5 * S::LANES..]);
     let _e16 = BSDF { response: [s.splat(0.0); 3], throughput: _e10, lobe: _e15 };
     return _e16;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_lobe_sample_p56<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_setup<S>, throughput_2: [S::F; 3], c_3: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_ggx_lobe_sample_p58<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_setup<S>, throughput_2: [S::F; 3], c_3: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(7);
     let mut l_3: [S::F; 3] = [s.splat(0.0); 3];
     let _e4 = s_.v;
@@ -6795,7 +6867,7 @@ pub fn mx_ggx_lobe_sample_p56<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_set
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_lobe_sample_g56<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_setup<S>, throughput_2: [S::F; 3], c_3: S::F, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_ggx_lobe_sample_g58<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_setup<S>, throughput_2: [S::F; 3], c_3: S::F, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 7 * S::LANES, "the tape is shorter than the pass's slots");
     let mut l_3: [S::F; 3] = [s.splat(0.0); 3];
     let _e4 = s_.v;
@@ -6809,7 +6881,232 @@ pub fn mx_ggx_lobe_sample_g56<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_set
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_dielectric_bsdf_p57<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_fresnel_conductor_polarized_p59<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S::F; 3], k: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
+    let tp = tp.fit::<S>(6);
+    let _e5 = cos_theta_2.max(s.splat(0.0f32)).min(s.splat(1.0f32));
+    let _e6 = (_e5 * _e5);
+    let _e8 = (-_e5).mul_add(_e5, s.splat(1.0f32));
+    let _e11 = [tp.f(s, 0), tp.f(s, 1), tp.f(s, 2)];
+    let _e12 = [_e8; 3];
+    let _e13 = uplift_simd::vector::sub::<S, 3>(_e11, _e12);
+    let _e14 = uplift_simd::vector::mul::<S, 3>(_e13, _e13);
+    let _e17 = [tp.f(s, 3), tp.f(s, 4), tp.f(s, 5)];
+    let _e18 = uplift_simd::vector::add::<S, 3>(_e14, _e17);
+    let _e19 = uplift_simd::vector::map::<S, 3>(_e18, |x| x.sqrt());
+    let _e20 = [_e6; 3];
+    let _e21 = uplift_simd::vector::add::<S, 3>(_e19, _e20);
+    let _e22 = uplift_simd::vector::add::<S, 3>(_e19, _e13);
+    let _e24 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e22);
+    let _e26 = [s.splat(0.0f32); 3];
+    let _e27 = uplift_simd::vector::zip::<S, 3>(_e24, _e26, |x, y| x.max(y));
+    let _e28 = uplift_simd::vector::map::<S, 3>(_e27, |x| x.sqrt());
+    let _e30 = (s.splat(2.0f32) * _e5);
+    let _e31 = uplift_simd::vector::mul::<S, 3>([_e30; 3], _e28);
+    let _e32 = uplift_simd::vector::sub::<S, 3>(_e21, _e31);
+    let _e33 = uplift_simd::vector::add::<S, 3>(_e21, _e31);
+    let _e35 = [s.splat(1e-30f32); 3];
+    let _e36 = uplift_simd::vector::zip::<S, 3>(_e33, _e35, |x, y| x.max(y));
+    let _e37 = uplift_simd::vector::zip::<S, 3>(_e32, _e36, |x, y| x * y.rcp());
+    let _e38 = uplift_simd::vector::mul::<S, 3>([_e6; 3], _e19);
+    let _e39 = (_e8 * _e8);
+    let _e40 = [_e39; 3];
+    let _e41 = uplift_simd::vector::add::<S, 3>(_e38, _e40);
+    let _e42 = uplift_simd::vector::mul::<S, 3>(_e31, [_e8; 3]);
+    let _e43 = uplift_simd::vector::sub::<S, 3>(_e41, _e42);
+    let _e44 = uplift_simd::vector::mul::<S, 3>(_e37, _e43);
+    let _e45 = uplift_simd::vector::add::<S, 3>(_e41, _e42);
+    let _e47 = [s.splat(1e-30f32); 3];
+    let _e48 = uplift_simd::vector::zip::<S, 3>(_e45, _e47, |x, y| x.max(y));
+    let _e49 = uplift_simd::vector::zip::<S, 3>(_e44, _e48, |x, y| x * y.rcp());
+    let _e50 = mx_polarized { p: _e49, s_: _e37 };
+    return _e50;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_conductor_polarized_g59<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S::F; 3], k: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
+    assert!(tg.len() >= 6 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e9 = uplift_simd::vector::mul::<S, 3>(n_1, n_1);
+    let _e10 = uplift_simd::vector::mul::<S, 3>(k, k);
+    let _e11 = uplift_simd::vector::sub::<S, 3>(_e9, _e10);
+    uplift_simd::tape::put(s, tg, 0, _e11[0]);
+    uplift_simd::tape::put(s, tg, 1, _e11[1]);
+    uplift_simd::tape::put(s, tg, 2, _e11[2]);
+    let _e16 = uplift_simd::vector::mul::<S, 3>([s.splat(4.0f32); 3], _e9);
+    let _e17 = uplift_simd::vector::mul::<S, 3>(_e16, _e10);
+    uplift_simd::tape::put(s, tg, 3, _e17[0]);
+    uplift_simd::tape::put(s, tg, 4, _e17[1]);
+    uplift_simd::tape::put(s, tg, 5, _e17[2]);
+    let _e26 = [s.splat(0.0f32); 3];
+    let _e35 = [s.splat(1e-30f32); 3];
+    let _e47 = [s.splat(1e-30f32); 3];
+    let _e50 = mx_polarized { p: [s.splat(0.0); 3], s_: [s.splat(0.0); 3] };
+    return _e50;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_conductor_phase_polarized_p60<S: Simd>(s: S, cos_theta_3: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
+    let tp = tp.fit::<S>(21);
+    let _e5 = [s.splat(1e-6f32); 3];
+    let _e8 = (cos_theta_3 * cos_theta_3);
+    let _e10 = (-cos_theta_3).mul_add(cos_theta_3, s.splat(1.0f32));
+    let _e13 = [s.splat(1.0f32); 3];
+    let _e16 = [tp.f(s, 0), tp.f(s, 1), tp.f(s, 2)];
+    let _e17 = tp.f(s, 3);
+    let _e18 = (_e17 * _e10);
+    let _e19 = [_e18; 3];
+    let _e20 = uplift_simd::vector::sub::<S, 3>(_e16, _e19);
+    let _e21 = uplift_simd::vector::mul::<S, 3>(_e20, _e20);
+    let _e30 = [tp.f(s, 4), tp.f(s, 5), tp.f(s, 6)];
+    let _e31 = uplift_simd::vector::add::<S, 3>(_e21, _e30);
+    let _e32 = uplift_simd::vector::map::<S, 3>(_e31, |x| x.sqrt());
+    let _e33 = uplift_simd::vector::add::<S, 3>(_e20, _e32);
+    let _e35 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e33);
+    let _e37 = [s.splat(0.0f32); 3];
+    let _e38 = uplift_simd::vector::zip::<S, 3>(_e35, _e37, |x, y| x.max(y));
+    let _e39 = uplift_simd::vector::map::<S, 3>(_e38, |x| x.sqrt());
+    let _e40 = uplift_simd::vector::sub::<S, 3>(_e32, _e20);
+    let _e42 = uplift_simd::vector::mul::<S, 3>([s.splat(0.5f32); 3], _e40);
+    let _e44 = [s.splat(0.0f32); 3];
+    let _e45 = uplift_simd::vector::zip::<S, 3>(_e42, _e44, |x, y| x.max(y));
+    let _e46 = uplift_simd::vector::map::<S, 3>(_e45, |x| x.sqrt());
+    let _e47 = (eta1_ * cos_theta_3);
+    let _e49 = tp.f(s, 7);
+    let _e50 = uplift_simd::vector::mul::<S, 3>([_e49; 3], _e46);
+    let _e51 = uplift_simd::vector::mul::<S, 3>(_e50, [cos_theta_3; 3]);
+    let _e52 = uplift_simd::vector::mul::<S, 3>(_e39, _e39);
+    let _e53 = uplift_simd::vector::mul::<S, 3>(_e46, _e46);
+    let _e54 = uplift_simd::vector::add::<S, 3>(_e52, _e53);
+    let _e55 = (_e47 * _e47);
+    let _e56 = [_e55; 3];
+    let _e57 = uplift_simd::vector::sub::<S, 3>(_e54, _e56);
+    let _e58 = mx_fast_atan2_vec3_(s, _e51, _e57);
+    let _e61 = [s.splat(1.0f32); 3];
+    let _e64 = [tp.f(s, 8), tp.f(s, 9), tp.f(s, 10)];
+    let _e65 = uplift_simd::vector::mul::<S, 3>(_e64, [cos_theta_3; 3]);
+    let _e69 = [tp.f(s, 11), tp.f(s, 12), tp.f(s, 13)];
+    let _e70 = uplift_simd::vector::mul::<S, 3>(_e69, [cos_theta_3; 3]);
+    let _e72 = [tp.f(s, 14), tp.f(s, 15), tp.f(s, 16)];
+    let _e73 = uplift_simd::vector::mul::<S, 3>(_e72, _e39);
+    let _e75 = [s.splat(1.0f32); 3];
+    let _e77 = [tp.f(s, 17), tp.f(s, 18), tp.f(s, 19)];
+    let _e78 = uplift_simd::vector::mul::<S, 3>(_e77, _e46);
+    let _e79 = uplift_simd::vector::sub::<S, 3>(_e73, _e78);
+    let _e80 = uplift_simd::vector::mul::<S, 3>(_e70, _e79);
+    let _e81 = uplift_simd::vector::mul::<S, 3>(_e65, _e65);
+    let _e82 = tp.f(s, 20);
+    let _e83 = uplift_simd::vector::mul::<S, 3>(_e39, _e39);
+    let _e84 = uplift_simd::vector::mul::<S, 3>(_e46, _e46);
+    let _e85 = uplift_simd::vector::add::<S, 3>(_e83, _e84);
+    let _e86 = uplift_simd::vector::mul::<S, 3>([_e82; 3], _e85);
+    let _e87 = uplift_simd::vector::sub::<S, 3>(_e81, _e86);
+    let _e88 = mx_fast_atan2_vec3_(s, _e80, _e87);
+    let _e89 = mx_polarized { p: _e88, s_: _e58 };
+    return _e89;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_conductor_phase_polarized_g60<S: Simd>(s: S, cos_theta_3: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
+    assert!(tg.len() >= 21 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e5 = [s.splat(1e-6f32); 3];
+    let _e6 = uplift_simd::vector::zip::<S, 3>(eta2_1, _e5, |x, y| x.max(y));
+    let _e7 = uplift_simd::vector::zip::<S, 3>(kappa2_, _e6, |x, y| x * y.rcp());
+    let _e11 = uplift_simd::vector::mul::<S, 3>(_e6, _e6);
+    let _e13 = [s.splat(1.0f32); 3];
+    let _e14 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
+    let _e15 = uplift_simd::vector::sub::<S, 3>(_e13, _e14);
+    let _e16 = uplift_simd::vector::mul::<S, 3>(_e11, _e15);
+    uplift_simd::tape::put(s, tg, 0, _e16[0]);
+    uplift_simd::tape::put(s, tg, 1, _e16[1]);
+    uplift_simd::tape::put(s, tg, 2, _e16[2]);
+    let _e17 = (eta1_ * eta1_);
+    uplift_simd::tape::put(s, tg, 3, _e17);
+    let _e23 = uplift_simd::vector::mul::<S, 3>([s.splat(2.0f32); 3], _e6);
+    let _e24 = uplift_simd::vector::mul::<S, 3>(_e23, _e6);
+    let _e25 = uplift_simd::vector::mul::<S, 3>(_e24, _e7);
+    let _e27 = uplift_simd::vector::mul::<S, 3>([s.splat(2.0f32); 3], _e6);
+    let _e28 = uplift_simd::vector::mul::<S, 3>(_e27, _e6);
+    let _e29 = uplift_simd::vector::mul::<S, 3>(_e28, _e7);
+    let _e30 = uplift_simd::vector::mul::<S, 3>(_e25, _e29);
+    uplift_simd::tape::put(s, tg, 4, _e30[0]);
+    uplift_simd::tape::put(s, tg, 5, _e30[1]);
+    uplift_simd::tape::put(s, tg, 6, _e30[2]);
+    let _e37 = [s.splat(0.0f32); 3];
+    let _e44 = [s.splat(0.0f32); 3];
+    let _e49 = (s.splat(2.0f32) * eta1_);
+    uplift_simd::tape::put(s, tg, 7, _e49);
+    let _e59 = uplift_simd::vector::mul::<S, 3>(_e6, _e6);
+    let _e61 = [s.splat(1.0f32); 3];
+    let _e62 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
+    let _e63 = uplift_simd::vector::add::<S, 3>(_e61, _e62);
+    let _e64 = uplift_simd::vector::mul::<S, 3>(_e59, _e63);
+    uplift_simd::tape::put(s, tg, 8, _e64[0]);
+    uplift_simd::tape::put(s, tg, 9, _e64[1]);
+    uplift_simd::tape::put(s, tg, 10, _e64[2]);
+    let _e67 = (s.splat(2.0f32) * eta1_);
+    let _e68 = uplift_simd::vector::mul::<S, 3>([_e67; 3], _e6);
+    let _e69 = uplift_simd::vector::mul::<S, 3>(_e68, _e6);
+    uplift_simd::tape::put(s, tg, 11, _e69[0]);
+    uplift_simd::tape::put(s, tg, 12, _e69[1]);
+    uplift_simd::tape::put(s, tg, 13, _e69[2]);
+    let _e72 = uplift_simd::vector::mul::<S, 3>([s.splat(2.0f32); 3], _e7);
+    uplift_simd::tape::put(s, tg, 14, _e72[0]);
+    uplift_simd::tape::put(s, tg, 15, _e72[1]);
+    uplift_simd::tape::put(s, tg, 16, _e72[2]);
+    let _e75 = [s.splat(1.0f32); 3];
+    let _e76 = uplift_simd::vector::mul::<S, 3>(_e7, _e7);
+    let _e77 = uplift_simd::vector::sub::<S, 3>(_e75, _e76);
+    uplift_simd::tape::put(s, tg, 17, _e77[0]);
+    uplift_simd::tape::put(s, tg, 18, _e77[1]);
+    uplift_simd::tape::put(s, tg, 19, _e77[2]);
+    let _e82 = (eta1_ * eta1_);
+    uplift_simd::tape::put(s, tg, 20, _e82);
+    let _e89 = mx_polarized { p: [s.splat(0.0); 3], s_: [s.splat(0.0); 3] };
+    return _e89;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_airy_conductor_p61<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+    let tp = tp.fit::<S>(39);
+    let _e6 = tp.f(s, 0);
+    let _e7 = mx_thin_film_cos_p42(s, cos_theta_6, _e6, tp.at::<S>(7));
+    let _e9 = [tp.f(s, 1), tp.f(s, 2), tp.f(s, 3)];
+    let _e11 = [tp.f(s, 4), tp.f(s, 5), tp.f(s, 6)];
+    let _e12 = mx_fresnel_conductor_polarized_p59(s, _e7, _e9, _e11, tp.at::<S>(8));
+    let _e13 = mx_fresnel_conductor_phase_polarized_p60(s, _e7, _e6, n_2, k_1, tp.at::<S>(14));
+    let _e14 = mx_airy_reflectance_p45(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, tp.at::<S>(35));
+    return _e14;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_airy_conductor_g61<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tg: &mut [f32]) -> [S::F; 3] {
+    assert!(tg.len() >= 39 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e6 = { let (x, y) = (film_ior, s.splat(1.0f32)); x.max(y) };
+    uplift_simd::tape::put(s, tg, 0, _e6);
+    let _e7 = mx_thin_film_cos_g42(s, cos_theta_6, _e6, &mut tg[7 * S::LANES..]);
+    let _e8 = [_e6; 3];
+    let _e9 = uplift_simd::vector::zip::<S, 3>(n_2, _e8, |x, y| x * y.rcp());
+    uplift_simd::tape::put(s, tg, 1, _e9[0]);
+    uplift_simd::tape::put(s, tg, 2, _e9[1]);
+    uplift_simd::tape::put(s, tg, 3, _e9[2]);
+    let _e10 = [_e6; 3];
+    let _e11 = uplift_simd::vector::zip::<S, 3>(k_1, _e10, |x, y| x * y.rcp());
+    uplift_simd::tape::put(s, tg, 4, _e11[0]);
+    uplift_simd::tape::put(s, tg, 5, _e11[1]);
+    uplift_simd::tape::put(s, tg, 6, _e11[2]);
+    let _e12 = mx_fresnel_conductor_polarized_g59(s, _e7, _e9, _e11, &mut tg[8 * S::LANES..]);
+    let _e13 = s.outline(#[inline(always)] || mx_fresnel_conductor_phase_polarized_g60(s, _e7, _e6, n_2, k_1, &mut tg[14 * S::LANES..]));
+    let _e14 = mx_airy_reflectance_g45(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, &mut tg[35 * S::LANES..]);
+    return _e14;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_dielectric_bsdf_p62<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(133);
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
@@ -6847,7 +7144,7 @@ pub fn mx_dielectric_bsdf_p57<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _m3 = _e62;
     if _m3.any() {
         let _e63 = tp.f(s, 54);
-        let _e64 = mx_ggx_lobe_sample_p56(s, cl_7, _e16, _e51, _e63, tp.at::<S>(77));
+        let _e64 = mx_ggx_lobe_sample_p58(s, cl_7, _e16, _e51, _e63, tp.at::<S>(77));
         _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
         _done = _done | _m3;
     }
@@ -6859,11 +7156,11 @@ pub fn mx_dielectric_bsdf_p57<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e69 = uplift_simd::vector::dot::<S, 3>(_e68, _e67);
     let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_p29(s, _e69, _e18, tp.at::<S>(84)) } else { s.splat(0.0) };
     let _e71 = [_e70; 3];
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_p35(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(86)) } else { [s.splat(0.0); 3] };
+    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_p61(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(86)) } else { [s.splat(0.0); 3] };
     let _e73 = uplift_simd::vector::select_all::<S, 3>(_e23, _e72, _e71);
     let _e74 = [tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)];
     let _e75 = [tp.f(s, 64), tp.f(s, 65)];
-    let _e76 = mx_ggx_reflection_p48(s, _e74, _e65, _e67, _e75, tp.at::<S>(125));
+    let _e76 = mx_ggx_reflection_p50(s, _e74, _e65, _e67, _e75, tp.at::<S>(125));
     let _e77 = (_e12 * _e76);
     let _e78 = uplift_simd::vector::mul::<S, 3>([_e77; 3], _e73);
     let _e79 = uplift_simd::vector::mul::<S, 3>(_e78, _e38);
@@ -6881,14 +7178,14 @@ pub fn mx_dielectric_bsdf_p57<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e87 = tp.f(s, 71);
     let _e88 = [tp.f(s, 72), tp.f(s, 73), tp.f(s, 74)];
     let _e89 = [tp.f(s, 75), tp.f(s, 76)];
-    let _e90 = mx_ggx_pdf_p51(s, _e88, _e67, _e89, tp.at::<S>(130));
+    let _e90 = mx_ggx_pdf_p53(s, _e88, _e67, _e89, tp.at::<S>(130));
     let _e91 = mx_lobe_with_pdf_p26(s, _e80, _e51, _e87, _e90, tp.at::<S>(132));
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_dielectric_bsdf_g57<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_dielectric_bsdf_g62<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 133 * S::LANES, "the tape is shorter than the pass's slots");
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
@@ -7002,7 +7299,7 @@ pub fn mx_dielectric_bsdf_g57<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     if _m3.any() {
         let _e63 = mx_luminance_rgb(s, _e53);
         uplift_simd::tape::put(s, tg, 54, _e63);
-        let _e64 = mx_ggx_lobe_sample_g56(s, cl_7, _e16, _e51, _e63, &mut tg[77 * S::LANES..]);
+        let _e64 = mx_ggx_lobe_sample_g58(s, cl_7, _e16, _e51, _e63, &mut tg[77 * S::LANES..]);
         _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
         _done = _done | _m3;
     }
@@ -7016,7 +7313,7 @@ pub fn mx_dielectric_bsdf_g57<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     uplift_simd::tape::put(s, tg, 59, _e68[1]);
     uplift_simd::tape::put(s, tg, 60, _e68[2]);
     let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_g29(s, s.splat(0.0), _e18, &mut tg[84 * S::LANES..]) } else { s.splat(0.0) };
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_g35(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[86 * S::LANES..]) } else { [s.splat(0.0); 3] };
+    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_g61(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[86 * S::LANES..]) } else { [s.splat(0.0); 3] };
     let _e74 = _e16.v;
     uplift_simd::tape::put(s, tg, 61, _e74[0]);
     uplift_simd::tape::put(s, tg, 62, _e74[1]);
@@ -7024,7 +7321,7 @@ pub fn mx_dielectric_bsdf_g57<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e75 = _e16.a;
     uplift_simd::tape::put(s, tg, 64, _e75[0]);
     uplift_simd::tape::put(s, tg, 65, _e75[1]);
-    let _e76 = mx_ggx_reflection_g48(s, _e74, [s.splat(0.0); 3], [s.splat(0.0); 3], _e75, &mut tg[125 * S::LANES..]);
+    let _e76 = mx_ggx_reflection_g50(s, _e74, [s.splat(0.0); 3], [s.splat(0.0); 3], _e75, &mut tg[125 * S::LANES..]);
     let _e81 = cl_7.context;
     let _e83 = _e81.eq(s.splat_i(0i32));
     uplift_simd::tape::put_m(s, tg, 66, _e83);
@@ -7050,14 +7347,14 @@ pub fn mx_dielectric_bsdf_g57<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e89 = _e16.a;
     uplift_simd::tape::put(s, tg, 75, _e89[0]);
     uplift_simd::tape::put(s, tg, 76, _e89[1]);
-    let _e90 = mx_ggx_pdf_g51(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[130 * S::LANES..]);
+    let _e90 = mx_ggx_pdf_g53(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[130 * S::LANES..]);
     let _e91 = mx_lobe_with_pdf_g26(s, [s.splat(0.0); 3], _e51, _e87, _e90, &mut tg[132 * S::LANES..]);
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_mix_bsdf_p58<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_mix_bsdf_p63<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(10);
     let _e4 = tp.f(s, 0);
     let _e5 = bg.response;
@@ -7069,14 +7366,14 @@ pub fn mx_mix_bsdf_p58<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSD
     let _e11 = fg.lobe;
     let _e12 = bg.lobe;
     let _e14 = tp.f(s, 4);
-    let _e15 = mx_lobe_combine_p54(s, cl_10, _e11, _e4, _e12, _e14, tp.at::<S>(5));
+    let _e15 = mx_lobe_combine_p56(s, cl_10, _e11, _e4, _e12, _e14, tp.at::<S>(5));
     let _e16 = BSDF { response: _e7, throughput: _e10, lobe: _e15 };
     return _e16;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_mix_bsdf_g58<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_mix_bsdf_g63<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSDF<S>, mix: S::F, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 10 * S::LANES, "the tape is shorter than the pass's slots");
     let _e4 = mx_mix_amount(s, mix);
     uplift_simd::tape::put(s, tg, 0, _e4);
@@ -7088,14 +7385,14 @@ pub fn mx_mix_bsdf_g58<S: Simd>(s: S, cl_10: mx_closure<S>, fg: BSDF<S>, bg: BSD
     uplift_simd::tape::put(s, tg, 3, _e10[2]);
     let _e14 = (s.splat(1.0f32) - _e4);
     uplift_simd::tape::put(s, tg, 4, _e14);
-    let _e15 = mx_lobe_combine_g54(s, cl_10, [s.splat(0.0); 4], _e4, [s.splat(0.0); 4], _e14, &mut tg[5 * S::LANES..]);
+    let _e15 = mx_lobe_combine_g56(s, cl_10, [s.splat(0.0); 4], _e4, [s.splat(0.0); 4], _e14, &mut tg[5 * S::LANES..]);
     let _e16 = BSDF { response: [s.splat(0.0); 3], throughput: _e10, lobe: _e15 };
     return _e16;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_sheen_bsdf_p59<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color: [S::F; 3], roughness_1: S::F, normal_1: [S::F; 3], mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_sheen_bsdf_p64<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color: [S::F; 3], roughness_1: S::F, normal_1: [S::F; 3], mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(61);
     let mut e_1: S::F = s.splat(0.0);
     let mut norm: S::F = s.splat(1.0f32);
@@ -7239,7 +7536,7 @@ pub fn mx_sheen_bsdf_p59<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_sheen_bsdf_g59<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color: [S::F; 3], roughness_1: S::F, normal_1: [S::F; 3], mode: S::I, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_sheen_bsdf_g64<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color: [S::F; 3], roughness_1: S::F, normal_1: [S::F; 3], mode: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 61 * S::LANES, "the tape is shorter than the pass's slots");
     let mut e_1: S::F = s.splat(0.0);
     let mut norm: S::F = s.splat(1.0f32);
@@ -7412,7 +7709,7 @@ pub fn mx_sheen_bsdf_g59<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_dielectric_bsdf_p60<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_dielectric_bsdf_p65<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(133);
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
@@ -7450,7 +7747,7 @@ pub fn mx_dielectric_bsdf_p60<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _m3 = _e62;
     if _m3.any() {
         let _e63 = tp.f(s, 54);
-        let _e64 = mx_ggx_lobe_sample_p56(s, cl_7, _e16, _e51, _e63, tp.at::<S>(77));
+        let _e64 = mx_ggx_lobe_sample_p58(s, cl_7, _e16, _e51, _e63, tp.at::<S>(77));
         _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
         _done = _done | _m3;
     }
@@ -7462,11 +7759,11 @@ pub fn mx_dielectric_bsdf_p60<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e69 = uplift_simd::vector::dot::<S, 3>(_e68, _e67);
     let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_p29(s, _e69, _e18, tp.at::<S>(84)) } else { s.splat(0.0) };
     let _e71 = [_e70; 3];
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_p35(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(86)) } else { [s.splat(0.0); 3] };
+    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_p61(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(86)) } else { [s.splat(0.0); 3] };
     let _e73 = uplift_simd::vector::select_all::<S, 3>(_e23, _e72, _e71);
     let _e74 = [tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)];
     let _e75 = [tp.f(s, 64), tp.f(s, 65)];
-    let _e76 = mx_ggx_reflection_p48(s, _e74, _e65, _e67, _e75, tp.at::<S>(125));
+    let _e76 = mx_ggx_reflection_p50(s, _e74, _e65, _e67, _e75, tp.at::<S>(125));
     let _e77 = (_e12 * _e76);
     let _e78 = uplift_simd::vector::mul::<S, 3>([_e77; 3], _e73);
     let _e79 = uplift_simd::vector::mul::<S, 3>(_e78, _e38);
@@ -7484,14 +7781,14 @@ pub fn mx_dielectric_bsdf_p60<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e87 = tp.f(s, 71);
     let _e88 = [tp.f(s, 72), tp.f(s, 73), tp.f(s, 74)];
     let _e89 = [tp.f(s, 75), tp.f(s, 76)];
-    let _e90 = mx_ggx_pdf_p51(s, _e88, _e67, _e89, tp.at::<S>(130));
+    let _e90 = mx_ggx_pdf_p53(s, _e88, _e67, _e89, tp.at::<S>(130));
     let _e91 = mx_lobe_with_pdf_p26(s, _e80, _e51, _e87, _e90, tp.at::<S>(132));
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_dielectric_bsdf_g60<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_dielectric_bsdf_g65<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 133 * S::LANES, "the tape is shorter than the pass's slots");
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
@@ -7605,7 +7902,7 @@ pub fn mx_dielectric_bsdf_g60<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     if _m3.any() {
         let _e63 = mx_luminance_rgb(s, _e53);
         uplift_simd::tape::put(s, tg, 54, _e63);
-        let _e64 = mx_ggx_lobe_sample_g56(s, cl_7, _e16, _e51, _e63, &mut tg[77 * S::LANES..]);
+        let _e64 = mx_ggx_lobe_sample_g58(s, cl_7, _e16, _e51, _e63, &mut tg[77 * S::LANES..]);
         _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
         _done = _done | _m3;
     }
@@ -7619,7 +7916,7 @@ pub fn mx_dielectric_bsdf_g60<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     uplift_simd::tape::put(s, tg, 59, _e68[1]);
     uplift_simd::tape::put(s, tg, 60, _e68[2]);
     let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_g29(s, s.splat(0.0), _e18, &mut tg[84 * S::LANES..]) } else { s.splat(0.0) };
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_g35(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[86 * S::LANES..]) } else { [s.splat(0.0); 3] };
+    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_g61(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[86 * S::LANES..]) } else { [s.splat(0.0); 3] };
     let _e74 = _e16.v;
     uplift_simd::tape::put(s, tg, 61, _e74[0]);
     uplift_simd::tape::put(s, tg, 62, _e74[1]);
@@ -7627,7 +7924,7 @@ pub fn mx_dielectric_bsdf_g60<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e75 = _e16.a;
     uplift_simd::tape::put(s, tg, 64, _e75[0]);
     uplift_simd::tape::put(s, tg, 65, _e75[1]);
-    let _e76 = mx_ggx_reflection_g48(s, _e74, [s.splat(0.0); 3], [s.splat(0.0); 3], _e75, &mut tg[125 * S::LANES..]);
+    let _e76 = mx_ggx_reflection_g50(s, _e74, [s.splat(0.0); 3], [s.splat(0.0); 3], _e75, &mut tg[125 * S::LANES..]);
     let _e81 = cl_7.context;
     let _e83 = _e81.eq(s.splat_i(0i32));
     uplift_simd::tape::put_m(s, tg, 66, _e83);
@@ -7653,14 +7950,14 @@ pub fn mx_dielectric_bsdf_g60<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e89 = _e16.a;
     uplift_simd::tape::put(s, tg, 75, _e89[0]);
     uplift_simd::tape::put(s, tg, 76, _e89[1]);
-    let _e90 = mx_ggx_pdf_g51(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[130 * S::LANES..]);
+    let _e90 = mx_ggx_pdf_g53(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[130 * S::LANES..]);
     let _e91 = mx_lobe_with_pdf_g26(s, [s.splat(0.0); 3], _e51, _e87, _e90, &mut tg[132 * S::LANES..]);
     return BSDF::<S>::select((!_done), _e91, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_combine_p61<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b_1: [S::F; 4], wb: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 4] {
+pub fn mx_lobe_combine_p66<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b_1: [S::F; 4], wb: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 4] {
     let tp = tp.fit::<S>(5);
     let mut _ret: [S::F; 4] = [s.splat(0.0); 4];
     let mut _done = s.first_lanes(0);
@@ -7700,7 +7997,7 @@ pub fn mx_lobe_combine_p61<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], w
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_lobe_combine_g61<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b_1: [S::F; 4], wb: S::F, tg: &mut [f32]) -> [S::F; 4] {
+pub fn mx_lobe_combine_g66<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], wa: S::F, b_1: [S::F; 4], wb: S::F, tg: &mut [f32]) -> [S::F; 4] {
     assert!(tg.len() >= 5 * S::LANES, "the tape is shorter than the pass's slots");
     let mut _ret: [S::F; 4] = [s.splat(0.0); 4];
     let mut _done = s.first_lanes(0);
@@ -7726,7 +8023,7 @@ pub fn mx_lobe_combine_g61<S: Simd>(s: S, cl_9: mx_closure<S>, a_5: [S::F; 4], w
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_layer_bsdf_p62<S: Simd>(s: S, cl_11: mx_closure<S>, top: BSDF<S>, base: BSDF<S>, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
+pub fn mx_layer_bsdf_p67<S: Simd>(s: S, cl_11: mx_closure<S>, top: BSDF<S>, base: BSDF<S>, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(9);
     let _e3 = top.throughput;
     let _e6 = tp.f(s, 0);
@@ -7740,14 +8037,14 @@ pub fn mx_layer_bsdf_p62<S: Simd>(s: S, cl_11: mx_closure<S>, top: BSDF<S>, base
     let _e14 = [tp.f(s, 1), tp.f(s, 2), tp.f(s, 3)];
     let _e15 = top.lobe;
     let _e17 = base.lobe;
-    let _e18 = mx_lobe_combine_p61(s, cl_11, _e15, s.splat(1.0f32), _e17, _e6, tp.at::<S>(4));
+    let _e18 = mx_lobe_combine_p66(s, cl_11, _e15, s.splat(1.0f32), _e17, _e6, tp.at::<S>(4));
     let _e19 = BSDF { response: _e11, throughput: _e14, lobe: _e18 };
     return _e19;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_layer_bsdf_g62<S: Simd>(s: S, cl_11: mx_closure<S>, top: BSDF<S>, base: BSDF<S>, tg: &mut [f32]) -> BSDF<S> {
+pub fn mx_layer_bsdf_g67<S: Simd>(s: S, cl_11: mx_closure<S>, top: BSDF<S>, base: BSDF<S>, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 9 * S::LANES, "the tape is shorter than the pass's slots");
     let _e3 = top.throughput;
     let _e4 = mx_luminance_rgb(s, _e3);
@@ -7760,14 +8057,14 @@ pub fn mx_layer_bsdf_g62<S: Simd>(s: S, cl_11: mx_closure<S>, top: BSDF<S>, base
     uplift_simd::tape::put(s, tg, 1, _e14[0]);
     uplift_simd::tape::put(s, tg, 2, _e14[1]);
     uplift_simd::tape::put(s, tg, 3, _e14[2]);
-    let _e18 = mx_lobe_combine_g61(s, cl_11, [s.splat(0.0); 4], s.splat(1.0f32), [s.splat(0.0); 4], _e6, &mut tg[4 * S::LANES..]);
+    let _e18 = mx_lobe_combine_g66(s, cl_11, [s.splat(0.0); 4], s.splat(1.0f32), [s.splat(0.0); 4], _e6, &mut tg[4 * S::LANES..]);
     let _e19 = BSDF { response: [s.splat(0.0); 3], throughput: _e14, lobe: _e18 };
     return _e19;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_pattern_p63<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>, tp: uplift_simd::tape::TapeRow<'_>) -> MxOutputs<S> {
+pub fn mx_pattern_p68<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>, tp: uplift_simd::tape::TapeRow<'_>) -> MxOutputs<S> {
     let tp = tp.fit::<S>(1716);
     let _e3 = inputs.wv;
     let _e7 = [s.splat(0.0f32), s.splat(0.0f32), s.splat(1.0f32)];
@@ -7800,9 +8097,11 @@ pub fn mx_pattern_p63<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
     let _e46 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e47 = inputs.coat_ior;
     let _e50 = [s.splat(0.01f32), s.splat(0.01f32)];
+    let _e52 = inputs.coat_film_thickness;
+    let _e53 = inputs.coat_film_ior;
     let _e54 = geom_1.normal_world;
     let _e55 = geom_1.tangent_world;
-    let _e58 = mx_dielectric_bsdf_p7(s, _e41, _e42, _e46, _e47, _e50, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e54, _e55, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(83));
+    let _e58 = mx_dielectric_bsdf_p7(s, _e41, _e42, _e46, _e47, _e50, s.first_lanes(0), _e52, _e53, _e54, _e55, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(83));
     let _e60 = mx_closure_for_lobe(s, _e9, s.splat_u(2407334386u32));
     let _e65 = geom_1.normal_world;
     let _e66 = geom_1.tangent_world;
@@ -7867,58 +8166,60 @@ pub fn mx_pattern_p63<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
     let _e177 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e178 = inputs.coat_ior;
     let _e181 = [s.splat(0.01f32), s.splat(0.01f32)];
+    let _e183 = inputs.coat_film_thickness;
+    let _e184 = inputs.coat_film_ior;
     let _e185 = geom_1.normal_world;
     let _e186 = geom_1.tangent_world;
-    let _e189 = mx_dielectric_bsdf_p40(s, _e172, _e173, _e177, _e178, _e181, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e185, _e186, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(689));
+    let _e189 = mx_dielectric_bsdf_p40(s, _e172, _e173, _e177, _e178, _e181, s.first_lanes(0), _e183, _e184, _e185, _e186, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(689));
     let _e191 = mx_closure_for_lobe(s, _e160, s.splat_u(2407334386u32));
     let _e196 = geom_1.normal_world;
     let _e197 = geom_1.tangent_world;
-    let _e199 = mx_conductor_bsdf_p53(s, _e191, s.splat(1.0f32), _e16, _e17, _e20, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e196, _e197, s.splat_i(0i32), tp.at::<S>(822));
+    let _e199 = mx_conductor_bsdf_p55(s, _e191, s.splat(1.0f32), _e16, _e17, _e20, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e196, _e197, s.splat_i(0i32), tp.at::<S>(822));
     let _e201 = mx_closure_for_lobe(s, _e160, s.splat_u(4181856127u32));
     let _e206 = geom_1.normal_world;
     let _e207 = geom_1.tangent_world;
-    let _e209 = mx_conductor_bsdf_p53(s, _e201, s.splat(1.0f32), _e16, _e17, _e23, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e206, _e207, s.splat_i(0i32), tp.at::<S>(1006));
+    let _e209 = mx_conductor_bsdf_p55(s, _e201, s.splat(1.0f32), _e16, _e17, _e23, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e206, _e207, s.splat_i(0i32), tp.at::<S>(1006));
     let _e211 = mx_closure_for_lobe(s, _e160, s.splat_u(100289679u32));
     let _e212 = inputs.haze_weight;
-    let _e213 = mx_mix_bsdf_p55(s, _e211, _e199, _e209, _e212, tp.at::<S>(1190));
+    let _e213 = mx_mix_bsdf_p57(s, _e211, _e199, _e209, _e212, tp.at::<S>(1190));
     let _e215 = mx_closure_for_lobe(s, _e160, s.splat_u(257921297u32));
     let _e220 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e221 = inputs.specular_ior;
     let _e225 = geom_1.normal_world;
     let _e226 = geom_1.tangent_world;
-    let _e229 = mx_dielectric_bsdf_p57(s, _e215, s.splat(1.0f32), _e220, _e221, _e20, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e225, _e226, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(1200));
+    let _e229 = mx_dielectric_bsdf_p62(s, _e215, s.splat(1.0f32), _e220, _e221, _e20, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e225, _e226, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(1200));
     let _e231 = mx_closure_for_lobe(s, _e160, s.splat_u(2697017240u32));
     let _e236 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e237 = inputs.specular_ior;
     let _e241 = geom_1.normal_world;
     let _e242 = geom_1.tangent_world;
-    let _e245 = mx_dielectric_bsdf_p57(s, _e231, s.splat(1.0f32), _e236, _e237, _e23, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e241, _e242, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(1333));
+    let _e245 = mx_dielectric_bsdf_p62(s, _e231, s.splat(1.0f32), _e236, _e237, _e23, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e241, _e242, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(1333));
     let _e247 = mx_closure_for_lobe(s, _e160, s.splat_u(2175277739u32));
     let _e248 = inputs.haze_weight;
-    let _e249 = mx_mix_bsdf_p58(s, _e247, _e229, _e245, _e248, tp.at::<S>(1466));
+    let _e249 = mx_mix_bsdf_p63(s, _e247, _e229, _e245, _e248, tp.at::<S>(1466));
     let _e251 = mx_closure_for_lobe(s, _e160, s.splat_u(2140428231u32));
     let _e252 = inputs.inner_weight;
     let _e253 = inputs.scatter_color;
     let _e254 = geom_1.normal_world;
-    let _e256 = mx_sheen_bsdf_p59(s, _e251, _e252, _e253, _e26, _e254, s.splat_i(0i32), tp.at::<S>(1476));
+    let _e256 = mx_sheen_bsdf_p64(s, _e251, _e252, _e253, _e26, _e254, s.splat_i(0i32), tp.at::<S>(1476));
     let _e258 = mx_closure_for_lobe(s, _e160, s.splat_u(3452003231u32));
     let _e259 = inputs.subcutaneous_weight;
     let _e260 = inputs.scatter_color;
     let _e261 = inputs.specular_ior;
     let _e265 = geom_1.normal_world;
     let _e266 = geom_1.tangent_world;
-    let _e269 = mx_dielectric_bsdf_p60(s, _e258, _e259, _e260, _e261, _e29, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e265, _e266, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(1537));
+    let _e269 = mx_dielectric_bsdf_p65(s, _e258, _e259, _e260, _e261, _e29, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e265, _e266, s.splat_i(0i32), s.splat_i(0i32), tp.at::<S>(1537));
     let _e271 = mx_closure_for_lobe(s, _e160, s.splat_u(2774413006u32));
-    let _e272 = mx_layer_bsdf_p62(s, _e271, _e256, _e269, tp.at::<S>(1670));
+    let _e272 = mx_layer_bsdf_p67(s, _e271, _e256, _e269, tp.at::<S>(1670));
     let _e274 = mx_closure_for_lobe(s, _e160, s.splat_u(3262708222u32));
-    let _e275 = mx_layer_bsdf_p62(s, _e274, _e249, _e272, tp.at::<S>(1679));
+    let _e275 = mx_layer_bsdf_p67(s, _e274, _e249, _e272, tp.at::<S>(1679));
     let _e277 = mx_closure_for_lobe(s, _e160, s.splat_u(4238484515u32));
     let _e278 = inputs.metalness;
-    let _e279 = mx_mix_bsdf_p58(s, _e277, _e213, _e275, _e278, tp.at::<S>(1688));
+    let _e279 = mx_mix_bsdf_p63(s, _e277, _e213, _e275, _e278, tp.at::<S>(1688));
     let _e281 = mx_closure_for_lobe(s, _e160, s.splat_u(211147556u32));
-    let _e282 = mx_layer_bsdf_p62(s, _e281, _e189, _e279, tp.at::<S>(1698));
+    let _e282 = mx_layer_bsdf_p67(s, _e281, _e189, _e279, tp.at::<S>(1698));
     let _e284 = mx_closure_for_lobe(s, _e160, s.splat_u(2233972744u32));
-    let _e285 = mx_layer_bsdf_p62(s, _e284, _e170, _e282, tp.at::<S>(1707));
+    let _e285 = mx_layer_bsdf_p67(s, _e284, _e170, _e282, tp.at::<S>(1707));
     let _e286 = _e160.wl;
     let _e287 = mx_closure_pdf(s, _e285);
     let _e288 = _e285.response;
@@ -7929,7 +8230,7 @@ pub fn mx_pattern_p63<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_pattern_g63<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>, tg: &mut [f32]) -> MxOutputs<S> {
+pub fn mx_pattern_g68<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>, tg: &mut [f32]) -> MxOutputs<S> {
     assert!(tg.len() >= 1716 * S::LANES, "the tape is shorter than the pass's slots");
     let _e3 = inputs.wv;
     let _e7 = [s.splat(0.0f32), s.splat(0.0f32), s.splat(1.0f32)];
@@ -7976,9 +8277,11 @@ pub fn mx_pattern_g63<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
     let _e46 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e47 = inputs.coat_ior;
     let _e50 = [s.splat(0.01f32), s.splat(0.01f32)];
+    let _e52 = inputs.coat_film_thickness;
+    let _e53 = inputs.coat_film_ior;
     let _e54 = geom_1.normal_world;
     let _e55 = geom_1.tangent_world;
-    let _e58 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g7(s, _e41, _e42, _e46, _e47, _e50, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e54, _e55, s.splat_i(0i32), s.splat_i(0i32), &mut tg[83 * S::LANES..]));
+    let _e58 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g7(s, _e41, _e42, _e46, _e47, _e50, s.first_lanes(0), _e52, _e53, _e54, _e55, s.splat_i(0i32), s.splat_i(0i32), &mut tg[83 * S::LANES..]));
     let _e60 = mx_closure_for_lobe(s, _e9, s.splat_u(2407334386u32));
     let _e65 = geom_1.normal_world;
     let _e66 = geom_1.tangent_world;
@@ -8043,58 +8346,60 @@ pub fn mx_pattern_g63<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
     let _e177 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e178 = inputs.coat_ior;
     let _e181 = [s.splat(0.01f32), s.splat(0.01f32)];
+    let _e183 = inputs.coat_film_thickness;
+    let _e184 = inputs.coat_film_ior;
     let _e185 = geom_1.normal_world;
     let _e186 = geom_1.tangent_world;
-    let _e189 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g40(s, _e172, _e173, _e177, _e178, _e181, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e185, _e186, s.splat_i(0i32), s.splat_i(0i32), &mut tg[689 * S::LANES..]));
+    let _e189 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g40(s, _e172, _e173, _e177, _e178, _e181, s.first_lanes(0), _e183, _e184, _e185, _e186, s.splat_i(0i32), s.splat_i(0i32), &mut tg[689 * S::LANES..]));
     let _e191 = mx_closure_for_lobe(s, _e160, s.splat_u(2407334386u32));
     let _e196 = geom_1.normal_world;
     let _e197 = geom_1.tangent_world;
-    let _e199 = s.outline(#[inline(always)] || mx_conductor_bsdf_g53(s, _e191, s.splat(1.0f32), _e16, _e17, _e20, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e196, _e197, s.splat_i(0i32), &mut tg[822 * S::LANES..]));
+    let _e199 = s.outline(#[inline(always)] || mx_conductor_bsdf_g55(s, _e191, s.splat(1.0f32), _e16, _e17, _e20, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e196, _e197, s.splat_i(0i32), &mut tg[822 * S::LANES..]));
     let _e201 = mx_closure_for_lobe(s, _e160, s.splat_u(4181856127u32));
     let _e206 = geom_1.normal_world;
     let _e207 = geom_1.tangent_world;
-    let _e209 = s.outline(#[inline(always)] || mx_conductor_bsdf_g53(s, _e201, s.splat(1.0f32), _e16, _e17, _e23, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e206, _e207, s.splat_i(0i32), &mut tg[1006 * S::LANES..]));
+    let _e209 = s.outline(#[inline(always)] || mx_conductor_bsdf_g55(s, _e201, s.splat(1.0f32), _e16, _e17, _e23, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e206, _e207, s.splat_i(0i32), &mut tg[1006 * S::LANES..]));
     let _e211 = mx_closure_for_lobe(s, _e160, s.splat_u(100289679u32));
     let _e212 = inputs.haze_weight;
-    let _e213 = mx_mix_bsdf_g55(s, _e211, _e199, _e209, _e212, &mut tg[1190 * S::LANES..]);
+    let _e213 = mx_mix_bsdf_g57(s, _e211, _e199, _e209, _e212, &mut tg[1190 * S::LANES..]);
     let _e215 = mx_closure_for_lobe(s, _e160, s.splat_u(257921297u32));
     let _e220 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e221 = inputs.specular_ior;
     let _e225 = geom_1.normal_world;
     let _e226 = geom_1.tangent_world;
-    let _e229 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g57(s, _e215, s.splat(1.0f32), _e220, _e221, _e20, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e225, _e226, s.splat_i(0i32), s.splat_i(0i32), &mut tg[1200 * S::LANES..]));
+    let _e229 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g62(s, _e215, s.splat(1.0f32), _e220, _e221, _e20, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e225, _e226, s.splat_i(0i32), s.splat_i(0i32), &mut tg[1200 * S::LANES..]));
     let _e231 = mx_closure_for_lobe(s, _e160, s.splat_u(2697017240u32));
     let _e236 = [s.splat(1.0f32), s.splat(1.0f32), s.splat(1.0f32)];
     let _e237 = inputs.specular_ior;
     let _e241 = geom_1.normal_world;
     let _e242 = geom_1.tangent_world;
-    let _e245 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g57(s, _e231, s.splat(1.0f32), _e236, _e237, _e23, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e241, _e242, s.splat_i(0i32), s.splat_i(0i32), &mut tg[1333 * S::LANES..]));
+    let _e245 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g62(s, _e231, s.splat(1.0f32), _e236, _e237, _e23, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e241, _e242, s.splat_i(0i32), s.splat_i(0i32), &mut tg[1333 * S::LANES..]));
     let _e247 = mx_closure_for_lobe(s, _e160, s.splat_u(2175277739u32));
     let _e248 = inputs.haze_weight;
-    let _e249 = mx_mix_bsdf_g58(s, _e247, _e229, _e245, _e248, &mut tg[1466 * S::LANES..]);
+    let _e249 = mx_mix_bsdf_g63(s, _e247, _e229, _e245, _e248, &mut tg[1466 * S::LANES..]);
     let _e251 = mx_closure_for_lobe(s, _e160, s.splat_u(2140428231u32));
     let _e252 = inputs.inner_weight;
     let _e253 = inputs.scatter_color;
     let _e254 = geom_1.normal_world;
-    let _e256 = s.outline(#[inline(always)] || mx_sheen_bsdf_g59(s, _e251, _e252, _e253, _e26, _e254, s.splat_i(0i32), &mut tg[1476 * S::LANES..]));
+    let _e256 = s.outline(#[inline(always)] || mx_sheen_bsdf_g64(s, _e251, _e252, _e253, _e26, _e254, s.splat_i(0i32), &mut tg[1476 * S::LANES..]));
     let _e258 = mx_closure_for_lobe(s, _e160, s.splat_u(3452003231u32));
     let _e259 = inputs.subcutaneous_weight;
     let _e260 = inputs.scatter_color;
     let _e261 = inputs.specular_ior;
     let _e265 = geom_1.normal_world;
     let _e266 = geom_1.tangent_world;
-    let _e269 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g60(s, _e258, _e259, _e260, _e261, _e29, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e265, _e266, s.splat_i(0i32), s.splat_i(0i32), &mut tg[1537 * S::LANES..]));
+    let _e269 = s.outline(#[inline(always)] || mx_dielectric_bsdf_g65(s, _e258, _e259, _e260, _e261, _e29, s.first_lanes(0), s.splat(0.0f32), s.splat(1.5f32), _e265, _e266, s.splat_i(0i32), s.splat_i(0i32), &mut tg[1537 * S::LANES..]));
     let _e271 = mx_closure_for_lobe(s, _e160, s.splat_u(2774413006u32));
-    let _e272 = mx_layer_bsdf_g62(s, _e271, _e256, _e269, &mut tg[1670 * S::LANES..]);
+    let _e272 = mx_layer_bsdf_g67(s, _e271, _e256, _e269, &mut tg[1670 * S::LANES..]);
     let _e274 = mx_closure_for_lobe(s, _e160, s.splat_u(3262708222u32));
-    let _e275 = mx_layer_bsdf_g62(s, _e274, _e249, _e272, &mut tg[1679 * S::LANES..]);
+    let _e275 = mx_layer_bsdf_g67(s, _e274, _e249, _e272, &mut tg[1679 * S::LANES..]);
     let _e277 = mx_closure_for_lobe(s, _e160, s.splat_u(4238484515u32));
     let _e278 = inputs.metalness;
-    let _e279 = mx_mix_bsdf_g58(s, _e277, _e213, _e275, _e278, &mut tg[1688 * S::LANES..]);
+    let _e279 = mx_mix_bsdf_g63(s, _e277, _e213, _e275, _e278, &mut tg[1688 * S::LANES..]);
     let _e281 = mx_closure_for_lobe(s, _e160, s.splat_u(211147556u32));
-    let _e282 = mx_layer_bsdf_g62(s, _e281, _e189, _e279, &mut tg[1698 * S::LANES..]);
+    let _e282 = mx_layer_bsdf_g67(s, _e281, _e189, _e279, &mut tg[1698 * S::LANES..]);
     let _e284 = mx_closure_for_lobe(s, _e160, s.splat_u(2233972744u32));
-    let _e285 = mx_layer_bsdf_g62(s, _e284, _e170, _e282, &mut tg[1707 * S::LANES..]);
+    let _e285 = mx_layer_bsdf_g67(s, _e284, _e170, _e282, &mut tg[1707 * S::LANES..]);
     let _e289 = _e285.throughput;
     uplift_simd::tape::put(s, tg, 17, _e289[0]);
     uplift_simd::tape::put(s, tg, 18, _e289[1]);
@@ -8108,7 +8413,7 @@ pub fn mx_pattern_g63<S: Simd>(s: S, geom_1: mx_geometry<S>, inputs: MxInputs<S>
 /// space (3 each). Bitangents are normal × tangent.
 pub const GEOMETRY_COLUMNS: usize = 20;
 /// Columns of `inputs`: the interface inputs' components.
-pub const INPUT_COLUMNS: usize = 28;
+pub const INPUT_COLUMNS: usize = 30;
 /// Columns of `outputs`: the outputs' components.
 pub const OUTPUT_COLUMNS: usize = 10;
 
@@ -8174,14 +8479,16 @@ pub fn mx_pattern_grouped_packets<S: Simd>(s: S, geom: &[&[f32]], inputs: &[&[f3
                 fuzz_thickness: mx_xg(18),
                 coat_weight: mx_xg(19),
                 coat_ior: mx_xg(20),
-                inner_weight: mx_xg(21),
-                inner_thickness: mx_xg(22),
-                scatter_color: [mx_xg(23), mx_xg(24), mx_xg(25)],
-                subcutaneous_weight: mx_xg(26),
-                subcutaneous_roughness: mx_xg(27),
+                coat_film_thickness: mx_xg(21),
+                coat_film_ior: mx_xg(22),
+                inner_weight: mx_xg(23),
+                inner_thickness: mx_xg(24),
+                scatter_color: [mx_xg(25), mx_xg(26), mx_xg(27)],
+                subcutaneous_weight: mx_xg(28),
+                subcutaneous_roughness: mx_xg(29),
             };
             // The group pass runs once per packet of groups: a function of its own per level.
-            let _ = s.outline(#[inline(always)] || mx_pattern_g63(s, mx_geom, mx_inputs, &mut mx_tape));
+            let _ = s.outline(#[inline(always)] || mx_pattern_g68(s, mx_geom, mx_inputs, &mut mx_tape));
         }
         for mx_j in 0..mx_g1 - mx_g0 {
             let mx_group = mx_g0 + mx_j;
@@ -8219,13 +8526,15 @@ pub fn mx_pattern_grouped_packets<S: Simd>(s: S, geom: &[&[f32]], inputs: &[&[f3
                     fuzz_thickness: mx_xs(18),
                     coat_weight: mx_xs(19),
                     coat_ior: mx_xs(20),
-                    inner_weight: mx_xs(21),
-                    inner_thickness: mx_xs(22),
-                    scatter_color: [mx_xs(23), mx_xs(24), mx_xs(25)],
-                    subcutaneous_weight: mx_xs(26),
-                    subcutaneous_roughness: mx_xs(27),
+                    coat_film_thickness: mx_xs(21),
+                    coat_film_ior: mx_xs(22),
+                    inner_weight: mx_xs(23),
+                    inner_thickness: mx_xs(24),
+                    scatter_color: [mx_xs(25), mx_xs(26), mx_xs(27)],
+                    subcutaneous_weight: mx_xs(28),
+                    subcutaneous_roughness: mx_xs(29),
                 };
-                let mx_out = mx_pattern_p63(s, mx_geom, mx_inputs, mx_row);
+                let mx_out = mx_pattern_p68(s, mx_geom, mx_inputs, mx_row);
                 s.store_partial(mx_out.wl[0], &mut outputs[0][mx_start..mx_end]);
                 s.store_partial(mx_out.wl[1], &mut outputs[1][mx_start..mx_end]);
                 s.store_partial(mx_out.wl[2], &mut outputs[2][mx_start..mx_end]);

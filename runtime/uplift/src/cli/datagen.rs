@@ -1,6 +1,6 @@
 //! `uplift datagen --class C --count N -o DIR`: writes generated training data as safetensors
 //! shards for use outside uplift (training itself generates on the fly and stores nothing).
-//! Each shard `DIR/<class>-<k>.safetensors` holds `params` (rows × 22, physical values, the
+//! Each shard `DIR/<class>-<k>.safetensors` holds `params` (rows × the stack's parameters, physical values, the
 //! parameter names in the metadata), `encoded` (the encoder's inputs), `wv`, `wl` (local frame,
 //! normal +z), `features` (the decoder's 9 direction features), `target` (f·μl RGB, T RGB, R)
 //! and `class`. Shards already written are skipped (and counted on stderr), so an interrupted
@@ -87,14 +87,15 @@ pub fn run(args: DatagenArgs) -> Result<(), String> {
             cols[6].extend(b.class.iter().map(|&c| c as f32));
             bar.inc(n as u64);
         }
-        for (name, width, data) in [("params", 22, 0), ("encoded", 22, 1), ("wv", 3, 2), ("wl", 3, 3), ("features", 9, 4), ("target", 7, 5), ("class", 1, 6)] {
+        let np = stack.len();
+        for (name, width, data) in [("params", np, 0), ("encoded", np, 1), ("wv", 3, 2), ("wl", 3, 3), ("features", 9, 4), ("target", 7, 5), ("class", 1, 6)] {
             let v = std::mem::take(&mut cols[data]);
             file.put(name, if width == 1 { vec![rows] } else { vec![rows, width] }, v);
         }
         let m = &mut file.metadata;
         m.insert("params".into(), names.clone());
         m.insert("target".into(), "fcos.R,fcos.G,fcos.B,T.R,T.G,T.B,R (fcos = f * mu_l, R = luminance of the albedo)".into());
-        m.insert("class".into(), "0 haze, 1 dust, 2 clearcoat, 3 inner, 4 infill".into());
+        m.insert("class".into(), generator.classes().names().iter().enumerate().map(|(k, n)| format!("{k} {n}")).collect::<Vec<_>>().join(", "));
         m.insert("generator".into(), format!("uplift datagen --class {} --seed {} (shard {shard}, first batch {first_chunk} of {CHUNK} rows)", mix.name(), args.seed));
         file.write(&path)?;
     }

@@ -49,6 +49,14 @@ pub struct EnhanceArgs {
     /// material; `render` applies them to the reference and the neural material.
     #[arg(long)]
     pub glints: bool,
+    /// A rule option applied on top of every material's rule: a builtin one (`iridescence`)
+    /// or an `uplift_rule_option` document (repeatable; docs/enhance.md).
+    #[arg(long = "option", value_name = "NAME|FILE")]
+    pub options: Vec<String>,
+    /// Shorthand for `--option iridescence`: a thin film on the clearcoat (its Airy
+    /// reflectance), thickness and IOR drawn per material; acts where the rule has a coat.
+    #[arg(long)]
+    pub iridescence: bool,
     /// Seed of every random choice.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -148,6 +156,13 @@ pub fn run(args: EnhanceArgs) -> Result<(), String> {
         resolution: args.resolution.as_deref().map(parse_resolution).transpose()?,
         mask_size: args.mask_size,
         glints: args.glints,
+        rule_options: {
+            let mut names = args.options.clone();
+            if args.iridescence && !names.iter().any(|n| n == "iridescence") {
+                names.push("iridescence".into());
+            }
+            names.iter().map(|n| uplift_enhance::rule_option::read_option(n, &stack)).collect::<Result<Vec<_>, _>>()?
+        },
         stack,
     };
     if options.mask_size == 0 || options.mask_size > 8192 {

@@ -111,7 +111,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         let dir = materials_dir.join(&m.material.name);
         b.set_message(m.material.name.clone());
         if !MaterialFolder::is_finished(&dir) {
-            let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(dirs.len() as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: false, stack: stack.clone() };
+            let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(dirs.len() as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: false, stack: stack.clone(), rule_options: Vec::new() };
             enhance(&m.material, &options, &dir, &engine)?;
         }
         dirs.push(dir);
@@ -181,7 +181,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         glints.push((index, m.kind.index()));
         let twin = materials_dir.join(format!("{}_glints", m.material.name));
         if !MaterialFolder::is_finished(&twin) || !MaterialFolder::open(&twin)?.has_fit() {
-            let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(index as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: true, stack: stack.clone() };
+            let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(index as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: true, stack: stack.clone(), rule_options: Vec::new() };
             enhance(&m.material, &options, &twin, &engine)?;
             let (from, to) = (MaterialFolder::open(dir)?, MaterialFolder::open(&twin)?);
             if from.read_params(&stack)?.params != to.read_params(&stack)?.params {

@@ -68,7 +68,7 @@ fn uniform_params(kind: EnhancementType, dir: &Path) -> (Vec<f32>, Vec<f32>) {
         surface: Surface::Plane,
     };
     let out = dir.join(material.name.clone());
-    let options = EnhanceOptions { kind: Some(kind), rules: Vec::new(), seed: 11, resolution: Some((32, 32)), mask_size: 64, glints: false, stack: uplift_engines::stack::Stack::builtin() };
+    let options = EnhanceOptions { kind: Some(kind), rules: Vec::new(), seed: 11, resolution: Some((32, 32)), mask_size: 64, glints: false, stack: uplift_engines::stack::Stack::builtin(), rule_options: Vec::new() };
     enhance(&material, &options, &out, &CpuEngine::new().unwrap()).unwrap();
     let ParamsImage { width: w, height: h, params, diffuse, .. } = uplift_material::MaterialFolder::open(&out).unwrap().read_params(&uplift_engines::stack::Stack::builtin()).unwrap();
     // The texel with the most dust or fuzz (the centre when there is none).
@@ -178,7 +178,7 @@ fn fitting_a_512_material_beats_the_encoder_within_the_energy_bound() {
     };
     let out = dir.join("m");
     // Type 2 (clearcoat with its damage mask) over textured base colour and roughness.
-    let options = EnhanceOptions { kind: Some(EnhancementType::new(2).unwrap()), rules: Vec::new(), seed: 5, resolution: Some((512, 512)), mask_size: 256, glints: false, stack: uplift_engines::stack::Stack::builtin() };
+    let options = EnhanceOptions { kind: Some(EnhancementType::new(2).unwrap()), rules: Vec::new(), seed: 5, resolution: Some((512, 512)), mask_size: 256, glints: false, stack: uplift_engines::stack::Stack::builtin(), rule_options: Vec::new() };
     enhance(&material, &options, &out, &CpuEngine::new().unwrap()).unwrap();
     let ParamsImage { width: w, height: h, params, diffuse, .. } = uplift_material::MaterialFolder::open(&out).unwrap().read_params(&uplift_engines::stack::Stack::builtin()).unwrap();
     assert_eq!((w, h), (512, 512));

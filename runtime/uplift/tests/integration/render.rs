@@ -15,24 +15,13 @@ use uplift_render::shading::{Model, Shading};
 use uplift_render::surface::SurfaceTextures;
 use uplift_render::tonemap::to_display;
 
-/// The stack's parameters: the uplift_stack graph's defaults with `set` applied (channel names).
+/// The stack's parameters: its nodedef's values with `set` applied (channel names).
 fn stack_params(set: &[(&str, f32)]) -> Vec<f32> {
     let stack = Stack::builtin();
-    let defaults: [(&str, f32); 22] = [
-        ("reflectivity.R", 0.9), ("reflectivity.G", 0.9), ("reflectivity.B", 0.9), ("edge_color.R", 1.0), ("edge_color.G", 1.0), ("edge_color.B", 1.0),
-        ("metalness", 0.0), ("core_roughness", 0.1), ("haze_roughness", 0.3), ("haze_weight", 0.2), ("specular_ior", 1.5), ("fuzz_weight", 0.0),
-        ("fuzz_thickness", 0.5), ("coat_weight", 0.0), ("coat_ior", 1.5), ("inner_weight", 0.0), ("inner_thickness", 0.5), ("scatter_color.R", 0.5),
-        ("scatter_color.G", 0.5), ("scatter_color.B", 0.5), ("subcutaneous_weight", 0.0), ("subcutaneous_roughness", 0.64),
-    ];
-    let mut p = vec![0.0; stack.len()];
-    for (k, d) in stack.parameters().iter().enumerate() {
-        p[k] = defaults.iter().find(|x| x.0 == d.channel).expect("default").1;
-        if let Some(s) = set.iter().find(|x| x.0 == d.channel) {
-            p[k] = s.1;
-        }
-    }
+    let mut p = stack.defaults();
     for s in set {
-        assert!(stack.parameters().iter().any(|d| d.channel == s.0), "no parameter {}", s.0);
+        let k = stack.index_of(s.0).unwrap_or_else(|| panic!("no parameter {}", s.0));
+        p[k] = s.1;
     }
     p
 }
@@ -480,7 +469,7 @@ fn a_plane_normal_map_becomes_the_tangent_space_normal_on_the_ball() {
         surface: Surface::Plane,
     };
     let out = dir.join("bumped");
-    enhance(&material, &EnhanceOptions { kind: Some(EnhancementType::new(0).unwrap()), rules: Vec::new(), seed: 3, resolution: Some((8, 8)), mask_size: 64, glints: false, stack: uplift_engines::stack::Stack::builtin() }, &out, &CpuEngine::new().unwrap()).unwrap();
+    enhance(&material, &EnhanceOptions { kind: Some(EnhancementType::new(0).unwrap()), rules: Vec::new(), seed: 3, resolution: Some((8, 8)), mask_size: 64, glints: false, stack: uplift_engines::stack::Stack::builtin(), rule_options: Vec::new() }, &out, &CpuEngine::new().unwrap()).unwrap();
     let s = SurfaceTextures::load(&out, &uplift_engines::stack::Stack::builtin(), false).unwrap();
     assert_eq!(s.normal_space, NormalSpace::Plane);
     let n = s.normal_at([0.5, 0.5]).expect("a baked normal");
