@@ -36,6 +36,18 @@ impl PreparedKernel {
         Ok(PreparedKernel { kernel, prepared })
     }
 
+    /// Prepares `kernels` on `engine` together: on the CPU engine the ones not shipped build in
+    /// one runner (`CpuEngine::prepare_all`).
+    pub fn all(engine: Engine<'_>, kernels: Vec<PatternKernel>, albedo_tables: Option<&[f32]>) -> Result<Vec<PreparedKernel>, String> {
+        match engine {
+            Engine::Cpu(e) => {
+                let prepared = e.prepare_all(&kernels.iter().collect::<Vec<_>>(), albedo_tables)?;
+                Ok(kernels.into_iter().zip(prepared).map(|(kernel, p)| PreparedKernel { kernel, prepared: Prepared::Cpu(p) }).collect())
+            }
+            Engine::Wgpu(_) => kernels.into_iter().map(|k| PreparedKernel::new(engine, k)).collect(),
+        }
+    }
+
     /// Where the kernel comes from (shipped or built; or the wgpu engine).
     pub fn describe(&self) -> String {
         match &self.prepared {

@@ -29,16 +29,31 @@ impl StackKernel {
 
     /// The kernel on either engine.
     pub fn on(engine: Engine<'_>, stack: &Arc<Stack>, context: ClosureContext) -> Result<StackKernel, String> {
+        Ok(Self::contexts(engine, stack, &[context])?.remove(0))
+    }
+
+    /// The kernels of several contexts, prepared together: on the CPU engine, a stack whose
+    /// kernels are not shipped (`--stack`) builds them in one runner.
+    pub fn contexts(engine: Engine<'_>, stack: &Arc<Stack>, contexts: &[ClosureContext]) -> Result<Vec<StackKernel>, String> {
         let (source, text) = stack.kernel_document();
-        let (doc, diags) = mtlx::read_str(&text, &source);
-        let c = stack.compiler().compile_document_in(doc, diags, &source, &OutputSelection::AllNumeric, Some(context));
-        let kernel = c.kernel.ok_or_else(|| c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n"))?;
-        let mut columns = Vec::with_capacity(stack.len());
-        for p in stack.parameters() {
-            let input = kernel.inputs.iter().find(|i| i.input.name == p.input).ok_or_else(|| format!("{source}: the uplift_stack kernel has no input `{}`", p.input))?;
-            columns.push(input.offset + p.component);
+        let mut kernels = Vec::new();
+        for &context in contexts {
+            let (doc, diags) = mtlx::read_str(&text, &source);
+            let c = stack.compiler().compile_document_in(doc, diags, &source, &OutputSelection::AllNumeric, Some(context));
+            kernels.push(c.kernel.ok_or_else(|| c.diagnostics.iter().map(|d| d.to_string()).collect::<Vec<_>>().join("\n"))?);
         }
-        Ok(StackKernel { prepared: PreparedKernel::new(engine, kernel)?, stack: stack.clone(), columns })
+        let mut columns_of = Vec::new();
+        for kernel in &kernels {
+            let mut columns = Vec::with_capacity(stack.len());
+            for p in stack.parameters() {
+                let input = kernel.inputs.iter().find(|i| i.input.name == p.input).ok_or_else(|| format!("{source}: the uplift_stack kernel has no input `{}`", p.input))?;
+                columns.push(input.offset + p.component);
+            }
+            columns_of.push(columns);
+        }
+        let tables = stack.compiler().library.albedo_table_data.clone();
+        let prepared = PreparedKernel::all(engine, kernels, tables.as_deref())?;
+        Ok(prepared.into_iter().zip(columns_of).map(|(prepared, columns)| StackKernel { prepared, stack: stack.clone(), columns }).collect())
     }
 
     /// The stack this kernel shades.

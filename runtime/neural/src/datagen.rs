@@ -13,7 +13,7 @@ use crate::loss::OUTPUTS;
 use uplift_engines::stack::Stack;
 use std::sync::Arc;
 use uplift_engines::cpu_engine::CpuEngine;
-use uplift_engines::stack_kernel::{usable_sample, StackKernel};
+use uplift_engines::stack_kernel::{usable_sample, Engine, StackKernel};
 use uplift_base::rng::{mix64, unit_from_key as unit};
 use rayon::prelude::*;
 use uplift_compiler::ClosureContext;
@@ -117,11 +117,13 @@ impl ViewDistribution {
 impl DataGenerator {
     /// A generator of `stack`'s training data on `engine`.
     pub fn new(engine: CpuEngine, stack: &Arc<Stack>, mix: ClassMix, seed: u64) -> Result<DataGenerator, String> {
+        let mut k = StackKernel::contexts(Engine::Cpu(&engine), stack, &[ClosureContext::Eval, ClosureContext::Albedo, ClosureContext::Sample, ClosureContext::Pdf])?.into_iter();
+        let mut next = || k.next().expect("four contexts");
         Ok(DataGenerator {
-            eval: StackKernel::new(&engine, stack, ClosureContext::Eval)?,
-            albedo: StackKernel::new(&engine, stack, ClosureContext::Albedo)?,
-            sample: StackKernel::new(&engine, stack, ClosureContext::Sample)?,
-            pdf: StackKernel::new(&engine, stack, ClosureContext::Pdf)?,
+            eval: next(),
+            albedo: next(),
+            sample: next(),
+            pdf: next(),
             classes: TrainingClasses::load(stack, &engine)?,
             engine,
             stack: stack.clone(),

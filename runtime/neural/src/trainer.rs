@@ -305,7 +305,13 @@ pub fn train_checkpointed(generator: &DataGenerator, opts: &TrainOptions, out: &
             let f = super::weights::TensorFile::read(init)?;
             let at = |e: String| format!("{}: {e}", init.display());
             s.model = NeuralModel { encoder: f.mlp("encoder").map_err(at)?, decoder: f.mlp("decoder").map_err(at)? };
-            super::weights::check_stack(&f, &s.model.encoder, generator.stack()).map_err(at)?;
+            if let Err(e) = super::weights::check_stack(&f, &s.model.encoder, generator.stack()) {
+                // A decoder for a stack this one extends: its encoder widened, new inputs at 0.
+                s.model.encoder = super::weights::widen_encoder(&f, &s.model.encoder, generator.stack()).map_err(|w| at(format!("{e}; and it cannot be widened to this stack: {w}")))?;
+                if progress {
+                    eprintln!("{}: made for a stack with fewer parameters; its encoder is widened to this stack's {} (new inputs' weights 0)", init.display(), generator.stack().len());
+                }
+            }
         }
         s
     };

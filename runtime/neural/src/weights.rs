@@ -186,6 +186,43 @@ pub fn check_stack(f: &TensorFile, encoder: &Mlp<f32>, stack: &Stack) -> Result<
     }
 }
 
+/// The encoder of a weights file made for a stack whose parameters are a subset of `stack`'s
+/// (the file's recorded signature entries all appear in this stack): its first layer widened
+/// to `stack`'s parameters, each recorded parameter's weights moved to its new column and the
+/// new parameters' weights zero, so the encoder computes the same latents wherever the new
+/// parameters' encoded values are 0. `uplift train --init` starts from it when a stack gains a
+/// lobe (a decorator added as graph nodes), instead of training from scratch.
+pub fn widen_encoder(f: &TensorFile, encoder: &Mlp<f32>, stack: &Stack) -> Result<Mlp<f32>, String> {
+    let recorded = f.metadata.get(STACK_KEY).ok_or("the file records no stack signature, so its parameters cannot be matched to this stack's")?;
+    let ours: Vec<String> = stack.signature().split(' ').map(str::to_string).collect();
+    let theirs: Vec<&str> = recorded.split_whitespace().collect();
+    if theirs.len() != encoder.shape.widths[0] {
+        return Err(format!("its encoder reads {} parameters but its signature lists {}", encoder.shape.widths[0], theirs.len()));
+    }
+    let mut column = Vec::with_capacity(theirs.len());
+    for t in &theirs {
+        column.push(ours.iter().position(|o| o == t).ok_or_else(|| format!("its parameter `{t}` is not in this stack (only a stack that adds parameters can start from it)"))?);
+    }
+    let mut shape = encoder.shape.clone();
+    let (old_in, new_in, out) = (shape.widths[0], ours.len(), shape.widths[1]);
+    shape.widths[0] = new_in;
+    let mut widened = Mlp::<f32>::new(shape, 0);
+    let (w_old, b_old) = encoder.shape.offsets(0);
+    let (w_new, b_new) = widened.shape.offsets(0);
+    for o in 0..out {
+        for j in 0..new_in {
+            widened.params[w_new + o * new_in + j] = 0.0;
+        }
+        for (i, &j) in column.iter().enumerate() {
+            widened.params[w_new + o * new_in + j] = encoder.params[w_old + o * old_in + i];
+        }
+        widened.params[b_new + o] = encoder.params[b_old + o];
+    }
+    let (rest_old, rest_new) = (encoder.shape.offsets(1).0, widened.shape.offsets(1).0);
+    widened.params[rest_new..].copy_from_slice(&encoder.params[rest_old..]);
+    Ok(widened)
+}
+
 /// How generated files name the weights: relative to the repository when inside it.
 pub fn source_name(path: &Path) -> String {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");

@@ -95,10 +95,15 @@ impl Shading {
     /// Shading of `stack` on the CPU engine (generated Rust; the decoder is the trainer's
     /// forward pass).
     pub fn new(engine: CpuEngine, stack: &Arc<Stack>, model: Model) -> Result<Shading, String> {
+        // The data generator's four contexts in its order (eval unused here): a stack whose
+        // kernels are not shipped shares one built runner between training and rendering.
+        let [_, albedo, sample, pdf]: [StackKernel; 4] = StackKernel::contexts(Engine::Cpu(&engine), stack, &[ClosureContext::Eval, ClosureContext::Albedo, ClosureContext::Sample, ClosureContext::Pdf])?
+            .try_into()
+            .map_err(|_| "four stack kernels".to_string())?;
         Ok(Shading {
-            pdf: StackKernel::new(&engine, stack, ClosureContext::Pdf)?,
-            sample: StackKernel::new(&engine, stack, ClosureContext::Sample)?,
-            albedo: StackKernel::new(&engine, stack, ClosureContext::Albedo)?,
+            pdf,
+            sample,
+            albedo,
             threads: engine.threads(),
             engine: ShadingEngine::Cpu(engine),
             glint: Default::default(),

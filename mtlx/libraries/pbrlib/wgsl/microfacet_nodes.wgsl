@@ -34,10 +34,18 @@ fn mx_dielectric_bsdf(cl: mx_closure, weight: f32, tint: vec3<f32>, ior: f32, ro
     let film = thinfilm_thickness > 0.0;
     let n3 = vec3<f32>(eta);
     let k3 = vec3<f32>(0.0);
-    let f1 = select(vec3<f32>(mx_fresnel_dielectric(1.0, eta)), mx_fresnel_airy_conductor(1.0, n3, k3, thinfilm_thickness, thinfilm_ior), film);
-    let comp = mx_ggx_energy_compensation(s.mu, s.abar, mx_fresnel_average(f1, vec3<f32>(1.0)));
+    // Branches, not `select`s: the Airy terms cost far more than Fresnel's, and a film that is
+    // an input (not a constant 0) is off for most points.
+    var f1 = vec3<f32>(mx_fresnel_dielectric(1.0, eta));
     // Untinted albedo (tint stays out of the throughput, as in MaterialX).
-    let e = select(vec3<f32>(mx_albedo_ggx_dielectric(s.mu, s.abar, eta)), mx_albedo_ggx_airy_conductor(s.mu, s.abar, n3, k3, thinfilm_thickness, thinfilm_ior), film);
+    var e = vec3<f32>(0.0);
+    if (film) {
+        f1 = mx_fresnel_airy_conductor(1.0, n3, k3, thinfilm_thickness, thinfilm_ior);
+        e = mx_albedo_ggx_airy_conductor(s.mu, s.abar, n3, k3, thinfilm_thickness, thinfilm_ior);
+    } else {
+        e = vec3<f32>(mx_albedo_ggx_dielectric(s.mu, s.abar, eta));
+    }
+    let comp = mx_ggx_energy_compensation(s.mu, s.abar, mx_fresnel_average(f1, vec3<f32>(1.0)));
     let albedo = comp * e;
     let throughput = vec3<f32>(1.0) - w * albedo;
     let tinted = w * t * albedo;
@@ -50,7 +58,12 @@ fn mx_dielectric_bsdf(cl: mx_closure, weight: f32, tint: vec3<f32>, ior: f32, ro
     let l = mx_ggx_light(cl, s);
     let h = mx_half_vector(s.v, l);
     let vh = dot(s.v, h);
-    let f = select(vec3<f32>(mx_fresnel_dielectric(vh, eta)), mx_fresnel_airy_conductor(vh, n3, k3, thinfilm_thickness, thinfilm_ior), film);
+    var f = vec3<f32>(0.0);
+    if (film) {
+        f = mx_fresnel_airy_conductor(vh, n3, k3, thinfilm_thickness, thinfilm_ior);
+    } else {
+        f = vec3<f32>(mx_fresnel_dielectric(vh, eta));
+    }
     let response = (w * mx_ggx_reflection(s.v, l, h, s.a)) * f * comp * t;
     if (cl.context == MX_CONTEXT_EVAL) {
         return BSDF(response, throughput, mx_bsdf_empty().lobe);

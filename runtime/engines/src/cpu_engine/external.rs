@@ -44,13 +44,14 @@ pub struct RunnerOptions {
     pub vectorize: bool,
     /// `true` builds at opt-level 0 without [`KERNEL_LLVM_ARGS`]: for one-off kernels of
     /// thousands of nodes in differential tests, whose optimised build takes LLVM tens of
-    /// minutes (and whose speed does not matter).
+    /// minutes (and whose speed does not matter). The default is `true` when the environment
+    /// sets `UPLIFT_RUNNER_QUICK=1` (tests that run the binary on kernels it does not ship).
     pub quick: bool,
 }
 
 impl Default for RunnerOptions {
     fn default() -> Self {
-        RunnerOptions { cache_dir: default_cache_dir(), vectorize: true, quick: false }
+        RunnerOptions { cache_dir: default_cache_dir(), vectorize: true, quick: std::env::var_os("UPLIFT_RUNNER_QUICK").is_some_and(|v| v == "1") }
     }
 }
 

@@ -87,6 +87,30 @@ impl CpuEngine {
         }
     }
 
+    /// Prepares several kernels: the shipped ones in-process, the others built together in one
+    /// runner (one cargo build instead of one each; `albedo_tables`: the library's table data,
+    /// when a kernel reads it).
+    pub fn prepare_all(&self, kernels: &[&PatternKernel], albedo_tables: Option<&[f32]>) -> Result<Vec<CpuKernel>, String> {
+        let mut out: Vec<Option<CpuKernel>> = Vec::with_capacity(kernels.len());
+        let mut missing = Vec::new();
+        for (k, kernel) in kernels.iter().enumerate() {
+            match shipped::find(kernel_fingerprint(&rust_of(kernel)?)) {
+                Some(s) => out.push(Some(CpuKernel::Builtin(s))),
+                None => {
+                    out.push(None);
+                    missing.push(k);
+                }
+            }
+        }
+        if !missing.is_empty() {
+            let built = self.prepare_bundle(&missing.iter().map(|&k| kernels[k]).collect::<Vec<_>>(), albedo_tables, &self.runner)?;
+            for (k, b) in missing.into_iter().zip(built) {
+                out[k] = Some(b);
+            }
+        }
+        Ok(out.into_iter().map(|k| k.expect("every kernel prepared")).collect())
+    }
+
     /// Builds `kernel`'s runner even when it is shipped, with `options` (the benchmark builds
     /// one with vectorisation off).
     pub fn prepare_runner(&self, kernel: &PatternKernel, options: &RunnerOptions) -> Result<ExternalKernel, String> {

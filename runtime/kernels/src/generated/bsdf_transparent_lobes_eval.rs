@@ -122,12 +122,12 @@ pub const MX_TABLE_VIEW_NODES: i32 = 32i32;
 
 pub const MX_TABLE_ROUGHNESS_NODES: i32 = 32i32;
 
+pub const MX_TABLE_FILM_FRESNEL_NODES: i32 = 32i32;
+
 #[allow(unused_imports)]
 pub use crate::generated::albedo_table_data::MX_ALBEDO_TABLE_DATA as mx_albedo_table_data;
 
 pub const MX_TABLE_IOR_NODES: i32 = 32i32;
-
-pub const MX_TABLE_FILM_FRESNEL_NODES: i32 = 32i32;
 
 pub const MX_CONTEXT_ALBEDO: i32 = 1i32;
 
@@ -331,11 +331,11 @@ pub fn mx_fast_cos_vec3_(x_2: Vec3) -> Vec3 {
 #[inline(always)]
 pub fn mx_fast_exp2_(x_3: f32) -> f32 {
     let y_7 = x_3.max(-126.0f32).min(127.0f32);
-    let e_5 = y_7.floor();
-    let f_3 = y_7 - e_5;
-    let t_2 = f_3 * 0.6931472f32;
+    let e_6 = y_7.floor();
+    let f_4 = y_7 - e_6;
+    let t_2 = f_4 * 0.6931472f32;
     let p_1 = 1.0f32 + t_2 * (1.0f32 + t_2 * (0.5f32 + t_2 * (0.16666667f32 + t_2 * (0.041666668f32 + t_2 * (0.008333334f32 + t_2 * (0.0013888889f32 + t_2 * 0.0001984127f32))))));
-    f32::from_bits(((e_5 as i32).wrapping_add(127i32) as u32).wrapping_shl(23u32)) * p_1
+    f32::from_bits(((e_6 as i32).wrapping_add(127i32) as u32).wrapping_shl(23u32)) * p_1
 }
 
 #[inline(always)]
@@ -416,101 +416,38 @@ pub fn mx_table_2d_index(x_5: f32, y_2: f32) -> mx_table_point {
 }
 
 #[inline(always)]
+pub fn mx_table_log_coordinate(v_3: f32) -> f32 {
+    let bits = (1.0f32 + 100.0f32 * v_3.max(0.0f32).min(1.0f32)).to_bits();
+    let e_7 = ((bits.wrapping_shr(23u32) & 255u32) as i32).wrapping_sub(127i32) as f32;
+    let t_3 = f32::from_bits(bits & 8388607u32 | 1065353216u32) - 1.0f32;
+    let p_3 = 5.060328e-6f32 + t_3 * (1.4423956f32 + t_3 * (-0.71698755f32 + t_3 * (0.4538582f32 + t_3 * (-0.27235582f32 + t_3 * (0.11790686f32 + t_3 * -0.024825985f32)))));
+    (e_7 + p_3) * 0.15019049f32
+}
+
+#[inline(always)]
+pub fn mx_ggx_moments_position(mu: f32, abar: f32, nodes: i32) -> mx_table_point {
+    let _e3 = mx_table_log_coordinate(mu);
+    let _e4 = mx_table_log_coordinate(abar);
+    let p_4 = mx_table_2d_index(_e3, _e4);
+    mx_table_point { i: p_4.i.wrapping_mul(nodes), fx: p_4.fx, fy: p_4.fy }
+}
+
+#[inline(always)]
 pub fn mx_albedo_table(i: i32) -> f32 {
     mx_albedo_table_data[(i as u32).min(118783) as usize]
 }
 
 #[inline(always)]
-pub fn mx_albedo_table_2d(offset: i32, x_6: f32, y_3: f32) -> f32 {
-    let p_3 = mx_table_2d_index(x_6, y_3);
-    let i_2 = offset.wrapping_add(p_3.i);
-    let j = i_2.wrapping_add(MX_TABLE_VIEW_NODES);
-    let _e8 = mx_albedo_table(i_2);
-    let _e11 = mx_albedo_table(i_2.wrapping_add(1i32));
-    let a_10 = wgsl_mix_f32_f32_f32(_e8, _e11, p_3.fx);
-    let _e14 = mx_albedo_table(j);
-    let _e17 = mx_albedo_table(j.wrapping_add(1i32));
-    let b_3 = wgsl_mix_f32_f32_f32(_e14, _e17, p_3.fx);
-    wgsl_mix_f32_f32_f32(a_10, b_3, p_3.fy)
-}
-
-#[inline(always)]
-pub fn mx_table_log_coordinate(v_3: f32) -> f32 {
-    let bits = (1.0f32 + 100.0f32 * v_3.max(0.0f32).min(1.0f32)).to_bits();
-    let e_6 = ((bits.wrapping_shr(23u32) & 255u32) as i32).wrapping_sub(127i32) as f32;
-    let t_3 = f32::from_bits(bits & 8388607u32 | 1065353216u32) - 1.0f32;
-    let p_4 = 5.060328e-6f32 + t_3 * (1.4423956f32 + t_3 * (-0.71698755f32 + t_3 * (0.4538582f32 + t_3 * (-0.27235582f32 + t_3 * (0.11790686f32 + t_3 * -0.024825985f32)))));
-    (e_6 + p_4) * 0.15019049f32
-}
-
-#[inline(always)]
-pub fn mx_albedo_ggx_ess(mu: f32, abar: f32) -> f32 {
-    let _e3 = mx_table_log_coordinate(mu);
-    let _e4 = mx_table_log_coordinate(abar);
-    let _e5 = mx_albedo_table_2d(0i32, _e3, _e4);
-    _e5
-}
-
-#[inline(always)]
-pub fn mx_ggx_energy_compensation(mu_1: f32, abar_1: f32, favg: Vec3) -> Vec3 {
-    let _e3 = mx_albedo_ggx_ess(mu_1, abar_1);
-    let ess = _e3.max(0.0001f32);
-    Vec3::splat(1.0f32) + favg * ((1.0f32 - ess) / ess)
-}
-
-#[inline(always)]
-pub fn mx_fresnel_average(f_normal: Vec3, f90_: Vec3) -> Vec3 {
-    f_normal + (f90_ - f_normal) * 0.04761905f32
-}
-
-#[inline(always)]
-pub fn mx_albedo_ggx_dielectric(mu_2: f32, abar_2: f32, eta_2: f32) -> f32 {
-    if eta_2 <= 0.0f32 {
-        let _e5 = mx_albedo_ggx_ess(mu_2, abar_2);
-        return _e5;
-    }
-    let base = if eta_2 < 1.0f32 { 82944i32 } else { 50176i32 };
-    let q_4 = (eta_2 - 1.0f32).abs() / (eta_2 + 1.0f32);
-    let _e17 = mx_table_log_coordinate(mu_2);
-    let _e18 = mx_table_log_coordinate(abar_2);
-    let p_5 = mx_table_2d_index(_e17, _e18);
-    let pz = mx_table_axis((2.0f32 * q_4).min(1.0f32).sqrt(), MX_TABLE_IOR_NODES);
-    let k_5 = MX_TABLE_ROUGHNESS_NODES.wrapping_mul(MX_TABLE_VIEW_NODES);
-    let i_3 = base.wrapping_add(pz.i.wrapping_mul(k_5)).wrapping_add(p_5.i);
-    let _e35 = mx_albedo_table(i_3);
-    let _e38 = mx_albedo_table(i_3.wrapping_add(1i32));
-    let a0_ = wgsl_mix_f32_f32_f32(_e35, _e38, p_5.fx);
-    let _e42 = mx_albedo_table(i_3.wrapping_add(MX_TABLE_VIEW_NODES));
-    let _e46 = mx_albedo_table(i_3.wrapping_add(MX_TABLE_VIEW_NODES).wrapping_add(1i32));
-    let b0_ = wgsl_mix_f32_f32_f32(_e42, _e46, p_5.fx);
-    let _e50 = mx_albedo_table(i_3.wrapping_add(k_5));
-    let _e54 = mx_albedo_table(i_3.wrapping_add(k_5).wrapping_add(1i32));
-    let a1_ = wgsl_mix_f32_f32_f32(_e50, _e54, p_5.fx);
-    let _e59 = mx_albedo_table(i_3.wrapping_add(k_5).wrapping_add(MX_TABLE_VIEW_NODES));
-    let _e64 = mx_albedo_table(i_3.wrapping_add(k_5).wrapping_add(MX_TABLE_VIEW_NODES).wrapping_add(1i32));
-    let b1_ = wgsl_mix_f32_f32_f32(_e59, _e64, p_5.fx);
-    wgsl_mix_f32_f32_f32(wgsl_mix_f32_f32_f32(a0_, b0_, p_5.fy), wgsl_mix_f32_f32_f32(a1_, b1_, p_5.fy), pz.f)
-}
-
-#[inline(always)]
-pub fn mx_ggx_moments_position(mu_3: f32, abar_3: f32, nodes: i32) -> mx_table_point {
-    let _e3 = mx_table_log_coordinate(mu_3);
-    let _e4 = mx_table_log_coordinate(abar_3);
-    let p_6 = mx_table_2d_index(_e3, _e4);
-    mx_table_point { i: p_6.i.wrapping_mul(nodes), fx: p_6.fx, fy: p_6.fy }
-}
-
-#[inline(always)]
-pub fn mx_ggx_moment(offset_1: i32, nodes_1: i32, p: mx_table_point, m: i32) -> f32 {
-    let i_4 = offset_1.wrapping_add(p.i).wrapping_add(m);
-    let j_1 = i_4.wrapping_add(MX_TABLE_VIEW_NODES.wrapping_mul(nodes_1));
-    let _e10 = mx_albedo_table(i_4);
-    let _e12 = mx_albedo_table(i_4.wrapping_add(nodes_1));
-    let a_11 = wgsl_mix_f32_f32_f32(_e10, _e12, p.fx);
-    let _e15 = mx_albedo_table(j_1);
-    let _e17 = mx_albedo_table(j_1.wrapping_add(nodes_1));
-    let b_4 = wgsl_mix_f32_f32_f32(_e15, _e17, p.fx);
-    wgsl_mix_f32_f32_f32(a_11, b_4, p.fy)
+pub fn mx_ggx_moment(offset: i32, nodes_1: i32, p: mx_table_point, m: i32) -> f32 {
+    let i_2 = offset.wrapping_add(p.i).wrapping_add(m);
+    let j = i_2.wrapping_add(MX_TABLE_VIEW_NODES.wrapping_mul(nodes_1));
+    let _e10 = mx_albedo_table(i_2);
+    let _e12 = mx_albedo_table(i_2.wrapping_add(nodes_1));
+    let a_10 = wgsl_mix_f32_f32_f32(_e10, _e12, p.fx);
+    let _e15 = mx_albedo_table(j);
+    let _e17 = mx_albedo_table(j.wrapping_add(nodes_1));
+    let b_3 = wgsl_mix_f32_f32_f32(_e15, _e17, p.fx);
+    wgsl_mix_f32_f32_f32(a_10, b_3, p.fy)
 }
 
 #[inline(always)]
@@ -520,10 +457,10 @@ pub fn mx_film_fresnel_node(m_1: i32) -> f32 {
 
 #[inline(always)]
 #[allow(unused_assignments)]
-pub fn mx_albedo_ggx_airy_conductor(mu_4: f32, abar_4: f32, n_3: Vec3, k_2: Vec3, thickness_2: f32, film_ior_1: f32) -> Vec3 {
+pub fn mx_albedo_ggx_airy_conductor(mu_1: f32, abar_1: f32, n_3: Vec3, k_2: Vec3, thickness_2: f32, film_ior_1: f32) -> Vec3 {
     let mut e: Vec3 = Vec3::splat(0.0f32);
     let mut m_2: i32 = 0i32;
-    let p_7 = mx_ggx_moments_position(mu_4, abar_4, MX_TABLE_FILM_FRESNEL_NODES);
+    let p_5 = mx_ggx_moments_position(mu_1, abar_1, MX_TABLE_FILM_FRESNEL_NODES);
     loop {
         let _e13 = m_2;
         if _e13 < MX_TABLE_FILM_FRESNEL_NODES {
@@ -533,7 +470,7 @@ pub fn mx_albedo_ggx_airy_conductor(mu_4: f32, abar_4: f32, n_3: Vec3, k_2: Vec3
         {
             let _e16 = e;
             let _e19 = m_2;
-            let _e20 = mx_ggx_moment(17408i32, MX_TABLE_FILM_FRESNEL_NODES, p_7, _e19);
+            let _e20 = mx_ggx_moment(17408i32, MX_TABLE_FILM_FRESNEL_NODES, p_5, _e19);
             let _e21 = m_2;
             let _e22 = mx_film_fresnel_node(_e21);
             let _e23 = mx_fresnel_airy_conductor(_e22, n_3, k_2, thickness_2, film_ior_1);
@@ -544,6 +481,69 @@ pub fn mx_albedo_ggx_airy_conductor(mu_4: f32, abar_4: f32, n_3: Vec3, k_2: Vec3
     }
     let _e29 = e;
     _e29
+}
+
+#[inline(always)]
+pub fn mx_albedo_table_2d(offset_1: i32, x_6: f32, y_3: f32) -> f32 {
+    let p_6 = mx_table_2d_index(x_6, y_3);
+    let i_3 = offset_1.wrapping_add(p_6.i);
+    let j_1 = i_3.wrapping_add(MX_TABLE_VIEW_NODES);
+    let _e8 = mx_albedo_table(i_3);
+    let _e11 = mx_albedo_table(i_3.wrapping_add(1i32));
+    let a_11 = wgsl_mix_f32_f32_f32(_e8, _e11, p_6.fx);
+    let _e14 = mx_albedo_table(j_1);
+    let _e17 = mx_albedo_table(j_1.wrapping_add(1i32));
+    let b_4 = wgsl_mix_f32_f32_f32(_e14, _e17, p_6.fx);
+    wgsl_mix_f32_f32_f32(a_11, b_4, p_6.fy)
+}
+
+#[inline(always)]
+pub fn mx_albedo_ggx_ess(mu_2: f32, abar_2: f32) -> f32 {
+    let _e3 = mx_table_log_coordinate(mu_2);
+    let _e4 = mx_table_log_coordinate(abar_2);
+    let _e5 = mx_albedo_table_2d(0i32, _e3, _e4);
+    _e5
+}
+
+#[inline(always)]
+pub fn mx_albedo_ggx_dielectric(mu_3: f32, abar_3: f32, eta_2: f32) -> f32 {
+    if eta_2 <= 0.0f32 {
+        let _e5 = mx_albedo_ggx_ess(mu_3, abar_3);
+        return _e5;
+    }
+    let base = if eta_2 < 1.0f32 { 82944i32 } else { 50176i32 };
+    let q_4 = (eta_2 - 1.0f32).abs() / (eta_2 + 1.0f32);
+    let _e17 = mx_table_log_coordinate(mu_3);
+    let _e18 = mx_table_log_coordinate(abar_3);
+    let p_7 = mx_table_2d_index(_e17, _e18);
+    let pz = mx_table_axis((2.0f32 * q_4).min(1.0f32).sqrt(), MX_TABLE_IOR_NODES);
+    let k_5 = MX_TABLE_ROUGHNESS_NODES.wrapping_mul(MX_TABLE_VIEW_NODES);
+    let i_4 = base.wrapping_add(pz.i.wrapping_mul(k_5)).wrapping_add(p_7.i);
+    let _e35 = mx_albedo_table(i_4);
+    let _e38 = mx_albedo_table(i_4.wrapping_add(1i32));
+    let a0_ = wgsl_mix_f32_f32_f32(_e35, _e38, p_7.fx);
+    let _e42 = mx_albedo_table(i_4.wrapping_add(MX_TABLE_VIEW_NODES));
+    let _e46 = mx_albedo_table(i_4.wrapping_add(MX_TABLE_VIEW_NODES).wrapping_add(1i32));
+    let b0_ = wgsl_mix_f32_f32_f32(_e42, _e46, p_7.fx);
+    let _e50 = mx_albedo_table(i_4.wrapping_add(k_5));
+    let _e54 = mx_albedo_table(i_4.wrapping_add(k_5).wrapping_add(1i32));
+    let a1_ = wgsl_mix_f32_f32_f32(_e50, _e54, p_7.fx);
+    let _e59 = mx_albedo_table(i_4.wrapping_add(k_5).wrapping_add(MX_TABLE_VIEW_NODES));
+    let _e64 = mx_albedo_table(i_4.wrapping_add(k_5).wrapping_add(MX_TABLE_VIEW_NODES).wrapping_add(1i32));
+    let b1_ = wgsl_mix_f32_f32_f32(_e59, _e64, p_7.fx);
+    wgsl_mix_f32_f32_f32(wgsl_mix_f32_f32_f32(a0_, b0_, p_7.fy), wgsl_mix_f32_f32_f32(a1_, b1_, p_7.fy), pz.f)
+}
+
+#[inline(always)]
+pub fn mx_ggx_energy_compensation(mu_4: f32, abar_4: f32, favg: Vec3) -> Vec3 {
+    let _e3 = mx_albedo_ggx_ess(mu_4, abar_4);
+    let ess = _e3.max(0.0001f32);
+    Vec3::splat(1.0f32) + favg * ((1.0f32 - ess) / ess)
+}
+
+#[inline(always)]
+pub fn mx_fresnel_average(f_normal: Vec3, f90_: Vec3) -> Vec3 {
+    f_normal + (f90_ - f_normal) * 0.04761905f32
 }
 
 #[inline(always)]
@@ -610,8 +610,8 @@ pub fn mx_race_uniform(cl_2: mx_closure) -> f32 {
 pub fn mx_lobe_sampled(cl_3: mx_closure, throughput: Vec3, wl_1: Vec3, c: f32) -> BSDF {
     let _e4 = mx_race_uniform(cl_3);
     let _e5 = mx_fast_log2_(_e4);
-    let e_7 = -0.6931472f32 * _e5;
-    let key = if c > 1e-30f32 { e_7 / c } else { MX_LOBE_NEVER };
+    let e_8 = -0.6931472f32 * _e5;
+    let key = if c > 1e-30f32 { e_8 / c } else { MX_LOBE_NEVER };
     BSDF { response: Vec3::splat(0.0f32), throughput: throughput, lobe: Vec4::new(wl_1.x, wl_1.y, wl_1.z, key.min(MX_LOBE_NEVER)) }
 }
 
@@ -692,7 +692,11 @@ pub fn mx_ggx_pdf(v_9: Vec3, h_4: Vec3, a_4: Vec2) -> f32 {
 }
 
 #[inline(always)]
+#[allow(unused_assignments)]
 pub fn mx_dielectric_bsdf(cl_6: mx_closure, weight: f32, tint: Vec3, ior: f32, roughness_2: Vec2, retroreflective_1: bool, thinfilm_thickness: f32, thinfilm_ior: f32, normal_2: Vec3, tangent_2: Vec3, _distribution: i32, scatter_mode: i32) -> BSDF {
+    let mut f1_: Vec3 = Vec3::ZERO;
+    let mut e_2: Vec3 = Vec3::splat(0.0f32);
+    let mut f_2: Vec3 = Vec3::splat(0.0f32);
     let w_2 = mx_lobe_weight(weight);
     if scatter_mode == 1i32 {
         let _e15 = mx_bsdf_empty();
@@ -705,41 +709,53 @@ pub fn mx_dielectric_bsdf(cl_6: mx_closure, weight: f32, tint: Vec3, ior: f32, r
     let n3_ = Vec3::splat(eta_3);
     let k3_ = Vec3::splat(0.0f32);
     let _e28 = mx_fresnel_dielectric(1.0f32, eta_3);
-    let _e31 = mx_fresnel_airy_conductor(1.0f32, n3_, k3_, thinfilm_thickness, thinfilm_ior);
-    let f1_ = if film { _e31 } else { Vec3::splat(_e28) };
-    let _e37 = mx_fresnel_average(f1_, Vec3::splat(1.0f32));
-    let comp = mx_ggx_energy_compensation(s_5.mu, s_5.abar, _e37);
-    let _e41 = mx_albedo_ggx_dielectric(s_5.mu, s_5.abar, eta_3);
-    let _e45 = mx_albedo_ggx_airy_conductor(s_5.mu, s_5.abar, n3_, k3_, thinfilm_thickness, thinfilm_ior);
-    let e_8 = if film { _e45 } else { Vec3::splat(_e41) };
-    let albedo = comp * e_8;
+    f1_ = Vec3::splat(_e28);
+    if film {
+        let _e35 = mx_fresnel_airy_conductor(1.0f32, n3_, k3_, thinfilm_thickness, thinfilm_ior);
+        f1_ = _e35;
+        let _e38 = mx_albedo_ggx_airy_conductor(s_5.mu, s_5.abar, n3_, k3_, thinfilm_thickness, thinfilm_ior);
+        e_2 = _e38;
+    } else {
+        let _e41 = mx_albedo_ggx_dielectric(s_5.mu, s_5.abar, eta_3);
+        e_2 = Vec3::splat(_e41);
+    }
+    let _e45 = f1_;
+    let _e48 = mx_fresnel_average(_e45, Vec3::splat(1.0f32));
+    let comp = mx_ggx_energy_compensation(s_5.mu, s_5.abar, _e48);
+    let _e50 = e_2;
+    let albedo = comp * _e50;
     let throughput_3 = Vec3::splat(1.0f32) - w_2 * albedo;
     let tinted = w_2 * t_5 * albedo;
     if cl_6.context == MX_CONTEXT_ALBEDO {
-        let _e57 = mx_bsdf_empty();
-        return BSDF { response: tinted, throughput: throughput_3, lobe: _e57.lobe };
+        let _e61 = mx_bsdf_empty();
+        return BSDF { response: tinted, throughput: throughput_3, lobe: _e61.lobe };
     }
     if cl_6.context == MX_CONTEXT_SAMPLE {
-        let _e63 = mx_luminance_rgb(tinted);
-        let _e64 = mx_ggx_lobe_sample(cl_6, s_5, throughput_3, _e63);
-        return _e64;
+        let _e67 = mx_luminance_rgb(tinted);
+        let _e68 = mx_ggx_lobe_sample(cl_6, s_5, throughput_3, _e67);
+        return _e68;
     }
     let l_5 = mx_ggx_light(cl_6, s_5);
     let h_6 = mx_half_vector(s_5.v, l_5);
     let vh_1 = s_5.v.dot(h_6);
-    let _e70 = mx_fresnel_dielectric(vh_1, eta_3);
-    let _e72 = mx_fresnel_airy_conductor(vh_1, n3_, k3_, thinfilm_thickness, thinfilm_ior);
-    let f_4 = if film { _e72 } else { Vec3::splat(_e70) };
-    let _e76 = mx_ggx_reflection(s_5.v, l_5, h_6, s_5.a);
-    let response_1 = w_2 * _e76 * f_4 * comp * t_5;
-    if cl_6.context == MX_CONTEXT_EVAL {
-        let _e84 = mx_bsdf_empty();
-        return BSDF { response: response_1, throughput: throughput_3, lobe: _e84.lobe };
+    if film {
+        let _e77 = mx_fresnel_airy_conductor(vh_1, n3_, k3_, thinfilm_thickness, thinfilm_ior);
+        f_2 = _e77;
+    } else {
+        let _e78 = mx_fresnel_dielectric(vh_1, eta_3);
+        f_2 = Vec3::splat(_e78);
     }
-    let _e87 = mx_luminance_rgb(tinted);
-    let _e90 = mx_ggx_pdf(s_5.v, h_6, s_5.a);
-    let _e91 = mx_lobe_with_pdf(response_1, throughput_3, _e87, _e90);
-    _e91
+    let _e82 = mx_ggx_reflection(s_5.v, l_5, h_6, s_5.a);
+    let _e84 = f_2;
+    let response_1 = w_2 * _e82 * _e84 * comp * t_5;
+    if cl_6.context == MX_CONTEXT_EVAL {
+        let _e91 = mx_bsdf_empty();
+        return BSDF { response: response_1, throughput: throughput_3, lobe: _e91.lobe };
+    }
+    let _e94 = mx_luminance_rgb(tinted);
+    let _e97 = mx_ggx_pdf(s_5.v, h_6, s_5.a);
+    let _e98 = mx_lobe_with_pdf(response_1, throughput_3, _e94, _e97);
+    _e98
 }
 
 #[inline(always)]
@@ -789,7 +805,7 @@ pub fn mx_fresnel_node(m_4: i32) -> f32 {
 #[inline(always)]
 #[allow(unused_assignments)]
 pub fn mx_albedo_ggx_schlick(mu_5: f32, abar_5: f32, r0_2: Vec3, r82_2: Vec3, r90_2: Vec3, exponent_2: f32) -> Vec3 {
-    let mut e_2: Vec3 = Vec3::splat(0.0f32);
+    let mut e_3: Vec3 = Vec3::splat(0.0f32);
     let mut m_5: i32 = 0i32;
     let p_8 = mx_ggx_moments_position(mu_5, abar_5, MX_TABLE_FRESNEL_NODES);
     loop {
@@ -799,25 +815,25 @@ pub fn mx_albedo_ggx_schlick(mu_5: f32, abar_5: f32, r0_2: Vec3, r82_2: Vec3, r9
             break;
         }
         {
-            let _e16 = e_2;
+            let _e16 = e_3;
             let _e19 = m_5;
             let _e20 = mx_ggx_moment(1024i32, MX_TABLE_FRESNEL_NODES, p_8, _e19);
             let _e21 = m_5;
             let _e22 = mx_fresnel_node(_e21);
             let _e23 = mx_fresnel_schlick_f82_(_e22, r0_2, r82_2, r90_2, exponent_2);
-            e_2 = _e16 + _e20 * _e23;
+            e_3 = _e16 + _e20 * _e23;
         }
         let _e27 = m_5;
         m_5 = _e27.wrapping_add(1i32);
     }
-    let _e29 = e_2;
+    let _e29 = e_3;
     _e29
 }
 
 #[inline(always)]
 #[allow(unused_assignments)]
 pub fn mx_albedo_ggx_airy_schlick(mu_6: f32, abar_6: f32, r0_3: Vec3, r82_3: Vec3, r90_3: Vec3, exponent_3: f32, thickness_4: f32, film_ior_3: f32) -> Vec3 {
-    let mut e_3: Vec3 = Vec3::splat(0.0f32);
+    let mut e_4: Vec3 = Vec3::splat(0.0f32);
     let mut m_6: i32 = 0i32;
     let p_9 = mx_ggx_moments_position(mu_6, abar_6, MX_TABLE_FILM_FRESNEL_NODES);
     loop {
@@ -827,18 +843,18 @@ pub fn mx_albedo_ggx_airy_schlick(mu_6: f32, abar_6: f32, r0_3: Vec3, r82_3: Vec
             break;
         }
         {
-            let _e18 = e_3;
+            let _e18 = e_4;
             let _e21 = m_6;
             let _e22 = mx_ggx_moment(17408i32, MX_TABLE_FILM_FRESNEL_NODES, p_9, _e21);
             let _e23 = m_6;
             let _e24 = mx_film_fresnel_node(_e23);
             let _e25 = mx_fresnel_airy_schlick(_e24, r0_3, r82_3, r90_3, exponent_3, thickness_4, film_ior_3);
-            e_3 = _e18 + _e22 * _e25;
+            e_4 = _e18 + _e22 * _e25;
         }
         let _e29 = m_6;
         m_6 = _e29.wrapping_add(1i32);
     }
-    let _e31 = e_3;
+    let _e31 = e_4;
     _e31
 }
 
@@ -965,10 +981,10 @@ pub fn mx_pdf_cosine(l_3: Vec3) -> f32 {
 #[inline(always)]
 #[allow(unused_assignments)]
 pub fn mx_sheen_bsdf(cl_10: mx_closure, weight_2: f32, color: Vec3, roughness_5: f32, normal_4: Vec3, mode: i32) -> BSDF {
-    let mut e_4: f32 = 0.0f32;
+    let mut e_5: f32 = 0.0f32;
     let mut norm: f32 = 1.0f32;
     let mut l_4: Vec3 = Vec3::ZERO;
-    let mut f_2: f32 = 0.0f32;
+    let mut f_3: f32 = 0.0f32;
     let mut pdf_1: f32 = 0.0f32;
     let w_4 = mx_lobe_weight(weight_2);
     let frame_1 = mx_frame_new(normal_4, Vec3::splat(0.0f32), cl_10.wv);
@@ -980,17 +996,17 @@ pub fn mx_sheen_bsdf(cl_10: mx_closure, weight_2: f32, color: Vec3, roughness_5:
     let ltc_1 = mx_sheen_zeltner_ltc(mu_9, y_8);
     if mode == 1i32 {
         let _e38 = mx_sheen_zeltner_albedo(mu_9, y_8);
-        e_4 = _e38.max(0.0f32).min(1.0f32);
+        e_5 = _e38.max(0.0f32).min(1.0f32);
     } else {
         let _e42 = mx_albedo_sheen_conty_kulla(mu_9, roughness_5);
         let e_ck = _e42.max(0.0f32);
         norm = 1.0f32 / e_ck.max(1.0f32);
         let _e49 = norm;
-        e_4 = e_ck * _e49;
+        e_5 = e_ck * _e49;
     }
-    let _e51 = e_4;
+    let _e51 = e_5;
     let throughput_5 = Vec3::splat(1.0f32 - w_4 * _e51);
-    let _e56 = e_4;
+    let _e56 = e_5;
     let albedo_2 = w_4 * _e56 * c_10;
     if cl_10.context == MX_CONTEXT_ALBEDO {
         let _e62 = mx_bsdf_empty();
@@ -1016,19 +1032,19 @@ pub fn mx_sheen_bsdf(cl_10: mx_closure, weight_2: f32, color: Vec3, roughness_5:
     if mode == 1i32 {
         let l_ltc_1 = Vec3::new(l_7.dot(xv), xv.x * l_7.y - xv.y * l_7.x, l_7.z);
         let density = mx_sheen_zeltner_density(l_ltc_1, ltc_1);
-        let _e134 = e_4;
-        f_2 = _e134 * density;
+        let _e134 = e_5;
+        f_3 = _e134 * density;
         pdf_1 = density;
     } else {
         let h_8 = mx_half_vector(v_11, l_7);
         let ml_1 = l_7.z.max(0.0f32);
         let _e140 = norm;
         let _e142 = mx_sheen_conty_kulla_d(h_8.z, roughness_5);
-        f_2 = if l_7.z <= 0.0f32 { 0.0f32 } else { _e140 * _e142 * ml_1 / (4.0f32 * (ml_1 + mu_9 - ml_1 * mu_9)) };
+        f_3 = if l_7.z <= 0.0f32 { 0.0f32 } else { _e140 * _e142 * ml_1 / (4.0f32 * (ml_1 + mu_9 - ml_1 * mu_9)) };
         let _e156 = mx_pdf_cosine(l_7);
         pdf_1 = _e156;
     }
-    let _e157 = f_2;
+    let _e157 = f_3;
     let response_3 = w_4 * _e157 * c_10;
     if cl_10.context == MX_CONTEXT_EVAL {
         let _e163 = mx_bsdf_empty();

@@ -144,9 +144,9 @@ pub const MX_INV_PI: f32 = 0.31830987f32;
 
 pub const MX_CONTEXT_EVAL: i32 = 0i32;
 
-pub const MX_TABLE_IOR_NODES: i32 = 32i32;
-
 pub const MX_TABLE_FILM_FRESNEL_NODES: i32 = 32i32;
+
+pub const MX_TABLE_IOR_NODES: i32 = 32i32;
 
 pub const MX_TABLE_FRESNEL_NODES: i32 = 16i32;
 
@@ -231,11 +231,11 @@ pub fn mx_sheen_zeltner_ltc(x: f32, y: f32) -> Vec2 {
 #[inline(always)]
 pub fn mx_fast_exp2_(x_1: f32) -> f32 {
     let y_6 = x_1.max(-126.0f32).min(127.0f32);
-    let e_4 = y_6.floor();
-    let f_3 = y_6 - e_4;
-    let t_1 = f_3 * 0.6931472f32;
+    let e_5 = y_6.floor();
+    let f_4 = y_6 - e_5;
+    let t_1 = f_4 * 0.6931472f32;
     let p_1 = 1.0f32 + t_1 * (1.0f32 + t_1 * (0.5f32 + t_1 * (0.16666667f32 + t_1 * (0.041666668f32 + t_1 * (0.008333334f32 + t_1 * (0.0013888889f32 + t_1 * 0.0001984127f32))))));
-    f32::from_bits(((e_4 as i32).wrapping_add(127i32) as u32).wrapping_shl(23u32)) * p_1
+    f32::from_bits(((e_5 as i32).wrapping_add(127i32) as u32).wrapping_shl(23u32)) * p_1
 }
 
 #[inline(always)]
@@ -290,10 +290,10 @@ pub fn mx_albedo_table_2d(offset: i32, x_5: f32, y_3: f32) -> f32 {
 #[inline(always)]
 pub fn mx_table_log_coordinate(v_2: f32) -> f32 {
     let bits = (1.0f32 + 100.0f32 * v_2.max(0.0f32).min(1.0f32)).to_bits();
-    let e_5 = ((bits.wrapping_shr(23u32) & 255u32) as i32).wrapping_sub(127i32) as f32;
+    let e_6 = ((bits.wrapping_shr(23u32) & 255u32) as i32).wrapping_sub(127i32) as f32;
     let t_2 = f32::from_bits(bits & 8388607u32 | 1065353216u32) - 1.0f32;
     let p_4 = 5.060328e-6f32 + t_2 * (1.4423956f32 + t_2 * (-0.71698755f32 + t_2 * (0.4538582f32 + t_2 * (-0.27235582f32 + t_2 * (0.11790686f32 + t_2 * -0.024825985f32)))));
-    (e_5 + p_4) * 0.15019049f32
+    (e_6 + p_4) * 0.15019049f32
 }
 
 #[inline(always)]
@@ -374,8 +374,8 @@ pub fn mx_race_uniform(cl_1: mx_closure) -> f32 {
 pub fn mx_lobe_sampled(cl_2: mx_closure, throughput: Vec3, wl_1: Vec3, c: f32) -> BSDF {
     let _e4 = mx_race_uniform(cl_2);
     let _e5 = mx_fast_log2_(_e4);
-    let e_6 = -0.6931472f32 * _e5;
-    let key = if c > 1e-30f32 { e_6 / c } else { MX_LOBE_NEVER };
+    let e_7 = -0.6931472f32 * _e5;
+    let key = if c > 1e-30f32 { e_7 / c } else { MX_LOBE_NEVER };
     BSDF { response: Vec3::splat(0.0f32), throughput: throughput, lobe: Vec4::new(wl_1.x, wl_1.y, wl_1.z, key.min(MX_LOBE_NEVER)) }
 }
 
@@ -694,68 +694,19 @@ pub fn mx_fresnel_airy_conductor(cos_theta_6: f32, n_2: Vec3, k_1: Vec3, thickne
 }
 
 #[inline(always)]
-pub fn mx_albedo_ggx_ess(mu_1: f32, abar: f32) -> f32 {
+pub fn mx_ggx_moments_position(mu_1: f32, abar: f32, nodes: i32) -> mx_table_point {
     let _e3 = mx_table_log_coordinate(mu_1);
     let _e4 = mx_table_log_coordinate(abar);
-    let _e5 = mx_albedo_table_2d(0i32, _e3, _e4);
-    _e5
-}
-
-#[inline(always)]
-pub fn mx_ggx_energy_compensation(mu_2: f32, abar_1: f32, favg: Vec3) -> Vec3 {
-    let _e3 = mx_albedo_ggx_ess(mu_2, abar_1);
-    let ess = _e3.max(0.0001f32);
-    Vec3::splat(1.0f32) + favg * ((1.0f32 - ess) / ess)
-}
-
-#[inline(always)]
-pub fn mx_fresnel_average(f_normal: Vec3, f90_: Vec3) -> Vec3 {
-    f_normal + (f90_ - f_normal) * 0.04761905f32
-}
-
-#[inline(always)]
-pub fn mx_albedo_ggx_dielectric(mu_3: f32, abar_2: f32, eta_2: f32) -> f32 {
-    if eta_2 <= 0.0f32 {
-        let _e5 = mx_albedo_ggx_ess(mu_3, abar_2);
-        return _e5;
-    }
-    let base_1 = if eta_2 < 1.0f32 { 82944i32 } else { 50176i32 };
-    let q_4 = (eta_2 - 1.0f32).abs() / (eta_2 + 1.0f32);
-    let _e17 = mx_table_log_coordinate(mu_3);
-    let _e18 = mx_table_log_coordinate(abar_2);
-    let p_5 = mx_table_2d_index(_e17, _e18);
-    let pz = mx_table_axis((2.0f32 * q_4).min(1.0f32).sqrt(), MX_TABLE_IOR_NODES);
-    let k_9 = MX_TABLE_ROUGHNESS_NODES.wrapping_mul(MX_TABLE_VIEW_NODES);
-    let i_3 = base_1.wrapping_add(pz.i.wrapping_mul(k_9)).wrapping_add(p_5.i);
-    let _e35 = mx_albedo_table(i_3);
-    let _e38 = mx_albedo_table(i_3.wrapping_add(1i32));
-    let a0_ = wgsl_mix_f32_f32_f32(_e35, _e38, p_5.fx);
-    let _e42 = mx_albedo_table(i_3.wrapping_add(MX_TABLE_VIEW_NODES));
-    let _e46 = mx_albedo_table(i_3.wrapping_add(MX_TABLE_VIEW_NODES).wrapping_add(1i32));
-    let b0_ = wgsl_mix_f32_f32_f32(_e42, _e46, p_5.fx);
-    let _e50 = mx_albedo_table(i_3.wrapping_add(k_9));
-    let _e54 = mx_albedo_table(i_3.wrapping_add(k_9).wrapping_add(1i32));
-    let a1_ = wgsl_mix_f32_f32_f32(_e50, _e54, p_5.fx);
-    let _e59 = mx_albedo_table(i_3.wrapping_add(k_9).wrapping_add(MX_TABLE_VIEW_NODES));
-    let _e64 = mx_albedo_table(i_3.wrapping_add(k_9).wrapping_add(MX_TABLE_VIEW_NODES).wrapping_add(1i32));
-    let b1_ = wgsl_mix_f32_f32_f32(_e59, _e64, p_5.fx);
-    wgsl_mix_f32_f32_f32(wgsl_mix_f32_f32_f32(a0_, b0_, p_5.fy), wgsl_mix_f32_f32_f32(a1_, b1_, p_5.fy), pz.f)
-}
-
-#[inline(always)]
-pub fn mx_ggx_moments_position(mu_4: f32, abar_3: f32, nodes: i32) -> mx_table_point {
-    let _e3 = mx_table_log_coordinate(mu_4);
-    let _e4 = mx_table_log_coordinate(abar_3);
-    let p_6 = mx_table_2d_index(_e3, _e4);
-    mx_table_point { i: p_6.i.wrapping_mul(nodes), fx: p_6.fx, fy: p_6.fy }
+    let p_5 = mx_table_2d_index(_e3, _e4);
+    mx_table_point { i: p_5.i.wrapping_mul(nodes), fx: p_5.fx, fy: p_5.fy }
 }
 
 #[inline(always)]
 pub fn mx_ggx_moment(offset_1: i32, nodes_1: i32, p: mx_table_point, m_1: i32) -> f32 {
-    let i_4 = offset_1.wrapping_add(p.i).wrapping_add(m_1);
-    let j_2 = i_4.wrapping_add(MX_TABLE_VIEW_NODES.wrapping_mul(nodes_1));
-    let _e10 = mx_albedo_table(i_4);
-    let _e12 = mx_albedo_table(i_4.wrapping_add(nodes_1));
+    let i_3 = offset_1.wrapping_add(p.i).wrapping_add(m_1);
+    let j_2 = i_3.wrapping_add(MX_TABLE_VIEW_NODES.wrapping_mul(nodes_1));
+    let _e10 = mx_albedo_table(i_3);
+    let _e12 = mx_albedo_table(i_3.wrapping_add(nodes_1));
     let a_12 = wgsl_mix_f32_f32_f32(_e10, _e12, p.fx);
     let _e15 = mx_albedo_table(j_2);
     let _e17 = mx_albedo_table(j_2.wrapping_add(nodes_1));
@@ -770,10 +721,10 @@ pub fn mx_film_fresnel_node(m_2: i32) -> f32 {
 
 #[inline(always)]
 #[allow(unused_assignments)]
-pub fn mx_albedo_ggx_airy_conductor(mu_5: f32, abar_4: f32, n_3: Vec3, k_2: Vec3, thickness_2: f32, film_ior_1: f32) -> Vec3 {
+pub fn mx_albedo_ggx_airy_conductor(mu_2: f32, abar_1: f32, n_3: Vec3, k_2: Vec3, thickness_2: f32, film_ior_1: f32) -> Vec3 {
     let mut e_2: Vec3 = Vec3::splat(0.0f32);
     let mut m_3: i32 = 0i32;
-    let p_7 = mx_ggx_moments_position(mu_5, abar_4, MX_TABLE_FILM_FRESNEL_NODES);
+    let p_6 = mx_ggx_moments_position(mu_2, abar_1, MX_TABLE_FILM_FRESNEL_NODES);
     loop {
         let _e13 = m_3;
         if _e13 < MX_TABLE_FILM_FRESNEL_NODES {
@@ -783,7 +734,7 @@ pub fn mx_albedo_ggx_airy_conductor(mu_5: f32, abar_4: f32, n_3: Vec3, k_2: Vec3
         {
             let _e16 = e_2;
             let _e19 = m_3;
-            let _e20 = mx_ggx_moment(17408i32, MX_TABLE_FILM_FRESNEL_NODES, p_7, _e19);
+            let _e20 = mx_ggx_moment(17408i32, MX_TABLE_FILM_FRESNEL_NODES, p_6, _e19);
             let _e21 = m_3;
             let _e22 = mx_film_fresnel_node(_e21);
             let _e23 = mx_fresnel_airy_conductor(_e22, n_3, k_2, thickness_2, film_ior_1);
@@ -794,6 +745,55 @@ pub fn mx_albedo_ggx_airy_conductor(mu_5: f32, abar_4: f32, n_3: Vec3, k_2: Vec3
     }
     let _e29 = e_2;
     _e29
+}
+
+#[inline(always)]
+pub fn mx_albedo_ggx_ess(mu_3: f32, abar_2: f32) -> f32 {
+    let _e3 = mx_table_log_coordinate(mu_3);
+    let _e4 = mx_table_log_coordinate(abar_2);
+    let _e5 = mx_albedo_table_2d(0i32, _e3, _e4);
+    _e5
+}
+
+#[inline(always)]
+pub fn mx_albedo_ggx_dielectric(mu_4: f32, abar_3: f32, eta_2: f32) -> f32 {
+    if eta_2 <= 0.0f32 {
+        let _e5 = mx_albedo_ggx_ess(mu_4, abar_3);
+        return _e5;
+    }
+    let base_1 = if eta_2 < 1.0f32 { 82944i32 } else { 50176i32 };
+    let q_4 = (eta_2 - 1.0f32).abs() / (eta_2 + 1.0f32);
+    let _e17 = mx_table_log_coordinate(mu_4);
+    let _e18 = mx_table_log_coordinate(abar_3);
+    let p_7 = mx_table_2d_index(_e17, _e18);
+    let pz = mx_table_axis((2.0f32 * q_4).min(1.0f32).sqrt(), MX_TABLE_IOR_NODES);
+    let k_9 = MX_TABLE_ROUGHNESS_NODES.wrapping_mul(MX_TABLE_VIEW_NODES);
+    let i_4 = base_1.wrapping_add(pz.i.wrapping_mul(k_9)).wrapping_add(p_7.i);
+    let _e35 = mx_albedo_table(i_4);
+    let _e38 = mx_albedo_table(i_4.wrapping_add(1i32));
+    let a0_ = wgsl_mix_f32_f32_f32(_e35, _e38, p_7.fx);
+    let _e42 = mx_albedo_table(i_4.wrapping_add(MX_TABLE_VIEW_NODES));
+    let _e46 = mx_albedo_table(i_4.wrapping_add(MX_TABLE_VIEW_NODES).wrapping_add(1i32));
+    let b0_ = wgsl_mix_f32_f32_f32(_e42, _e46, p_7.fx);
+    let _e50 = mx_albedo_table(i_4.wrapping_add(k_9));
+    let _e54 = mx_albedo_table(i_4.wrapping_add(k_9).wrapping_add(1i32));
+    let a1_ = wgsl_mix_f32_f32_f32(_e50, _e54, p_7.fx);
+    let _e59 = mx_albedo_table(i_4.wrapping_add(k_9).wrapping_add(MX_TABLE_VIEW_NODES));
+    let _e64 = mx_albedo_table(i_4.wrapping_add(k_9).wrapping_add(MX_TABLE_VIEW_NODES).wrapping_add(1i32));
+    let b1_ = wgsl_mix_f32_f32_f32(_e59, _e64, p_7.fx);
+    wgsl_mix_f32_f32_f32(wgsl_mix_f32_f32_f32(a0_, b0_, p_7.fy), wgsl_mix_f32_f32_f32(a1_, b1_, p_7.fy), pz.f)
+}
+
+#[inline(always)]
+pub fn mx_ggx_energy_compensation(mu_5: f32, abar_4: f32, favg: Vec3) -> Vec3 {
+    let _e3 = mx_albedo_ggx_ess(mu_5, abar_4);
+    let ess = _e3.max(0.0001f32);
+    Vec3::splat(1.0f32) + favg * ((1.0f32 - ess) / ess)
+}
+
+#[inline(always)]
+pub fn mx_fresnel_average(f_normal: Vec3, f90_: Vec3) -> Vec3 {
+    f_normal + (f90_ - f_normal) * 0.04761905f32
 }
 
 #[inline(always)]
@@ -868,7 +868,11 @@ pub fn mx_ggx_pdf(v_9: Vec3, h_4: Vec3, a_4: Vec2) -> f32 {
 }
 
 #[inline(always)]
+#[allow(unused_assignments)]
 pub fn mx_dielectric_bsdf(cl_7: mx_closure, weight_1: f32, tint: Vec3, ior: f32, roughness_4: Vec2, retroreflective_1: bool, thinfilm_thickness: f32, thinfilm_ior: f32, normal_3: Vec3, tangent_2: Vec3, _distribution: i32, scatter_mode: i32) -> BSDF {
+    let mut f1_: Vec3 = Vec3::ZERO;
+    let mut e_3: Vec3 = Vec3::splat(0.0f32);
+    let mut f_3: Vec3 = Vec3::splat(0.0f32);
     let w_3 = mx_lobe_weight(weight_1);
     if scatter_mode == 1i32 {
         let _e15 = mx_bsdf_empty();
@@ -881,41 +885,53 @@ pub fn mx_dielectric_bsdf(cl_7: mx_closure, weight_1: f32, tint: Vec3, ior: f32,
     let n3_ = Vec3::splat(eta_3);
     let k3_ = Vec3::splat(0.0f32);
     let _e28 = mx_fresnel_dielectric(1.0f32, eta_3);
-    let _e31 = mx_fresnel_airy_conductor(1.0f32, n3_, k3_, thinfilm_thickness, thinfilm_ior);
-    let f1_ = if film { _e31 } else { Vec3::splat(_e28) };
-    let _e37 = mx_fresnel_average(f1_, Vec3::splat(1.0f32));
-    let comp = mx_ggx_energy_compensation(s_6.mu, s_6.abar, _e37);
-    let _e41 = mx_albedo_ggx_dielectric(s_6.mu, s_6.abar, eta_3);
-    let _e45 = mx_albedo_ggx_airy_conductor(s_6.mu, s_6.abar, n3_, k3_, thinfilm_thickness, thinfilm_ior);
-    let e_7 = if film { _e45 } else { Vec3::splat(_e41) };
-    let albedo_1 = comp * e_7;
+    f1_ = Vec3::splat(_e28);
+    if film {
+        let _e35 = mx_fresnel_airy_conductor(1.0f32, n3_, k3_, thinfilm_thickness, thinfilm_ior);
+        f1_ = _e35;
+        let _e38 = mx_albedo_ggx_airy_conductor(s_6.mu, s_6.abar, n3_, k3_, thinfilm_thickness, thinfilm_ior);
+        e_3 = _e38;
+    } else {
+        let _e41 = mx_albedo_ggx_dielectric(s_6.mu, s_6.abar, eta_3);
+        e_3 = Vec3::splat(_e41);
+    }
+    let _e45 = f1_;
+    let _e48 = mx_fresnel_average(_e45, Vec3::splat(1.0f32));
+    let comp = mx_ggx_energy_compensation(s_6.mu, s_6.abar, _e48);
+    let _e50 = e_3;
+    let albedo_1 = comp * _e50;
     let throughput_4 = Vec3::splat(1.0f32) - w_3 * albedo_1;
     let tinted = w_3 * t_5 * albedo_1;
     if cl_7.context == MX_CONTEXT_ALBEDO {
-        let _e57 = mx_bsdf_empty();
-        return BSDF { response: tinted, throughput: throughput_4, lobe: _e57.lobe };
+        let _e61 = mx_bsdf_empty();
+        return BSDF { response: tinted, throughput: throughput_4, lobe: _e61.lobe };
     }
     if cl_7.context == MX_CONTEXT_SAMPLE {
-        let _e63 = mx_luminance_rgb(tinted);
-        let _e64 = mx_ggx_lobe_sample(cl_7, s_6, throughput_4, _e63);
-        return _e64;
+        let _e67 = mx_luminance_rgb(tinted);
+        let _e68 = mx_ggx_lobe_sample(cl_7, s_6, throughput_4, _e67);
+        return _e68;
     }
     let l_6 = mx_ggx_light(cl_7, s_6);
     let h_7 = mx_half_vector(s_6.v, l_6);
     let vh_2 = s_6.v.dot(h_7);
-    let _e70 = mx_fresnel_dielectric(vh_2, eta_3);
-    let _e72 = mx_fresnel_airy_conductor(vh_2, n3_, k3_, thinfilm_thickness, thinfilm_ior);
-    let f_4 = if film { _e72 } else { Vec3::splat(_e70) };
-    let _e76 = mx_ggx_reflection(s_6.v, l_6, h_7, s_6.a);
-    let response_2 = w_3 * _e76 * f_4 * comp * t_5;
-    if cl_7.context == MX_CONTEXT_EVAL {
-        let _e84 = mx_bsdf_empty();
-        return BSDF { response: response_2, throughput: throughput_4, lobe: _e84.lobe };
+    if film {
+        let _e77 = mx_fresnel_airy_conductor(vh_2, n3_, k3_, thinfilm_thickness, thinfilm_ior);
+        f_3 = _e77;
+    } else {
+        let _e78 = mx_fresnel_dielectric(vh_2, eta_3);
+        f_3 = Vec3::splat(_e78);
     }
-    let _e87 = mx_luminance_rgb(tinted);
-    let _e90 = mx_ggx_pdf(s_6.v, h_7, s_6.a);
-    let _e91 = mx_lobe_with_pdf(response_2, throughput_4, _e87, _e90);
-    _e91
+    let _e82 = mx_ggx_reflection(s_6.v, l_6, h_7, s_6.a);
+    let _e84 = f_3;
+    let response_2 = w_3 * _e82 * _e84 * comp * t_5;
+    if cl_7.context == MX_CONTEXT_EVAL {
+        let _e91 = mx_bsdf_empty();
+        return BSDF { response: response_2, throughput: throughput_4, lobe: _e91.lobe };
+    }
+    let _e94 = mx_luminance_rgb(tinted);
+    let _e97 = mx_ggx_pdf(s_6.v, h_7, s_6.a);
+    let _e98 = mx_lobe_with_pdf(response_2, throughput_4, _e94, _e97);
+    _e98
 }
 
 #[inline(always)]
@@ -959,7 +975,7 @@ pub fn mx_fresnel_node(m_4: i32) -> f32 {
 #[inline(always)]
 #[allow(unused_assignments)]
 pub fn mx_albedo_ggx_conductor(mu_6: f32, abar_5: f32, n_7: Vec3, k_6: Vec3) -> Vec3 {
-    let mut e_3: Vec3 = Vec3::splat(0.0f32);
+    let mut e_4: Vec3 = Vec3::splat(0.0f32);
     let mut m_5: i32 = 0i32;
     let p_8 = mx_ggx_moments_position(mu_6, abar_5, MX_TABLE_FRESNEL_NODES);
     loop {
@@ -969,18 +985,18 @@ pub fn mx_albedo_ggx_conductor(mu_6: f32, abar_5: f32, n_7: Vec3, k_6: Vec3) -> 
             break;
         }
         {
-            let _e14 = e_3;
+            let _e14 = e_4;
             let _e17 = m_5;
             let _e18 = mx_ggx_moment(1024i32, MX_TABLE_FRESNEL_NODES, p_8, _e17);
             let _e19 = m_5;
             let _e20 = mx_fresnel_node(_e19);
             let _e21 = mx_fresnel_conductor(_e20, n_7, k_6);
-            e_3 = _e14 + _e18 * _e21;
+            e_4 = _e14 + _e18 * _e21;
         }
         let _e25 = m_5;
         m_5 = _e25.wrapping_add(1i32);
     }
-    let _e27 = e_3;
+    let _e27 = e_4;
     _e27
 }
 

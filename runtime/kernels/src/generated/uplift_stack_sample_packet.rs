@@ -1525,44 +1525,106 @@ pub fn mx_fresnel_airy_conductor<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_albedo_ggx_ess<S: Simd>(s: S, mu_1: S::F, abar: S::F) -> S::F {
+pub fn mx_ggx_moments_position<S: Simd>(s: S, mu_1: S::F, abar: S::F, nodes: S::I) -> mx_table_point<S> {
     let _e3 = mx_table_log_coordinate(s, mu_1);
     let _e4 = mx_table_log_coordinate(s, abar);
+    let _e5 = mx_table_2d_index(s, _e3, _e4);
+    let _e6 = _e5.i;
+    let _e7 = (_e6 * nodes);
+    let _e8 = _e5.fx;
+    let _e9 = _e5.fy;
+    let _e10 = mx_table_point { i: _e7, fx: _e8, fy: _e9 };
+    return _e10;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_ggx_moment<S: Simd>(s: S, offset_1: S::I, nodes_1: S::I, p: mx_table_point<S>, m_1: S::I) -> S::F {
+    let _e4 = p.i;
+    let _e5 = (offset_1 + _e4);
+    let _e6 = (_e5 + m_1);
+    let _e8 = (s.splat_i(32i32) * nodes_1);
+    let _e9 = (_e6 + _e8);
+    let _e10 = mx_albedo_table(s, _e6);
+    let _e11 = (_e6 + nodes_1);
+    let _e12 = mx_albedo_table(s, _e11);
+    let _e13 = p.fx;
+    let _e14 = { let t = _e13; _e12.mul_add(t, _e10 * (s.splat(1.0) - t)) };
+    let _e15 = mx_albedo_table(s, _e9);
+    let _e16 = (_e9 + nodes_1);
+    let _e17 = mx_albedo_table(s, _e16);
+    let _e18 = p.fx;
+    let _e19 = { let t = _e18; _e17.mul_add(t, _e15 * (s.splat(1.0) - t)) };
+    let _e20 = p.fy;
+    let _e21 = { let t = _e20; _e19.mul_add(t, _e14 * (s.splat(1.0) - t)) };
+    return _e21;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_film_fresnel_node<S: Simd>(s: S, m_2: S::I) -> S::F {
+    let _e1 = m_2.to_f32();
+    let _e3 = (_e1 * s.splat(0.032258064f32));
+    return _e3;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_albedo_ggx_airy_conductor<S: Simd>(s: S, mu_2: S::F, abar_1: S::F, n_3: [S::F; 3], k_2: [S::F; 3], thickness_2: S::F, film_ior_1: S::F) -> [S::F; 3] {
+    let mut e_2: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut m_3: S::I = s.splat_i(0i32);
+    let _e7 = mx_ggx_moments_position(s, mu_2, abar_1, s.splat_i(32i32));
+    let _e9 = [s.splat(0.0f32); 3];
+    let mut _lm1 = s.first_lanes(usize::MAX);
+    let mut _brk1 = s.first_lanes(0);
+    loop {
+        let mut _cont1 = s.first_lanes(0);
+        let _e13 = m_3;
+        let _e15 = _e13.lt(s.splat_i(32i32));
+        let _m1 = _lm1 & !_e15;
+        if _m1.any() {
+            _brk1 = _brk1 | _m1;
+            let _m2 = s.first_lanes(0);
+        }
+        let _m3 = _lm1 & !_brk1 & !_cont1;
+        let _e16 = e_2;
+        let _e19 = m_3;
+        let _e20 = mx_ggx_moment(s, s.splat_i(17408i32), s.splat_i(32i32), _e7, _e19);
+        let _e21 = m_3;
+        let _e22 = mx_film_fresnel_node(s, _e21);
+        let _e23 = mx_fresnel_airy_conductor(s, _e22, n_3, k_2, thickness_2, film_ior_1);
+        let _e24 = uplift_simd::vector::mul::<S, 3>([_e20; 3], _e23);
+        let _e25 = uplift_simd::vector::add::<S, 3>(_e16, _e24);
+        e_2 = uplift_simd::vector::select_all::<S, 3>(_m3, _e25, e_2);
+        let _m4 = _lm1 & !_brk1;
+        let _e27 = m_3;
+        let _e28 = (_e27 + s.splat_i(1i32));
+        m_3 = _m4.select_i(_e28, m_3);
+        _lm1 = _lm1 & !_brk1;
+        if !_lm1.any() { break; }
+    }
+    let _e29 = e_2;
+    return _e29;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_albedo_ggx_ess<S: Simd>(s: S, mu_3: S::F, abar_2: S::F) -> S::F {
+    let _e3 = mx_table_log_coordinate(s, mu_3);
+    let _e4 = mx_table_log_coordinate(s, abar_2);
     let _e5 = mx_albedo_table_2d(s, s.splat_i(0i32), _e3, _e4);
     return _e5;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_energy_compensation<S: Simd>(s: S, mu_2: S::F, abar_1: S::F, favg: [S::F; 3]) -> [S::F; 3] {
-    let _e3 = mx_albedo_ggx_ess(s, mu_2, abar_1);
-    let _e5 = { let (x, y) = (_e3, s.splat(0.0001f32)); x.max(y) };
-    let _e7 = [s.splat(1.0f32); 3];
-    let _e9 = (s.splat(1.0f32) - _e5);
-    let _e10 = (_e9 * (_e5).rcp());
-    let _e11 = uplift_simd::vector::mul::<S, 3>(favg, [_e10; 3]);
-    let _e12 = uplift_simd::vector::add::<S, 3>(_e7, _e11);
-    return _e12;
-}
-
-#[inline(always)]
-#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_average<S: Simd>(s: S, f_normal: [S::F; 3], f90_: [S::F; 3]) -> [S::F; 3] {
-    let _e2 = uplift_simd::vector::sub::<S, 3>(f90_, f_normal);
-    let _e4 = uplift_simd::vector::mul::<S, 3>(_e2, [s.splat(0.04761905f32); 3]);
-    let _e5 = uplift_simd::vector::add::<S, 3>(f_normal, _e4);
-    return _e5;
-}
-
-#[inline(always)]
-#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_albedo_ggx_dielectric<S: Simd>(s: S, mu_3: S::F, abar_2: S::F, eta_2: S::F) -> S::F {
+pub fn mx_albedo_ggx_dielectric<S: Simd>(s: S, mu_4: S::F, abar_3: S::F, eta_2: S::F) -> S::F {
     let mut _ret: S::F = s.splat(0.0);
     let mut _done = s.first_lanes(0);
     let _e4 = eta_2.le(s.splat(0.0f32));
     let _m1 = _e4;
     if _m1.any() {
-        let _e5 = mx_albedo_ggx_ess(s, mu_3, abar_2);
+        let _e5 = mx_albedo_ggx_ess(s, mu_4, abar_3);
         _ret = (_m1 & !_done).select(_e5, _ret);
         _done = _done | _m1;
     }
@@ -1573,8 +1635,8 @@ pub fn mx_albedo_ggx_dielectric<S: Simd>(s: S, mu_3: S::F, abar_2: S::F, eta_2: 
     let _e13 = { let x = _e12; x.abs() };
     let _e15 = (eta_2 + s.splat(1.0f32));
     let _e16 = (_e13 * (_e15).rcp());
-    let _e17 = mx_table_log_coordinate(s, mu_3);
-    let _e18 = mx_table_log_coordinate(s, abar_2);
+    let _e17 = mx_table_log_coordinate(s, mu_4);
+    let _e18 = mx_table_log_coordinate(s, abar_3);
     let _e19 = mx_table_2d_index(s, _e17, _e18);
     let _e21 = (s.splat(2.0f32) * _e16);
     let _e23 = { let (x, y) = (_e21, s.splat(1.0f32)); x.min(y) };
@@ -1625,86 +1687,24 @@ pub fn mx_albedo_ggx_dielectric<S: Simd>(s: S, mu_3: S::F, abar_2: S::F, eta_2: 
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_moments_position<S: Simd>(s: S, mu_4: S::F, abar_3: S::F, nodes: S::I) -> mx_table_point<S> {
-    let _e3 = mx_table_log_coordinate(s, mu_4);
-    let _e4 = mx_table_log_coordinate(s, abar_3);
-    let _e5 = mx_table_2d_index(s, _e3, _e4);
-    let _e6 = _e5.i;
-    let _e7 = (_e6 * nodes);
-    let _e8 = _e5.fx;
-    let _e9 = _e5.fy;
-    let _e10 = mx_table_point { i: _e7, fx: _e8, fy: _e9 };
-    return _e10;
+pub fn mx_ggx_energy_compensation<S: Simd>(s: S, mu_5: S::F, abar_4: S::F, favg: [S::F; 3]) -> [S::F; 3] {
+    let _e3 = mx_albedo_ggx_ess(s, mu_5, abar_4);
+    let _e5 = { let (x, y) = (_e3, s.splat(0.0001f32)); x.max(y) };
+    let _e7 = [s.splat(1.0f32); 3];
+    let _e9 = (s.splat(1.0f32) - _e5);
+    let _e10 = (_e9 * (_e5).rcp());
+    let _e11 = uplift_simd::vector::mul::<S, 3>(favg, [_e10; 3]);
+    let _e12 = uplift_simd::vector::add::<S, 3>(_e7, _e11);
+    return _e12;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_ggx_moment<S: Simd>(s: S, offset_1: S::I, nodes_1: S::I, p: mx_table_point<S>, m_1: S::I) -> S::F {
-    let _e4 = p.i;
-    let _e5 = (offset_1 + _e4);
-    let _e6 = (_e5 + m_1);
-    let _e8 = (s.splat_i(32i32) * nodes_1);
-    let _e9 = (_e6 + _e8);
-    let _e10 = mx_albedo_table(s, _e6);
-    let _e11 = (_e6 + nodes_1);
-    let _e12 = mx_albedo_table(s, _e11);
-    let _e13 = p.fx;
-    let _e14 = { let t = _e13; _e12.mul_add(t, _e10 * (s.splat(1.0) - t)) };
-    let _e15 = mx_albedo_table(s, _e9);
-    let _e16 = (_e9 + nodes_1);
-    let _e17 = mx_albedo_table(s, _e16);
-    let _e18 = p.fx;
-    let _e19 = { let t = _e18; _e17.mul_add(t, _e15 * (s.splat(1.0) - t)) };
-    let _e20 = p.fy;
-    let _e21 = { let t = _e20; _e19.mul_add(t, _e14 * (s.splat(1.0) - t)) };
-    return _e21;
-}
-
-#[inline(always)]
-#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_film_fresnel_node<S: Simd>(s: S, m_2: S::I) -> S::F {
-    let _e1 = m_2.to_f32();
-    let _e3 = (_e1 * s.splat(0.032258064f32));
-    return _e3;
-}
-
-#[inline(always)]
-#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_albedo_ggx_airy_conductor<S: Simd>(s: S, mu_5: S::F, abar_4: S::F, n_3: [S::F; 3], k_2: [S::F; 3], thickness_2: S::F, film_ior_1: S::F) -> [S::F; 3] {
-    let mut e_2: [S::F; 3] = [s.splat(0.0f32); 3];
-    let mut m_3: S::I = s.splat_i(0i32);
-    let _e7 = mx_ggx_moments_position(s, mu_5, abar_4, s.splat_i(32i32));
-    let _e9 = [s.splat(0.0f32); 3];
-    let mut _lm1 = s.first_lanes(usize::MAX);
-    let mut _brk1 = s.first_lanes(0);
-    loop {
-        let mut _cont1 = s.first_lanes(0);
-        let _e13 = m_3;
-        let _e15 = _e13.lt(s.splat_i(32i32));
-        let _m1 = _lm1 & !_e15;
-        if _m1.any() {
-            _brk1 = _brk1 | _m1;
-            let _m2 = s.first_lanes(0);
-        }
-        let _m3 = _lm1 & !_brk1 & !_cont1;
-        let _e16 = e_2;
-        let _e19 = m_3;
-        let _e20 = mx_ggx_moment(s, s.splat_i(17408i32), s.splat_i(32i32), _e7, _e19);
-        let _e21 = m_3;
-        let _e22 = mx_film_fresnel_node(s, _e21);
-        let _e23 = mx_fresnel_airy_conductor(s, _e22, n_3, k_2, thickness_2, film_ior_1);
-        let _e24 = uplift_simd::vector::mul::<S, 3>([_e20; 3], _e23);
-        let _e25 = uplift_simd::vector::add::<S, 3>(_e16, _e24);
-        e_2 = uplift_simd::vector::select_all::<S, 3>(_m3, _e25, e_2);
-        let _m4 = _lm1 & !_brk1;
-        let _e27 = m_3;
-        let _e28 = (_e27 + s.splat_i(1i32));
-        m_3 = _m4.select_i(_e28, m_3);
-        _lm1 = _lm1 & !_brk1;
-        if !_lm1.any() { break; }
-    }
-    let _e29 = e_2;
-    return _e29;
+pub fn mx_fresnel_average<S: Simd>(s: S, f_normal: [S::F; 3], f90_: [S::F; 3]) -> [S::F; 3] {
+    let _e2 = uplift_simd::vector::sub::<S, 3>(f90_, f_normal);
+    let _e4 = uplift_simd::vector::mul::<S, 3>(_e2, [s.splat(0.04761905f32); 3]);
+    let _e5 = uplift_simd::vector::add::<S, 3>(f_normal, _e4);
+    return _e5;
 }
 
 #[inline(always)]
@@ -1891,6 +1891,9 @@ pub fn mx_ggx_pdf<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F; 2])
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I) -> BSDF<S> {
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e12 = mx_lobe_weight(s, weight_1);
@@ -1909,83 +1912,103 @@ pub fn mx_dielectric_bsdf<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, ti
     let _e23 = thinfilm_thickness.gt(s.splat(0.0f32));
     let _e24 = [_e18; 3];
     let _e26 = [s.splat(0.0f32); 3];
-    let _e28 = if (!(_e23)).any() { mx_fresnel_dielectric(s, s.splat(1.0f32), _e18) } else { s.splat(0.0) };
+    let _e28 = mx_fresnel_dielectric(s, s.splat(1.0f32), _e18);
     let _e29 = [_e28; 3];
-    let _e31 = if (_e23).any() { mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior) } else { [s.splat(0.0); 3] };
-    let _e32 = uplift_simd::vector::select_all::<S, 3>(_e23, _e31, _e29);
-    let _e33 = _e16.mu;
-    let _e34 = _e16.abar;
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e37 = mx_fresnel_average(s, _e32, _e36);
-    let _e38 = mx_ggx_energy_compensation(s, _e33, _e34, _e37);
-    let _e39 = _e16.mu;
-    let _e40 = _e16.abar;
-    let _e41 = if (!(_e23)).any() { s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18)) } else { s.splat(0.0) };
-    let _e42 = [_e41; 3];
+    f1_ = _e29;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _m2 = _e23;
+    if _m2.any() {
+        let _e35 = mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior);
+        f1_ = uplift_simd::vector::select_all::<S, 3>(_m2, _e35, f1_);
+        let _e36 = _e16.mu;
+        let _e37 = _e16.abar;
+        let _e38 = s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e36, _e37, _e24, _e26, thinfilm_thickness, thinfilm_ior));
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m2, _e38, e_3);
+    }
+    let _m3 = !_e23;
+    if _m3.any() {
+        let _e39 = _e16.mu;
+        let _e40 = _e16.abar;
+        let _e41 = s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18));
+        let _e42 = [_e41; 3];
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m3, _e42, e_3);
+    }
     let _e43 = _e16.mu;
     let _e44 = _e16.abar;
-    let _e45 = if (_e23).any() { s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e43, _e44, _e24, _e26, thinfilm_thickness, thinfilm_ior)) } else { [s.splat(0.0); 3] };
-    let _e46 = uplift_simd::vector::select_all::<S, 3>(_e23, _e45, _e42);
-    let _e47 = uplift_simd::vector::mul::<S, 3>(_e38, _e46);
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e50 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e47);
-    let _e51 = uplift_simd::vector::sub::<S, 3>(_e49, _e50);
-    let _e52 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
-    let _e53 = uplift_simd::vector::mul::<S, 3>(_e52, _e47);
-    let _e54 = cl_7.context;
-    let _e56 = _e54.eq(s.splat_i(1i32));
-    let _m2 = _e56;
-    if _m2.any() {
-        let _e57 = mx_bsdf_empty(s);
-        let _e58 = _e57.lobe;
-        let _e59 = BSDF { response: _e53, throughput: _e51, lobe: _e58 };
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
-        _done = _done | _m2;
-    }
-    if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = _e60.eq(s.splat_i(2i32));
-    let _m3 = _e62;
-    if _m3.any() {
-        let _e63 = mx_luminance_rgb(s, _e53);
-        let _e64 = mx_ggx_lobe_sample(s, cl_7, _e16, _e51, _e63);
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
-        _done = _done | _m3;
-    }
-    if _done.all() { return _ret; }
-    let _e65 = mx_ggx_light(s, cl_7, _e16);
-    let _e66 = _e16.v;
-    let _e67 = mx_half_vector(s, _e66, _e65);
-    let _e68 = _e16.v;
-    let _e69 = uplift_simd::vector::dot::<S, 3>(_e68, _e67);
-    let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric(s, _e69, _e18) } else { s.splat(0.0) };
-    let _e71 = [_e70; 3];
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior) } else { [s.splat(0.0); 3] };
-    let _e73 = uplift_simd::vector::select_all::<S, 3>(_e23, _e72, _e71);
-    let _e74 = _e16.v;
-    let _e75 = _e16.a;
-    let _e76 = mx_ggx_reflection(s, _e74, _e65, _e67, _e75);
-    let _e77 = (_e12 * _e76);
-    let _e78 = uplift_simd::vector::mul::<S, 3>([_e77; 3], _e73);
-    let _e79 = uplift_simd::vector::mul::<S, 3>(_e78, _e38);
-    let _e80 = uplift_simd::vector::mul::<S, 3>(_e79, _e21);
-    let _e81 = cl_7.context;
-    let _e83 = _e81.eq(s.splat_i(0i32));
-    let _m4 = _e83;
+    let _e45 = f1_;
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e48 = mx_fresnel_average(s, _e45, _e47);
+    let _e49 = mx_ggx_energy_compensation(s, _e43, _e44, _e48);
+    let _e50 = e_3;
+    let _e51 = uplift_simd::vector::mul::<S, 3>(_e49, _e50);
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e54 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e51);
+    let _e55 = uplift_simd::vector::sub::<S, 3>(_e53, _e54);
+    let _e56 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
+    let _e57 = uplift_simd::vector::mul::<S, 3>(_e56, _e51);
+    let _e58 = cl_7.context;
+    let _e60 = _e58.eq(s.splat_i(1i32));
+    let _m4 = _e60;
     if _m4.any() {
-        let _e84 = mx_bsdf_empty(s);
-        let _e85 = _e84.lobe;
-        let _e86 = BSDF { response: _e80, throughput: _e51, lobe: _e85 };
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
+        let _e61 = mx_bsdf_empty(s);
+        let _e62 = _e61.lobe;
+        let _e63 = BSDF { response: _e57, throughput: _e55, lobe: _e62 };
+        _ret = BSDF::<S>::select((_m4 & !_done), _e63, _ret);
         _done = _done | _m4;
     }
     if _done.all() { return _ret; }
-    let _e87 = mx_luminance_rgb(s, _e53);
-    let _e88 = _e16.v;
-    let _e89 = _e16.a;
-    let _e90 = mx_ggx_pdf(s, _e88, _e67, _e89);
-    let _e91 = mx_lobe_with_pdf(s, _e80, _e51, _e87, _e90);
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e64 = cl_7.context;
+    let _e66 = _e64.eq(s.splat_i(2i32));
+    let _m5 = _e66;
+    if _m5.any() {
+        let _e67 = mx_luminance_rgb(s, _e57);
+        let _e68 = mx_ggx_lobe_sample(s, cl_7, _e16, _e55, _e67);
+        _ret = BSDF::<S>::select((_m5 & !_done), _e68, _ret);
+        _done = _done | _m5;
+    }
+    if _done.all() { return _ret; }
+    let _e69 = mx_ggx_light(s, cl_7, _e16);
+    let _e70 = _e16.v;
+    let _e71 = mx_half_vector(s, _e70, _e69);
+    let _e72 = _e16.v;
+    let _e73 = uplift_simd::vector::dot::<S, 3>(_e72, _e71);
+    let _e75 = [s.splat(0.0f32); 3];
+    let _m6 = _e23;
+    if _m6.any() {
+        let _e77 = mx_fresnel_airy_conductor(s, _e73, _e24, _e26, thinfilm_thickness, thinfilm_ior);
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m6, _e77, f_3);
+    }
+    let _m7 = !_e23;
+    if _m7.any() {
+        let _e78 = mx_fresnel_dielectric(s, _e73, _e18);
+        let _e79 = [_e78; 3];
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m7, _e79, f_3);
+    }
+    let _e80 = _e16.v;
+    let _e81 = _e16.a;
+    let _e82 = mx_ggx_reflection(s, _e80, _e69, _e71, _e81);
+    let _e83 = (_e12 * _e82);
+    let _e84 = f_3;
+    let _e85 = uplift_simd::vector::mul::<S, 3>([_e83; 3], _e84);
+    let _e86 = uplift_simd::vector::mul::<S, 3>(_e85, _e49);
+    let _e87 = uplift_simd::vector::mul::<S, 3>(_e86, _e21);
+    let _e88 = cl_7.context;
+    let _e90 = _e88.eq(s.splat_i(0i32));
+    let _m8 = _e90;
+    if _m8.any() {
+        let _e91 = mx_bsdf_empty(s);
+        let _e92 = _e91.lobe;
+        let _e93 = BSDF { response: _e87, throughput: _e55, lobe: _e92 };
+        _ret = BSDF::<S>::select((_m8 & !_done), _e93, _ret);
+        _done = _done | _m8;
+    }
+    if _done.all() { return _ret; }
+    let _e94 = mx_luminance_rgb(s, _e57);
+    let _e95 = _e16.v;
+    let _e96 = _e16.a;
+    let _e97 = mx_ggx_pdf(s, _e95, _e71, _e96);
+    let _e98 = mx_lobe_with_pdf(s, _e87, _e55, _e94, _e97);
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]
@@ -2078,7 +2101,7 @@ pub fn mx_fresnel_node<S: Simd>(s: S, m_4: S::I) -> S::F {
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_albedo_ggx_conductor<S: Simd>(s: S, mu_6: S::F, abar_5: S::F, n_7: [S::F; 3], k_6: [S::F; 3]) -> [S::F; 3] {
-    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut e_4: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut m_5: S::I = s.splat_i(0i32);
     let _e5 = mx_ggx_moments_position(s, mu_6, abar_5, s.splat_i(16i32));
     let _e7 = [s.splat(0.0f32); 3];
@@ -2094,7 +2117,7 @@ pub fn mx_albedo_ggx_conductor<S: Simd>(s: S, mu_6: S::F, abar_5: S::F, n_7: [S:
             let _m2 = s.first_lanes(0);
         }
         let _m3 = _lm1 & !_brk1 & !_cont1;
-        let _e14 = e_3;
+        let _e14 = e_4;
         let _e17 = m_5;
         let _e18 = mx_ggx_moment(s, s.splat_i(1024i32), s.splat_i(16i32), _e5, _e17);
         let _e19 = m_5;
@@ -2102,7 +2125,7 @@ pub fn mx_albedo_ggx_conductor<S: Simd>(s: S, mu_6: S::F, abar_5: S::F, n_7: [S:
         let _e21 = mx_fresnel_conductor(s, _e20, n_7, k_6);
         let _e22 = uplift_simd::vector::mul::<S, 3>([_e18; 3], _e21);
         let _e23 = uplift_simd::vector::add::<S, 3>(_e14, _e22);
-        e_3 = uplift_simd::vector::select_all::<S, 3>(_m3, _e23, e_3);
+        e_4 = uplift_simd::vector::select_all::<S, 3>(_m3, _e23, e_4);
         let _m4 = _lm1 & !_brk1;
         let _e25 = m_5;
         let _e26 = (_e25 + s.splat_i(1i32));
@@ -2110,7 +2133,7 @@ pub fn mx_albedo_ggx_conductor<S: Simd>(s: S, mu_6: S::F, abar_5: S::F, n_7: [S:
         _lm1 = _lm1 & !_brk1;
         if !_lm1.any() { break; }
     }
-    let _e27 = e_3;
+    let _e27 = e_4;
     return _e27;
 }
 
@@ -2984,6 +3007,9 @@ pub fn mx_ggx_lobe_sample_g6<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_setu
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf_p7<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(71);
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e14 = tp.m(s, 0);
@@ -2997,45 +3023,50 @@ pub fn mx_dielectric_bsdf_p7<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F,
     let _e16 = mx_ggx_setup { frame: mx_frame { x: [tp.f(s, 11), tp.f(s, 12), tp.f(s, 13)], y: [tp.f(s, 14), tp.f(s, 15), tp.f(s, 16)], n: [tp.f(s, 17), tp.f(s, 18), tp.f(s, 19)] }, v: [tp.f(s, 20), tp.f(s, 21), tp.f(s, 22)], a: [tp.f(s, 23), tp.f(s, 24)], abar: tp.f(s, 25), mu: tp.f(s, 26) };
     let _e20 = [s.splat(0.0f32); 3];
     let _e26 = [s.splat(0.0f32); 3];
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e51 = [tp.f(s, 27), tp.f(s, 28), tp.f(s, 29)];
-    let _e54 = cl_7.context;
-    let _e56 = tp.m(s, 30);
-    let _m2 = _e56;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e55 = [tp.f(s, 27), tp.f(s, 28), tp.f(s, 29)];
+    let _e58 = cl_7.context;
+    let _e60 = tp.m(s, 30);
+    let _m2 = _e60;
     if _m2.any() {
-        let _e59 = BSDF { response: [tp.f(s, 31), tp.f(s, 32), tp.f(s, 33)], throughput: [tp.f(s, 34), tp.f(s, 35), tp.f(s, 36)], lobe: [tp.f(s, 37), tp.f(s, 38), tp.f(s, 39), tp.f(s, 40)] };
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
+        let _e63 = BSDF { response: [tp.f(s, 31), tp.f(s, 32), tp.f(s, 33)], throughput: [tp.f(s, 34), tp.f(s, 35), tp.f(s, 36)], lobe: [tp.f(s, 37), tp.f(s, 38), tp.f(s, 39), tp.f(s, 40)] };
+        _ret = BSDF::<S>::select((_m2 & !_done), _e63, _ret);
         _done = _done | _m2;
     }
     if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = tp.m(s, 41);
-    let _m3 = _e62;
+    let _e64 = cl_7.context;
+    let _e66 = tp.m(s, 41);
+    let _m3 = _e66;
     if _m3.any() {
-        let _e63 = tp.f(s, 42);
-        let _e64 = mx_ggx_lobe_sample_p6(s, cl_7, _e16, _e51, _e63, tp.at::<S>(64));
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
+        let _e67 = tp.f(s, 42);
+        let _e68 = mx_ggx_lobe_sample_p6(s, cl_7, _e16, _e55, _e67, tp.at::<S>(64));
+        _ret = BSDF::<S>::select((_m3 & !_done), _e68, _ret);
         _done = _done | _m3;
     }
     if _done.all() { return _ret; }
-    let _e81 = cl_7.context;
-    let _e83 = tp.m(s, 43);
-    let _m4 = _e83;
+    let _e75 = [s.splat(0.0f32); 3];
+    let _e88 = cl_7.context;
+    let _e90 = tp.m(s, 43);
+    let _m4 = _e90;
     if _m4.any() {
-        let _e86 = BSDF { response: [tp.f(s, 44), tp.f(s, 45), tp.f(s, 46)], throughput: [tp.f(s, 47), tp.f(s, 48), tp.f(s, 49)], lobe: [tp.f(s, 50), tp.f(s, 51), tp.f(s, 52), tp.f(s, 53)] };
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
+        let _e93 = BSDF { response: [tp.f(s, 44), tp.f(s, 45), tp.f(s, 46)], throughput: [tp.f(s, 47), tp.f(s, 48), tp.f(s, 49)], lobe: [tp.f(s, 50), tp.f(s, 51), tp.f(s, 52), tp.f(s, 53)] };
+        _ret = BSDF::<S>::select((_m4 & !_done), _e93, _ret);
         _done = _done | _m4;
     }
     if _done.all() { return _ret; }
-    let _e91 = BSDF { response: [tp.f(s, 54), tp.f(s, 55), tp.f(s, 56)], throughput: [tp.f(s, 57), tp.f(s, 58), tp.f(s, 59)], lobe: [tp.f(s, 60), tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)] };
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e98 = BSDF { response: [tp.f(s, 54), tp.f(s, 55), tp.f(s, 56)], throughput: [tp.f(s, 57), tp.f(s, 58), tp.f(s, 59)], lobe: [tp.f(s, 60), tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)] };
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf_g7<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 71 * S::LANES, "the tape is shorter than the pass's slots");
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e12 = mx_lobe_weight(s, weight_1);
@@ -3081,120 +3112,140 @@ pub fn mx_dielectric_bsdf_g7<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F,
     let _e23 = thinfilm_thickness.gt(s.splat(0.0f32));
     let _e24 = [_e18; 3];
     let _e26 = [s.splat(0.0f32); 3];
-    let _e28 = if (!(_e23)).any() { mx_fresnel_dielectric(s, s.splat(1.0f32), _e18) } else { s.splat(0.0) };
+    let _e28 = mx_fresnel_dielectric(s, s.splat(1.0f32), _e18);
     let _e29 = [_e28; 3];
-    let _e31 = if (_e23).any() { mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior) } else { [s.splat(0.0); 3] };
-    let _e32 = uplift_simd::vector::select_all::<S, 3>(_e23, _e31, _e29);
-    let _e33 = _e16.mu;
-    let _e34 = _e16.abar;
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e37 = mx_fresnel_average(s, _e32, _e36);
-    let _e38 = mx_ggx_energy_compensation(s, _e33, _e34, _e37);
-    let _e39 = _e16.mu;
-    let _e40 = _e16.abar;
-    let _e41 = if (!(_e23)).any() { s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18)) } else { s.splat(0.0) };
-    let _e42 = [_e41; 3];
+    f1_ = _e29;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _m2 = _e23;
+    if _m2.any() {
+        let _e35 = mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior);
+        f1_ = uplift_simd::vector::select_all::<S, 3>(_m2, _e35, f1_);
+        let _e36 = _e16.mu;
+        let _e37 = _e16.abar;
+        let _e38 = s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e36, _e37, _e24, _e26, thinfilm_thickness, thinfilm_ior));
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m2, _e38, e_3);
+    }
+    let _m3 = !_e23;
+    if _m3.any() {
+        let _e39 = _e16.mu;
+        let _e40 = _e16.abar;
+        let _e41 = s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18));
+        let _e42 = [_e41; 3];
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m3, _e42, e_3);
+    }
     let _e43 = _e16.mu;
     let _e44 = _e16.abar;
-    let _e45 = if (_e23).any() { s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e43, _e44, _e24, _e26, thinfilm_thickness, thinfilm_ior)) } else { [s.splat(0.0); 3] };
-    let _e46 = uplift_simd::vector::select_all::<S, 3>(_e23, _e45, _e42);
-    let _e47 = uplift_simd::vector::mul::<S, 3>(_e38, _e46);
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e50 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e47);
-    let _e51 = uplift_simd::vector::sub::<S, 3>(_e49, _e50);
-    uplift_simd::tape::put(s, tg, 27, _e51[0]);
-    uplift_simd::tape::put(s, tg, 28, _e51[1]);
-    uplift_simd::tape::put(s, tg, 29, _e51[2]);
-    let _e52 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
-    let _e53 = uplift_simd::vector::mul::<S, 3>(_e52, _e47);
-    let _e54 = cl_7.context;
-    let _e56 = _e54.eq(s.splat_i(1i32));
-    uplift_simd::tape::put_m(s, tg, 30, _e56);
-    let _m2 = _e56;
-    if _m2.any() {
-        let _e57 = mx_bsdf_empty(s);
-        let _e58 = _e57.lobe;
-        let _e59 = BSDF { response: _e53, throughput: _e51, lobe: _e58 };
-        uplift_simd::tape::put(s, tg, 31, _e59.response[0]);
-        uplift_simd::tape::put(s, tg, 32, _e59.response[1]);
-        uplift_simd::tape::put(s, tg, 33, _e59.response[2]);
-        uplift_simd::tape::put(s, tg, 34, _e59.throughput[0]);
-        uplift_simd::tape::put(s, tg, 35, _e59.throughput[1]);
-        uplift_simd::tape::put(s, tg, 36, _e59.throughput[2]);
-        uplift_simd::tape::put(s, tg, 37, _e59.lobe[0]);
-        uplift_simd::tape::put(s, tg, 38, _e59.lobe[1]);
-        uplift_simd::tape::put(s, tg, 39, _e59.lobe[2]);
-        uplift_simd::tape::put(s, tg, 40, _e59.lobe[3]);
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
-        _done = _done | _m2;
-    }
-    if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = _e60.eq(s.splat_i(2i32));
-    uplift_simd::tape::put_m(s, tg, 41, _e62);
-    let _m3 = _e62;
-    if _m3.any() {
-        let _e63 = mx_luminance_rgb(s, _e53);
-        uplift_simd::tape::put(s, tg, 42, _e63);
-        let _e64 = mx_ggx_lobe_sample_g6(s, cl_7, _e16, _e51, _e63, &mut tg[64 * S::LANES..]);
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
-        _done = _done | _m3;
-    }
-    if _done.all() { return _ret; }
-    let _e65 = mx_ggx_light(s, cl_7, _e16);
-    let _e66 = _e16.v;
-    let _e67 = mx_half_vector(s, _e66, _e65);
-    let _e68 = _e16.v;
-    let _e69 = uplift_simd::vector::dot::<S, 3>(_e68, _e67);
-    let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric(s, _e69, _e18) } else { s.splat(0.0) };
-    let _e71 = [_e70; 3];
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior) } else { [s.splat(0.0); 3] };
-    let _e73 = uplift_simd::vector::select_all::<S, 3>(_e23, _e72, _e71);
-    let _e74 = _e16.v;
-    let _e75 = _e16.a;
-    let _e76 = mx_ggx_reflection(s, _e74, _e65, _e67, _e75);
-    let _e77 = (_e12 * _e76);
-    let _e78 = uplift_simd::vector::mul::<S, 3>([_e77; 3], _e73);
-    let _e79 = uplift_simd::vector::mul::<S, 3>(_e78, _e38);
-    let _e80 = uplift_simd::vector::mul::<S, 3>(_e79, _e21);
-    let _e81 = cl_7.context;
-    let _e83 = _e81.eq(s.splat_i(0i32));
-    uplift_simd::tape::put_m(s, tg, 43, _e83);
-    let _m4 = _e83;
+    let _e45 = f1_;
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e48 = mx_fresnel_average(s, _e45, _e47);
+    let _e49 = mx_ggx_energy_compensation(s, _e43, _e44, _e48);
+    let _e50 = e_3;
+    let _e51 = uplift_simd::vector::mul::<S, 3>(_e49, _e50);
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e54 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e51);
+    let _e55 = uplift_simd::vector::sub::<S, 3>(_e53, _e54);
+    uplift_simd::tape::put(s, tg, 27, _e55[0]);
+    uplift_simd::tape::put(s, tg, 28, _e55[1]);
+    uplift_simd::tape::put(s, tg, 29, _e55[2]);
+    let _e56 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
+    let _e57 = uplift_simd::vector::mul::<S, 3>(_e56, _e51);
+    let _e58 = cl_7.context;
+    let _e60 = _e58.eq(s.splat_i(1i32));
+    uplift_simd::tape::put_m(s, tg, 30, _e60);
+    let _m4 = _e60;
     if _m4.any() {
-        let _e84 = mx_bsdf_empty(s);
-        let _e85 = _e84.lobe;
-        let _e86 = BSDF { response: _e80, throughput: _e51, lobe: _e85 };
-        uplift_simd::tape::put(s, tg, 44, _e86.response[0]);
-        uplift_simd::tape::put(s, tg, 45, _e86.response[1]);
-        uplift_simd::tape::put(s, tg, 46, _e86.response[2]);
-        uplift_simd::tape::put(s, tg, 47, _e86.throughput[0]);
-        uplift_simd::tape::put(s, tg, 48, _e86.throughput[1]);
-        uplift_simd::tape::put(s, tg, 49, _e86.throughput[2]);
-        uplift_simd::tape::put(s, tg, 50, _e86.lobe[0]);
-        uplift_simd::tape::put(s, tg, 51, _e86.lobe[1]);
-        uplift_simd::tape::put(s, tg, 52, _e86.lobe[2]);
-        uplift_simd::tape::put(s, tg, 53, _e86.lobe[3]);
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
+        let _e61 = mx_bsdf_empty(s);
+        let _e62 = _e61.lobe;
+        let _e63 = BSDF { response: _e57, throughput: _e55, lobe: _e62 };
+        uplift_simd::tape::put(s, tg, 31, _e63.response[0]);
+        uplift_simd::tape::put(s, tg, 32, _e63.response[1]);
+        uplift_simd::tape::put(s, tg, 33, _e63.response[2]);
+        uplift_simd::tape::put(s, tg, 34, _e63.throughput[0]);
+        uplift_simd::tape::put(s, tg, 35, _e63.throughput[1]);
+        uplift_simd::tape::put(s, tg, 36, _e63.throughput[2]);
+        uplift_simd::tape::put(s, tg, 37, _e63.lobe[0]);
+        uplift_simd::tape::put(s, tg, 38, _e63.lobe[1]);
+        uplift_simd::tape::put(s, tg, 39, _e63.lobe[2]);
+        uplift_simd::tape::put(s, tg, 40, _e63.lobe[3]);
+        _ret = BSDF::<S>::select((_m4 & !_done), _e63, _ret);
         _done = _done | _m4;
     }
     if _done.all() { return _ret; }
-    let _e87 = mx_luminance_rgb(s, _e53);
-    let _e88 = _e16.v;
-    let _e89 = _e16.a;
-    let _e90 = mx_ggx_pdf(s, _e88, _e67, _e89);
-    let _e91 = mx_lobe_with_pdf(s, _e80, _e51, _e87, _e90);
-    uplift_simd::tape::put(s, tg, 54, _e91.response[0]);
-    uplift_simd::tape::put(s, tg, 55, _e91.response[1]);
-    uplift_simd::tape::put(s, tg, 56, _e91.response[2]);
-    uplift_simd::tape::put(s, tg, 57, _e91.throughput[0]);
-    uplift_simd::tape::put(s, tg, 58, _e91.throughput[1]);
-    uplift_simd::tape::put(s, tg, 59, _e91.throughput[2]);
-    uplift_simd::tape::put(s, tg, 60, _e91.lobe[0]);
-    uplift_simd::tape::put(s, tg, 61, _e91.lobe[1]);
-    uplift_simd::tape::put(s, tg, 62, _e91.lobe[2]);
-    uplift_simd::tape::put(s, tg, 63, _e91.lobe[3]);
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e64 = cl_7.context;
+    let _e66 = _e64.eq(s.splat_i(2i32));
+    uplift_simd::tape::put_m(s, tg, 41, _e66);
+    let _m5 = _e66;
+    if _m5.any() {
+        let _e67 = mx_luminance_rgb(s, _e57);
+        uplift_simd::tape::put(s, tg, 42, _e67);
+        let _e68 = mx_ggx_lobe_sample_g6(s, cl_7, _e16, _e55, _e67, &mut tg[64 * S::LANES..]);
+        _ret = BSDF::<S>::select((_m5 & !_done), _e68, _ret);
+        _done = _done | _m5;
+    }
+    if _done.all() { return _ret; }
+    let _e69 = mx_ggx_light(s, cl_7, _e16);
+    let _e70 = _e16.v;
+    let _e71 = mx_half_vector(s, _e70, _e69);
+    let _e72 = _e16.v;
+    let _e73 = uplift_simd::vector::dot::<S, 3>(_e72, _e71);
+    let _e75 = [s.splat(0.0f32); 3];
+    let _m6 = _e23;
+    if _m6.any() {
+        let _e77 = mx_fresnel_airy_conductor(s, _e73, _e24, _e26, thinfilm_thickness, thinfilm_ior);
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m6, _e77, f_3);
+    }
+    let _m7 = !_e23;
+    if _m7.any() {
+        let _e78 = mx_fresnel_dielectric(s, _e73, _e18);
+        let _e79 = [_e78; 3];
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m7, _e79, f_3);
+    }
+    let _e80 = _e16.v;
+    let _e81 = _e16.a;
+    let _e82 = mx_ggx_reflection(s, _e80, _e69, _e71, _e81);
+    let _e83 = (_e12 * _e82);
+    let _e84 = f_3;
+    let _e85 = uplift_simd::vector::mul::<S, 3>([_e83; 3], _e84);
+    let _e86 = uplift_simd::vector::mul::<S, 3>(_e85, _e49);
+    let _e87 = uplift_simd::vector::mul::<S, 3>(_e86, _e21);
+    let _e88 = cl_7.context;
+    let _e90 = _e88.eq(s.splat_i(0i32));
+    uplift_simd::tape::put_m(s, tg, 43, _e90);
+    let _m8 = _e90;
+    if _m8.any() {
+        let _e91 = mx_bsdf_empty(s);
+        let _e92 = _e91.lobe;
+        let _e93 = BSDF { response: _e87, throughput: _e55, lobe: _e92 };
+        uplift_simd::tape::put(s, tg, 44, _e93.response[0]);
+        uplift_simd::tape::put(s, tg, 45, _e93.response[1]);
+        uplift_simd::tape::put(s, tg, 46, _e93.response[2]);
+        uplift_simd::tape::put(s, tg, 47, _e93.throughput[0]);
+        uplift_simd::tape::put(s, tg, 48, _e93.throughput[1]);
+        uplift_simd::tape::put(s, tg, 49, _e93.throughput[2]);
+        uplift_simd::tape::put(s, tg, 50, _e93.lobe[0]);
+        uplift_simd::tape::put(s, tg, 51, _e93.lobe[1]);
+        uplift_simd::tape::put(s, tg, 52, _e93.lobe[2]);
+        uplift_simd::tape::put(s, tg, 53, _e93.lobe[3]);
+        _ret = BSDF::<S>::select((_m8 & !_done), _e93, _ret);
+        _done = _done | _m8;
+    }
+    if _done.all() { return _ret; }
+    let _e94 = mx_luminance_rgb(s, _e57);
+    let _e95 = _e16.v;
+    let _e96 = _e16.a;
+    let _e97 = mx_ggx_pdf(s, _e95, _e71, _e96);
+    let _e98 = mx_lobe_with_pdf(s, _e87, _e55, _e94, _e97);
+    uplift_simd::tape::put(s, tg, 54, _e98.response[0]);
+    uplift_simd::tape::put(s, tg, 55, _e98.response[1]);
+    uplift_simd::tape::put(s, tg, 56, _e98.response[2]);
+    uplift_simd::tape::put(s, tg, 57, _e98.throughput[0]);
+    uplift_simd::tape::put(s, tg, 58, _e98.throughput[1]);
+    uplift_simd::tape::put(s, tg, 59, _e98.throughput[2]);
+    uplift_simd::tape::put(s, tg, 60, _e98.lobe[0]);
+    uplift_simd::tape::put(s, tg, 61, _e98.lobe[1]);
+    uplift_simd::tape::put(s, tg, 62, _e98.lobe[2]);
+    uplift_simd::tape::put(s, tg, 63, _e98.lobe[3]);
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]
@@ -3673,6 +3724,9 @@ pub fn mx_ggx_lobe_sample_g14<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_set
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf_p15<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(71);
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e14 = tp.m(s, 0);
@@ -3686,45 +3740,50 @@ pub fn mx_dielectric_bsdf_p15<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e16 = mx_ggx_setup { frame: mx_frame { x: [tp.f(s, 11), tp.f(s, 12), tp.f(s, 13)], y: [tp.f(s, 14), tp.f(s, 15), tp.f(s, 16)], n: [tp.f(s, 17), tp.f(s, 18), tp.f(s, 19)] }, v: [tp.f(s, 20), tp.f(s, 21), tp.f(s, 22)], a: [tp.f(s, 23), tp.f(s, 24)], abar: tp.f(s, 25), mu: tp.f(s, 26) };
     let _e20 = [s.splat(0.0f32); 3];
     let _e26 = [s.splat(0.0f32); 3];
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e51 = [tp.f(s, 27), tp.f(s, 28), tp.f(s, 29)];
-    let _e54 = cl_7.context;
-    let _e56 = tp.m(s, 30);
-    let _m2 = _e56;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e55 = [tp.f(s, 27), tp.f(s, 28), tp.f(s, 29)];
+    let _e58 = cl_7.context;
+    let _e60 = tp.m(s, 30);
+    let _m2 = _e60;
     if _m2.any() {
-        let _e59 = BSDF { response: [tp.f(s, 31), tp.f(s, 32), tp.f(s, 33)], throughput: [tp.f(s, 34), tp.f(s, 35), tp.f(s, 36)], lobe: [tp.f(s, 37), tp.f(s, 38), tp.f(s, 39), tp.f(s, 40)] };
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
+        let _e63 = BSDF { response: [tp.f(s, 31), tp.f(s, 32), tp.f(s, 33)], throughput: [tp.f(s, 34), tp.f(s, 35), tp.f(s, 36)], lobe: [tp.f(s, 37), tp.f(s, 38), tp.f(s, 39), tp.f(s, 40)] };
+        _ret = BSDF::<S>::select((_m2 & !_done), _e63, _ret);
         _done = _done | _m2;
     }
     if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = tp.m(s, 41);
-    let _m3 = _e62;
+    let _e64 = cl_7.context;
+    let _e66 = tp.m(s, 41);
+    let _m3 = _e66;
     if _m3.any() {
-        let _e63 = tp.f(s, 42);
-        let _e64 = mx_ggx_lobe_sample_p14(s, cl_7, _e16, _e51, _e63, tp.at::<S>(64));
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
+        let _e67 = tp.f(s, 42);
+        let _e68 = mx_ggx_lobe_sample_p14(s, cl_7, _e16, _e55, _e67, tp.at::<S>(64));
+        _ret = BSDF::<S>::select((_m3 & !_done), _e68, _ret);
         _done = _done | _m3;
     }
     if _done.all() { return _ret; }
-    let _e81 = cl_7.context;
-    let _e83 = tp.m(s, 43);
-    let _m4 = _e83;
+    let _e75 = [s.splat(0.0f32); 3];
+    let _e88 = cl_7.context;
+    let _e90 = tp.m(s, 43);
+    let _m4 = _e90;
     if _m4.any() {
-        let _e86 = BSDF { response: [tp.f(s, 44), tp.f(s, 45), tp.f(s, 46)], throughput: [tp.f(s, 47), tp.f(s, 48), tp.f(s, 49)], lobe: [tp.f(s, 50), tp.f(s, 51), tp.f(s, 52), tp.f(s, 53)] };
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
+        let _e93 = BSDF { response: [tp.f(s, 44), tp.f(s, 45), tp.f(s, 46)], throughput: [tp.f(s, 47), tp.f(s, 48), tp.f(s, 49)], lobe: [tp.f(s, 50), tp.f(s, 51), tp.f(s, 52), tp.f(s, 53)] };
+        _ret = BSDF::<S>::select((_m4 & !_done), _e93, _ret);
         _done = _done | _m4;
     }
     if _done.all() { return _ret; }
-    let _e91 = BSDF { response: [tp.f(s, 54), tp.f(s, 55), tp.f(s, 56)], throughput: [tp.f(s, 57), tp.f(s, 58), tp.f(s, 59)], lobe: [tp.f(s, 60), tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)] };
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e98 = BSDF { response: [tp.f(s, 54), tp.f(s, 55), tp.f(s, 56)], throughput: [tp.f(s, 57), tp.f(s, 58), tp.f(s, 59)], lobe: [tp.f(s, 60), tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)] };
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf_g15<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 71 * S::LANES, "the tape is shorter than the pass's slots");
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e12 = mx_lobe_weight(s, weight_1);
@@ -3770,120 +3829,140 @@ pub fn mx_dielectric_bsdf_g15<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e23 = thinfilm_thickness.gt(s.splat(0.0f32));
     let _e24 = [_e18; 3];
     let _e26 = [s.splat(0.0f32); 3];
-    let _e28 = if (!(_e23)).any() { mx_fresnel_dielectric(s, s.splat(1.0f32), _e18) } else { s.splat(0.0) };
+    let _e28 = mx_fresnel_dielectric(s, s.splat(1.0f32), _e18);
     let _e29 = [_e28; 3];
-    let _e31 = if (_e23).any() { mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior) } else { [s.splat(0.0); 3] };
-    let _e32 = uplift_simd::vector::select_all::<S, 3>(_e23, _e31, _e29);
-    let _e33 = _e16.mu;
-    let _e34 = _e16.abar;
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e37 = mx_fresnel_average(s, _e32, _e36);
-    let _e38 = mx_ggx_energy_compensation(s, _e33, _e34, _e37);
-    let _e39 = _e16.mu;
-    let _e40 = _e16.abar;
-    let _e41 = if (!(_e23)).any() { s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18)) } else { s.splat(0.0) };
-    let _e42 = [_e41; 3];
+    f1_ = _e29;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _m2 = _e23;
+    if _m2.any() {
+        let _e35 = mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior);
+        f1_ = uplift_simd::vector::select_all::<S, 3>(_m2, _e35, f1_);
+        let _e36 = _e16.mu;
+        let _e37 = _e16.abar;
+        let _e38 = s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e36, _e37, _e24, _e26, thinfilm_thickness, thinfilm_ior));
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m2, _e38, e_3);
+    }
+    let _m3 = !_e23;
+    if _m3.any() {
+        let _e39 = _e16.mu;
+        let _e40 = _e16.abar;
+        let _e41 = s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18));
+        let _e42 = [_e41; 3];
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m3, _e42, e_3);
+    }
     let _e43 = _e16.mu;
     let _e44 = _e16.abar;
-    let _e45 = if (_e23).any() { s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e43, _e44, _e24, _e26, thinfilm_thickness, thinfilm_ior)) } else { [s.splat(0.0); 3] };
-    let _e46 = uplift_simd::vector::select_all::<S, 3>(_e23, _e45, _e42);
-    let _e47 = uplift_simd::vector::mul::<S, 3>(_e38, _e46);
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e50 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e47);
-    let _e51 = uplift_simd::vector::sub::<S, 3>(_e49, _e50);
-    uplift_simd::tape::put(s, tg, 27, _e51[0]);
-    uplift_simd::tape::put(s, tg, 28, _e51[1]);
-    uplift_simd::tape::put(s, tg, 29, _e51[2]);
-    let _e52 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
-    let _e53 = uplift_simd::vector::mul::<S, 3>(_e52, _e47);
-    let _e54 = cl_7.context;
-    let _e56 = _e54.eq(s.splat_i(1i32));
-    uplift_simd::tape::put_m(s, tg, 30, _e56);
-    let _m2 = _e56;
-    if _m2.any() {
-        let _e57 = mx_bsdf_empty(s);
-        let _e58 = _e57.lobe;
-        let _e59 = BSDF { response: _e53, throughput: _e51, lobe: _e58 };
-        uplift_simd::tape::put(s, tg, 31, _e59.response[0]);
-        uplift_simd::tape::put(s, tg, 32, _e59.response[1]);
-        uplift_simd::tape::put(s, tg, 33, _e59.response[2]);
-        uplift_simd::tape::put(s, tg, 34, _e59.throughput[0]);
-        uplift_simd::tape::put(s, tg, 35, _e59.throughput[1]);
-        uplift_simd::tape::put(s, tg, 36, _e59.throughput[2]);
-        uplift_simd::tape::put(s, tg, 37, _e59.lobe[0]);
-        uplift_simd::tape::put(s, tg, 38, _e59.lobe[1]);
-        uplift_simd::tape::put(s, tg, 39, _e59.lobe[2]);
-        uplift_simd::tape::put(s, tg, 40, _e59.lobe[3]);
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
-        _done = _done | _m2;
-    }
-    if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = _e60.eq(s.splat_i(2i32));
-    uplift_simd::tape::put_m(s, tg, 41, _e62);
-    let _m3 = _e62;
-    if _m3.any() {
-        let _e63 = mx_luminance_rgb(s, _e53);
-        uplift_simd::tape::put(s, tg, 42, _e63);
-        let _e64 = mx_ggx_lobe_sample_g14(s, cl_7, _e16, _e51, _e63, &mut tg[64 * S::LANES..]);
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
-        _done = _done | _m3;
-    }
-    if _done.all() { return _ret; }
-    let _e65 = mx_ggx_light(s, cl_7, _e16);
-    let _e66 = _e16.v;
-    let _e67 = mx_half_vector(s, _e66, _e65);
-    let _e68 = _e16.v;
-    let _e69 = uplift_simd::vector::dot::<S, 3>(_e68, _e67);
-    let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric(s, _e69, _e18) } else { s.splat(0.0) };
-    let _e71 = [_e70; 3];
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior) } else { [s.splat(0.0); 3] };
-    let _e73 = uplift_simd::vector::select_all::<S, 3>(_e23, _e72, _e71);
-    let _e74 = _e16.v;
-    let _e75 = _e16.a;
-    let _e76 = mx_ggx_reflection(s, _e74, _e65, _e67, _e75);
-    let _e77 = (_e12 * _e76);
-    let _e78 = uplift_simd::vector::mul::<S, 3>([_e77; 3], _e73);
-    let _e79 = uplift_simd::vector::mul::<S, 3>(_e78, _e38);
-    let _e80 = uplift_simd::vector::mul::<S, 3>(_e79, _e21);
-    let _e81 = cl_7.context;
-    let _e83 = _e81.eq(s.splat_i(0i32));
-    uplift_simd::tape::put_m(s, tg, 43, _e83);
-    let _m4 = _e83;
+    let _e45 = f1_;
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e48 = mx_fresnel_average(s, _e45, _e47);
+    let _e49 = mx_ggx_energy_compensation(s, _e43, _e44, _e48);
+    let _e50 = e_3;
+    let _e51 = uplift_simd::vector::mul::<S, 3>(_e49, _e50);
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e54 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e51);
+    let _e55 = uplift_simd::vector::sub::<S, 3>(_e53, _e54);
+    uplift_simd::tape::put(s, tg, 27, _e55[0]);
+    uplift_simd::tape::put(s, tg, 28, _e55[1]);
+    uplift_simd::tape::put(s, tg, 29, _e55[2]);
+    let _e56 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
+    let _e57 = uplift_simd::vector::mul::<S, 3>(_e56, _e51);
+    let _e58 = cl_7.context;
+    let _e60 = _e58.eq(s.splat_i(1i32));
+    uplift_simd::tape::put_m(s, tg, 30, _e60);
+    let _m4 = _e60;
     if _m4.any() {
-        let _e84 = mx_bsdf_empty(s);
-        let _e85 = _e84.lobe;
-        let _e86 = BSDF { response: _e80, throughput: _e51, lobe: _e85 };
-        uplift_simd::tape::put(s, tg, 44, _e86.response[0]);
-        uplift_simd::tape::put(s, tg, 45, _e86.response[1]);
-        uplift_simd::tape::put(s, tg, 46, _e86.response[2]);
-        uplift_simd::tape::put(s, tg, 47, _e86.throughput[0]);
-        uplift_simd::tape::put(s, tg, 48, _e86.throughput[1]);
-        uplift_simd::tape::put(s, tg, 49, _e86.throughput[2]);
-        uplift_simd::tape::put(s, tg, 50, _e86.lobe[0]);
-        uplift_simd::tape::put(s, tg, 51, _e86.lobe[1]);
-        uplift_simd::tape::put(s, tg, 52, _e86.lobe[2]);
-        uplift_simd::tape::put(s, tg, 53, _e86.lobe[3]);
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
+        let _e61 = mx_bsdf_empty(s);
+        let _e62 = _e61.lobe;
+        let _e63 = BSDF { response: _e57, throughput: _e55, lobe: _e62 };
+        uplift_simd::tape::put(s, tg, 31, _e63.response[0]);
+        uplift_simd::tape::put(s, tg, 32, _e63.response[1]);
+        uplift_simd::tape::put(s, tg, 33, _e63.response[2]);
+        uplift_simd::tape::put(s, tg, 34, _e63.throughput[0]);
+        uplift_simd::tape::put(s, tg, 35, _e63.throughput[1]);
+        uplift_simd::tape::put(s, tg, 36, _e63.throughput[2]);
+        uplift_simd::tape::put(s, tg, 37, _e63.lobe[0]);
+        uplift_simd::tape::put(s, tg, 38, _e63.lobe[1]);
+        uplift_simd::tape::put(s, tg, 39, _e63.lobe[2]);
+        uplift_simd::tape::put(s, tg, 40, _e63.lobe[3]);
+        _ret = BSDF::<S>::select((_m4 & !_done), _e63, _ret);
         _done = _done | _m4;
     }
     if _done.all() { return _ret; }
-    let _e87 = mx_luminance_rgb(s, _e53);
-    let _e88 = _e16.v;
-    let _e89 = _e16.a;
-    let _e90 = mx_ggx_pdf(s, _e88, _e67, _e89);
-    let _e91 = mx_lobe_with_pdf(s, _e80, _e51, _e87, _e90);
-    uplift_simd::tape::put(s, tg, 54, _e91.response[0]);
-    uplift_simd::tape::put(s, tg, 55, _e91.response[1]);
-    uplift_simd::tape::put(s, tg, 56, _e91.response[2]);
-    uplift_simd::tape::put(s, tg, 57, _e91.throughput[0]);
-    uplift_simd::tape::put(s, tg, 58, _e91.throughput[1]);
-    uplift_simd::tape::put(s, tg, 59, _e91.throughput[2]);
-    uplift_simd::tape::put(s, tg, 60, _e91.lobe[0]);
-    uplift_simd::tape::put(s, tg, 61, _e91.lobe[1]);
-    uplift_simd::tape::put(s, tg, 62, _e91.lobe[2]);
-    uplift_simd::tape::put(s, tg, 63, _e91.lobe[3]);
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e64 = cl_7.context;
+    let _e66 = _e64.eq(s.splat_i(2i32));
+    uplift_simd::tape::put_m(s, tg, 41, _e66);
+    let _m5 = _e66;
+    if _m5.any() {
+        let _e67 = mx_luminance_rgb(s, _e57);
+        uplift_simd::tape::put(s, tg, 42, _e67);
+        let _e68 = mx_ggx_lobe_sample_g14(s, cl_7, _e16, _e55, _e67, &mut tg[64 * S::LANES..]);
+        _ret = BSDF::<S>::select((_m5 & !_done), _e68, _ret);
+        _done = _done | _m5;
+    }
+    if _done.all() { return _ret; }
+    let _e69 = mx_ggx_light(s, cl_7, _e16);
+    let _e70 = _e16.v;
+    let _e71 = mx_half_vector(s, _e70, _e69);
+    let _e72 = _e16.v;
+    let _e73 = uplift_simd::vector::dot::<S, 3>(_e72, _e71);
+    let _e75 = [s.splat(0.0f32); 3];
+    let _m6 = _e23;
+    if _m6.any() {
+        let _e77 = mx_fresnel_airy_conductor(s, _e73, _e24, _e26, thinfilm_thickness, thinfilm_ior);
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m6, _e77, f_3);
+    }
+    let _m7 = !_e23;
+    if _m7.any() {
+        let _e78 = mx_fresnel_dielectric(s, _e73, _e18);
+        let _e79 = [_e78; 3];
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m7, _e79, f_3);
+    }
+    let _e80 = _e16.v;
+    let _e81 = _e16.a;
+    let _e82 = mx_ggx_reflection(s, _e80, _e69, _e71, _e81);
+    let _e83 = (_e12 * _e82);
+    let _e84 = f_3;
+    let _e85 = uplift_simd::vector::mul::<S, 3>([_e83; 3], _e84);
+    let _e86 = uplift_simd::vector::mul::<S, 3>(_e85, _e49);
+    let _e87 = uplift_simd::vector::mul::<S, 3>(_e86, _e21);
+    let _e88 = cl_7.context;
+    let _e90 = _e88.eq(s.splat_i(0i32));
+    uplift_simd::tape::put_m(s, tg, 43, _e90);
+    let _m8 = _e90;
+    if _m8.any() {
+        let _e91 = mx_bsdf_empty(s);
+        let _e92 = _e91.lobe;
+        let _e93 = BSDF { response: _e87, throughput: _e55, lobe: _e92 };
+        uplift_simd::tape::put(s, tg, 44, _e93.response[0]);
+        uplift_simd::tape::put(s, tg, 45, _e93.response[1]);
+        uplift_simd::tape::put(s, tg, 46, _e93.response[2]);
+        uplift_simd::tape::put(s, tg, 47, _e93.throughput[0]);
+        uplift_simd::tape::put(s, tg, 48, _e93.throughput[1]);
+        uplift_simd::tape::put(s, tg, 49, _e93.throughput[2]);
+        uplift_simd::tape::put(s, tg, 50, _e93.lobe[0]);
+        uplift_simd::tape::put(s, tg, 51, _e93.lobe[1]);
+        uplift_simd::tape::put(s, tg, 52, _e93.lobe[2]);
+        uplift_simd::tape::put(s, tg, 53, _e93.lobe[3]);
+        _ret = BSDF::<S>::select((_m8 & !_done), _e93, _ret);
+        _done = _done | _m8;
+    }
+    if _done.all() { return _ret; }
+    let _e94 = mx_luminance_rgb(s, _e57);
+    let _e95 = _e16.v;
+    let _e96 = _e16.a;
+    let _e97 = mx_ggx_pdf(s, _e95, _e71, _e96);
+    let _e98 = mx_lobe_with_pdf(s, _e87, _e55, _e94, _e97);
+    uplift_simd::tape::put(s, tg, 54, _e98.response[0]);
+    uplift_simd::tape::put(s, tg, 55, _e98.response[1]);
+    uplift_simd::tape::put(s, tg, 56, _e98.response[2]);
+    uplift_simd::tape::put(s, tg, 57, _e98.throughput[0]);
+    uplift_simd::tape::put(s, tg, 58, _e98.throughput[1]);
+    uplift_simd::tape::put(s, tg, 59, _e98.throughput[2]);
+    uplift_simd::tape::put(s, tg, 60, _e98.lobe[0]);
+    uplift_simd::tape::put(s, tg, 61, _e98.lobe[1]);
+    uplift_simd::tape::put(s, tg, 62, _e98.lobe[2]);
+    uplift_simd::tape::put(s, tg, 63, _e98.lobe[3]);
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]
@@ -4233,6 +4312,9 @@ pub fn mx_sheen_bsdf_g17<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf_p18<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(71);
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e14 = tp.m(s, 0);
@@ -4246,45 +4328,50 @@ pub fn mx_dielectric_bsdf_p18<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e16 = mx_ggx_setup { frame: mx_frame { x: [tp.f(s, 11), tp.f(s, 12), tp.f(s, 13)], y: [tp.f(s, 14), tp.f(s, 15), tp.f(s, 16)], n: [tp.f(s, 17), tp.f(s, 18), tp.f(s, 19)] }, v: [tp.f(s, 20), tp.f(s, 21), tp.f(s, 22)], a: [tp.f(s, 23), tp.f(s, 24)], abar: tp.f(s, 25), mu: tp.f(s, 26) };
     let _e20 = [s.splat(0.0f32); 3];
     let _e26 = [s.splat(0.0f32); 3];
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e51 = [tp.f(s, 27), tp.f(s, 28), tp.f(s, 29)];
-    let _e54 = cl_7.context;
-    let _e56 = tp.m(s, 30);
-    let _m2 = _e56;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e55 = [tp.f(s, 27), tp.f(s, 28), tp.f(s, 29)];
+    let _e58 = cl_7.context;
+    let _e60 = tp.m(s, 30);
+    let _m2 = _e60;
     if _m2.any() {
-        let _e59 = BSDF { response: [tp.f(s, 31), tp.f(s, 32), tp.f(s, 33)], throughput: [tp.f(s, 34), tp.f(s, 35), tp.f(s, 36)], lobe: [tp.f(s, 37), tp.f(s, 38), tp.f(s, 39), tp.f(s, 40)] };
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
+        let _e63 = BSDF { response: [tp.f(s, 31), tp.f(s, 32), tp.f(s, 33)], throughput: [tp.f(s, 34), tp.f(s, 35), tp.f(s, 36)], lobe: [tp.f(s, 37), tp.f(s, 38), tp.f(s, 39), tp.f(s, 40)] };
+        _ret = BSDF::<S>::select((_m2 & !_done), _e63, _ret);
         _done = _done | _m2;
     }
     if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = tp.m(s, 41);
-    let _m3 = _e62;
+    let _e64 = cl_7.context;
+    let _e66 = tp.m(s, 41);
+    let _m3 = _e66;
     if _m3.any() {
-        let _e63 = tp.f(s, 42);
-        let _e64 = mx_ggx_lobe_sample_p14(s, cl_7, _e16, _e51, _e63, tp.at::<S>(64));
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
+        let _e67 = tp.f(s, 42);
+        let _e68 = mx_ggx_lobe_sample_p14(s, cl_7, _e16, _e55, _e67, tp.at::<S>(64));
+        _ret = BSDF::<S>::select((_m3 & !_done), _e68, _ret);
         _done = _done | _m3;
     }
     if _done.all() { return _ret; }
-    let _e81 = cl_7.context;
-    let _e83 = tp.m(s, 43);
-    let _m4 = _e83;
+    let _e75 = [s.splat(0.0f32); 3];
+    let _e88 = cl_7.context;
+    let _e90 = tp.m(s, 43);
+    let _m4 = _e90;
     if _m4.any() {
-        let _e86 = BSDF { response: [tp.f(s, 44), tp.f(s, 45), tp.f(s, 46)], throughput: [tp.f(s, 47), tp.f(s, 48), tp.f(s, 49)], lobe: [tp.f(s, 50), tp.f(s, 51), tp.f(s, 52), tp.f(s, 53)] };
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
+        let _e93 = BSDF { response: [tp.f(s, 44), tp.f(s, 45), tp.f(s, 46)], throughput: [tp.f(s, 47), tp.f(s, 48), tp.f(s, 49)], lobe: [tp.f(s, 50), tp.f(s, 51), tp.f(s, 52), tp.f(s, 53)] };
+        _ret = BSDF::<S>::select((_m4 & !_done), _e93, _ret);
         _done = _done | _m4;
     }
     if _done.all() { return _ret; }
-    let _e91 = BSDF { response: [tp.f(s, 54), tp.f(s, 55), tp.f(s, 56)], throughput: [tp.f(s, 57), tp.f(s, 58), tp.f(s, 59)], lobe: [tp.f(s, 60), tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)] };
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e98 = BSDF { response: [tp.f(s, 54), tp.f(s, 55), tp.f(s, 56)], throughput: [tp.f(s, 57), tp.f(s, 58), tp.f(s, 59)], lobe: [tp.f(s, 60), tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)] };
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf_g18<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 71 * S::LANES, "the tape is shorter than the pass's slots");
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e12 = mx_lobe_weight(s, weight_1);
@@ -4330,120 +4417,140 @@ pub fn mx_dielectric_bsdf_g18<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e23 = thinfilm_thickness.gt(s.splat(0.0f32));
     let _e24 = [_e18; 3];
     let _e26 = [s.splat(0.0f32); 3];
-    let _e28 = if (!(_e23)).any() { mx_fresnel_dielectric(s, s.splat(1.0f32), _e18) } else { s.splat(0.0) };
+    let _e28 = mx_fresnel_dielectric(s, s.splat(1.0f32), _e18);
     let _e29 = [_e28; 3];
-    let _e31 = if (_e23).any() { mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior) } else { [s.splat(0.0); 3] };
-    let _e32 = uplift_simd::vector::select_all::<S, 3>(_e23, _e31, _e29);
-    let _e33 = _e16.mu;
-    let _e34 = _e16.abar;
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e37 = mx_fresnel_average(s, _e32, _e36);
-    let _e38 = mx_ggx_energy_compensation(s, _e33, _e34, _e37);
-    let _e39 = _e16.mu;
-    let _e40 = _e16.abar;
-    let _e41 = if (!(_e23)).any() { s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18)) } else { s.splat(0.0) };
-    let _e42 = [_e41; 3];
+    f1_ = _e29;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _m2 = _e23;
+    if _m2.any() {
+        let _e35 = mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior);
+        f1_ = uplift_simd::vector::select_all::<S, 3>(_m2, _e35, f1_);
+        let _e36 = _e16.mu;
+        let _e37 = _e16.abar;
+        let _e38 = s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e36, _e37, _e24, _e26, thinfilm_thickness, thinfilm_ior));
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m2, _e38, e_3);
+    }
+    let _m3 = !_e23;
+    if _m3.any() {
+        let _e39 = _e16.mu;
+        let _e40 = _e16.abar;
+        let _e41 = s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18));
+        let _e42 = [_e41; 3];
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m3, _e42, e_3);
+    }
     let _e43 = _e16.mu;
     let _e44 = _e16.abar;
-    let _e45 = if (_e23).any() { s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e43, _e44, _e24, _e26, thinfilm_thickness, thinfilm_ior)) } else { [s.splat(0.0); 3] };
-    let _e46 = uplift_simd::vector::select_all::<S, 3>(_e23, _e45, _e42);
-    let _e47 = uplift_simd::vector::mul::<S, 3>(_e38, _e46);
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e50 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e47);
-    let _e51 = uplift_simd::vector::sub::<S, 3>(_e49, _e50);
-    uplift_simd::tape::put(s, tg, 27, _e51[0]);
-    uplift_simd::tape::put(s, tg, 28, _e51[1]);
-    uplift_simd::tape::put(s, tg, 29, _e51[2]);
-    let _e52 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
-    let _e53 = uplift_simd::vector::mul::<S, 3>(_e52, _e47);
-    let _e54 = cl_7.context;
-    let _e56 = _e54.eq(s.splat_i(1i32));
-    uplift_simd::tape::put_m(s, tg, 30, _e56);
-    let _m2 = _e56;
-    if _m2.any() {
-        let _e57 = mx_bsdf_empty(s);
-        let _e58 = _e57.lobe;
-        let _e59 = BSDF { response: _e53, throughput: _e51, lobe: _e58 };
-        uplift_simd::tape::put(s, tg, 31, _e59.response[0]);
-        uplift_simd::tape::put(s, tg, 32, _e59.response[1]);
-        uplift_simd::tape::put(s, tg, 33, _e59.response[2]);
-        uplift_simd::tape::put(s, tg, 34, _e59.throughput[0]);
-        uplift_simd::tape::put(s, tg, 35, _e59.throughput[1]);
-        uplift_simd::tape::put(s, tg, 36, _e59.throughput[2]);
-        uplift_simd::tape::put(s, tg, 37, _e59.lobe[0]);
-        uplift_simd::tape::put(s, tg, 38, _e59.lobe[1]);
-        uplift_simd::tape::put(s, tg, 39, _e59.lobe[2]);
-        uplift_simd::tape::put(s, tg, 40, _e59.lobe[3]);
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
-        _done = _done | _m2;
-    }
-    if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = _e60.eq(s.splat_i(2i32));
-    uplift_simd::tape::put_m(s, tg, 41, _e62);
-    let _m3 = _e62;
-    if _m3.any() {
-        let _e63 = mx_luminance_rgb(s, _e53);
-        uplift_simd::tape::put(s, tg, 42, _e63);
-        let _e64 = mx_ggx_lobe_sample_g14(s, cl_7, _e16, _e51, _e63, &mut tg[64 * S::LANES..]);
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
-        _done = _done | _m3;
-    }
-    if _done.all() { return _ret; }
-    let _e65 = mx_ggx_light(s, cl_7, _e16);
-    let _e66 = _e16.v;
-    let _e67 = mx_half_vector(s, _e66, _e65);
-    let _e68 = _e16.v;
-    let _e69 = uplift_simd::vector::dot::<S, 3>(_e68, _e67);
-    let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric(s, _e69, _e18) } else { s.splat(0.0) };
-    let _e71 = [_e70; 3];
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior) } else { [s.splat(0.0); 3] };
-    let _e73 = uplift_simd::vector::select_all::<S, 3>(_e23, _e72, _e71);
-    let _e74 = _e16.v;
-    let _e75 = _e16.a;
-    let _e76 = mx_ggx_reflection(s, _e74, _e65, _e67, _e75);
-    let _e77 = (_e12 * _e76);
-    let _e78 = uplift_simd::vector::mul::<S, 3>([_e77; 3], _e73);
-    let _e79 = uplift_simd::vector::mul::<S, 3>(_e78, _e38);
-    let _e80 = uplift_simd::vector::mul::<S, 3>(_e79, _e21);
-    let _e81 = cl_7.context;
-    let _e83 = _e81.eq(s.splat_i(0i32));
-    uplift_simd::tape::put_m(s, tg, 43, _e83);
-    let _m4 = _e83;
+    let _e45 = f1_;
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e48 = mx_fresnel_average(s, _e45, _e47);
+    let _e49 = mx_ggx_energy_compensation(s, _e43, _e44, _e48);
+    let _e50 = e_3;
+    let _e51 = uplift_simd::vector::mul::<S, 3>(_e49, _e50);
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e54 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e51);
+    let _e55 = uplift_simd::vector::sub::<S, 3>(_e53, _e54);
+    uplift_simd::tape::put(s, tg, 27, _e55[0]);
+    uplift_simd::tape::put(s, tg, 28, _e55[1]);
+    uplift_simd::tape::put(s, tg, 29, _e55[2]);
+    let _e56 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
+    let _e57 = uplift_simd::vector::mul::<S, 3>(_e56, _e51);
+    let _e58 = cl_7.context;
+    let _e60 = _e58.eq(s.splat_i(1i32));
+    uplift_simd::tape::put_m(s, tg, 30, _e60);
+    let _m4 = _e60;
     if _m4.any() {
-        let _e84 = mx_bsdf_empty(s);
-        let _e85 = _e84.lobe;
-        let _e86 = BSDF { response: _e80, throughput: _e51, lobe: _e85 };
-        uplift_simd::tape::put(s, tg, 44, _e86.response[0]);
-        uplift_simd::tape::put(s, tg, 45, _e86.response[1]);
-        uplift_simd::tape::put(s, tg, 46, _e86.response[2]);
-        uplift_simd::tape::put(s, tg, 47, _e86.throughput[0]);
-        uplift_simd::tape::put(s, tg, 48, _e86.throughput[1]);
-        uplift_simd::tape::put(s, tg, 49, _e86.throughput[2]);
-        uplift_simd::tape::put(s, tg, 50, _e86.lobe[0]);
-        uplift_simd::tape::put(s, tg, 51, _e86.lobe[1]);
-        uplift_simd::tape::put(s, tg, 52, _e86.lobe[2]);
-        uplift_simd::tape::put(s, tg, 53, _e86.lobe[3]);
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
+        let _e61 = mx_bsdf_empty(s);
+        let _e62 = _e61.lobe;
+        let _e63 = BSDF { response: _e57, throughput: _e55, lobe: _e62 };
+        uplift_simd::tape::put(s, tg, 31, _e63.response[0]);
+        uplift_simd::tape::put(s, tg, 32, _e63.response[1]);
+        uplift_simd::tape::put(s, tg, 33, _e63.response[2]);
+        uplift_simd::tape::put(s, tg, 34, _e63.throughput[0]);
+        uplift_simd::tape::put(s, tg, 35, _e63.throughput[1]);
+        uplift_simd::tape::put(s, tg, 36, _e63.throughput[2]);
+        uplift_simd::tape::put(s, tg, 37, _e63.lobe[0]);
+        uplift_simd::tape::put(s, tg, 38, _e63.lobe[1]);
+        uplift_simd::tape::put(s, tg, 39, _e63.lobe[2]);
+        uplift_simd::tape::put(s, tg, 40, _e63.lobe[3]);
+        _ret = BSDF::<S>::select((_m4 & !_done), _e63, _ret);
         _done = _done | _m4;
     }
     if _done.all() { return _ret; }
-    let _e87 = mx_luminance_rgb(s, _e53);
-    let _e88 = _e16.v;
-    let _e89 = _e16.a;
-    let _e90 = mx_ggx_pdf(s, _e88, _e67, _e89);
-    let _e91 = mx_lobe_with_pdf(s, _e80, _e51, _e87, _e90);
-    uplift_simd::tape::put(s, tg, 54, _e91.response[0]);
-    uplift_simd::tape::put(s, tg, 55, _e91.response[1]);
-    uplift_simd::tape::put(s, tg, 56, _e91.response[2]);
-    uplift_simd::tape::put(s, tg, 57, _e91.throughput[0]);
-    uplift_simd::tape::put(s, tg, 58, _e91.throughput[1]);
-    uplift_simd::tape::put(s, tg, 59, _e91.throughput[2]);
-    uplift_simd::tape::put(s, tg, 60, _e91.lobe[0]);
-    uplift_simd::tape::put(s, tg, 61, _e91.lobe[1]);
-    uplift_simd::tape::put(s, tg, 62, _e91.lobe[2]);
-    uplift_simd::tape::put(s, tg, 63, _e91.lobe[3]);
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e64 = cl_7.context;
+    let _e66 = _e64.eq(s.splat_i(2i32));
+    uplift_simd::tape::put_m(s, tg, 41, _e66);
+    let _m5 = _e66;
+    if _m5.any() {
+        let _e67 = mx_luminance_rgb(s, _e57);
+        uplift_simd::tape::put(s, tg, 42, _e67);
+        let _e68 = mx_ggx_lobe_sample_g14(s, cl_7, _e16, _e55, _e67, &mut tg[64 * S::LANES..]);
+        _ret = BSDF::<S>::select((_m5 & !_done), _e68, _ret);
+        _done = _done | _m5;
+    }
+    if _done.all() { return _ret; }
+    let _e69 = mx_ggx_light(s, cl_7, _e16);
+    let _e70 = _e16.v;
+    let _e71 = mx_half_vector(s, _e70, _e69);
+    let _e72 = _e16.v;
+    let _e73 = uplift_simd::vector::dot::<S, 3>(_e72, _e71);
+    let _e75 = [s.splat(0.0f32); 3];
+    let _m6 = _e23;
+    if _m6.any() {
+        let _e77 = mx_fresnel_airy_conductor(s, _e73, _e24, _e26, thinfilm_thickness, thinfilm_ior);
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m6, _e77, f_3);
+    }
+    let _m7 = !_e23;
+    if _m7.any() {
+        let _e78 = mx_fresnel_dielectric(s, _e73, _e18);
+        let _e79 = [_e78; 3];
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m7, _e79, f_3);
+    }
+    let _e80 = _e16.v;
+    let _e81 = _e16.a;
+    let _e82 = mx_ggx_reflection(s, _e80, _e69, _e71, _e81);
+    let _e83 = (_e12 * _e82);
+    let _e84 = f_3;
+    let _e85 = uplift_simd::vector::mul::<S, 3>([_e83; 3], _e84);
+    let _e86 = uplift_simd::vector::mul::<S, 3>(_e85, _e49);
+    let _e87 = uplift_simd::vector::mul::<S, 3>(_e86, _e21);
+    let _e88 = cl_7.context;
+    let _e90 = _e88.eq(s.splat_i(0i32));
+    uplift_simd::tape::put_m(s, tg, 43, _e90);
+    let _m8 = _e90;
+    if _m8.any() {
+        let _e91 = mx_bsdf_empty(s);
+        let _e92 = _e91.lobe;
+        let _e93 = BSDF { response: _e87, throughput: _e55, lobe: _e92 };
+        uplift_simd::tape::put(s, tg, 44, _e93.response[0]);
+        uplift_simd::tape::put(s, tg, 45, _e93.response[1]);
+        uplift_simd::tape::put(s, tg, 46, _e93.response[2]);
+        uplift_simd::tape::put(s, tg, 47, _e93.throughput[0]);
+        uplift_simd::tape::put(s, tg, 48, _e93.throughput[1]);
+        uplift_simd::tape::put(s, tg, 49, _e93.throughput[2]);
+        uplift_simd::tape::put(s, tg, 50, _e93.lobe[0]);
+        uplift_simd::tape::put(s, tg, 51, _e93.lobe[1]);
+        uplift_simd::tape::put(s, tg, 52, _e93.lobe[2]);
+        uplift_simd::tape::put(s, tg, 53, _e93.lobe[3]);
+        _ret = BSDF::<S>::select((_m8 & !_done), _e93, _ret);
+        _done = _done | _m8;
+    }
+    if _done.all() { return _ret; }
+    let _e94 = mx_luminance_rgb(s, _e57);
+    let _e95 = _e16.v;
+    let _e96 = _e16.a;
+    let _e97 = mx_ggx_pdf(s, _e95, _e71, _e96);
+    let _e98 = mx_lobe_with_pdf(s, _e87, _e55, _e94, _e97);
+    uplift_simd::tape::put(s, tg, 54, _e98.response[0]);
+    uplift_simd::tape::put(s, tg, 55, _e98.response[1]);
+    uplift_simd::tape::put(s, tg, 56, _e98.response[2]);
+    uplift_simd::tape::put(s, tg, 57, _e98.throughput[0]);
+    uplift_simd::tape::put(s, tg, 58, _e98.throughput[1]);
+    uplift_simd::tape::put(s, tg, 59, _e98.throughput[2]);
+    uplift_simd::tape::put(s, tg, 60, _e98.lobe[0]);
+    uplift_simd::tape::put(s, tg, 61, _e98.lobe[1]);
+    uplift_simd::tape::put(s, tg, 62, _e98.lobe[2]);
+    uplift_simd::tape::put(s, tg, 63, _e98.lobe[3]);
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]
@@ -5093,51 +5200,7 @@ pub fn mx_ggx_lobe_sample_g28<S: Simd>(s: S, cl_5: mx_closure<S>, s_: mx_ggx_set
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_dielectric_p29<S: Simd>(s: S, cos_theta: S::F, eta: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
-    let tp = tp.fit::<S>(2);
-    let _e4 = cos_theta.max(s.splat(0.0f32)).min(s.splat(1.0f32));
-    let _e5 = tp.f(s, 0);
-    let _e6 = (_e4 * _e4);
-    let _e7 = eta.mul_add(eta, _e6);
-    let _e9 = (_e7 - s.splat(1.0f32));
-    let _e11 = { let (x, y) = (_e9, s.splat(0.0f32)); x.max(y) };
-    let _e12 = { let x = _e11; x.sqrt() };
-    let _e13 = (_e12 + _e4);
-    let _e14 = (_e12 - _e4);
-    let _e16 = { let (x, y) = (_e13, s.splat(1e-30f32)); x.max(y) };
-    let _e17 = (_e14 * (_e16).rcp());
-    let _e18 = (_e4 * _e13);
-    let _e20 = _e4.mul_add(_e13, -s.splat(1.0f32));
-    let _e21 = (_e4 * _e14);
-    let _e23 = _e4.mul_add(_e14, s.splat(1.0f32));
-    let _e25 = { let (x, y) = (_e23, s.splat(1e-30f32)); x.max(y) };
-    let _e26 = (_e20 * (_e25).rcp());
-    let _e28 = (s.splat(0.5f32) * _e17);
-    let _e29 = (_e28 * _e17);
-    let _e30 = (_e26 * _e26);
-    let _e32 = _e26.mul_add(_e26, s.splat(1.0f32));
-    let _e33 = (_e29 * _e32);
-    let _e35 = tp.m(s, 1);
-    let _e37 = _e9.lt(s.splat(0.0f32));
-    let _e38 = (_e35 | _e37);
-    let _e40 = _e38.select(s.splat(1.0f32), _e33);
-    return _e40;
-}
-
-#[inline(always)]
-#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_dielectric_g29<S: Simd>(s: S, cos_theta: S::F, eta: S::F, tg: &mut [f32]) -> S::F {
-    assert!(tg.len() >= 2 * S::LANES, "the tape is shorter than the pass's slots");
-    let _e5 = (eta * eta);
-    uplift_simd::tape::put(s, tg, 0, _e5);
-    let _e35 = eta.le(s.splat(0.0f32));
-    uplift_simd::tape::put_m(s, tg, 1, _e35);
-    return s.splat(0.0);
-}
-
-#[inline(always)]
-#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_thin_film_cos_p30<S: Simd>(s: S, cos_theta_1: S::F, eta2_: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+pub fn mx_thin_film_cos_p29<S: Simd>(s: S, cos_theta_1: S::F, eta2_: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
     let tp = tp.fit::<S>(1);
     let _e4 = cos_theta_1.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e5 = (_e4 * _e4);
@@ -5152,7 +5215,7 @@ pub fn mx_thin_film_cos_p30<S: Simd>(s: S, cos_theta_1: S::F, eta2_: S::F, tp: u
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_thin_film_cos_g30<S: Simd>(s: S, cos_theta_1: S::F, eta2_: S::F, tg: &mut [f32]) -> S::F {
+pub fn mx_thin_film_cos_g29<S: Simd>(s: S, cos_theta_1: S::F, eta2_: S::F, tg: &mut [f32]) -> S::F {
     assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
     let _e8 = (eta2_ * eta2_);
     uplift_simd::tape::put(s, tg, 0, _e8);
@@ -5161,7 +5224,7 @@ pub fn mx_thin_film_cos_g30<S: Simd>(s: S, cos_theta_1: S::F, eta2_: S::F, tg: &
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_conductor_polarized_p31<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S::F; 3], k: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
+pub fn mx_fresnel_conductor_polarized_p30<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S::F; 3], k: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
     let tp = tp.fit::<S>(6);
     let _e5 = cos_theta_2.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e6 = (_e5 * _e5);
@@ -5204,7 +5267,7 @@ pub fn mx_fresnel_conductor_polarized_p31<S: Simd>(s: S, cos_theta_2: S::F, n_1:
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_conductor_polarized_g31<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S::F; 3], k: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
+pub fn mx_fresnel_conductor_polarized_g30<S: Simd>(s: S, cos_theta_2: S::F, n_1: [S::F; 3], k: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
     assert!(tg.len() >= 6 * S::LANES, "the tape is shorter than the pass's slots");
     let _e9 = uplift_simd::vector::mul::<S, 3>(n_1, n_1);
     let _e10 = uplift_simd::vector::mul::<S, 3>(k, k);
@@ -5226,7 +5289,7 @@ pub fn mx_fresnel_conductor_polarized_g31<S: Simd>(s: S, cos_theta_2: S::F, n_1:
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_conductor_phase_polarized_p32<S: Simd>(s: S, cos_theta_3: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
+pub fn mx_fresnel_conductor_phase_polarized_p31<S: Simd>(s: S, cos_theta_3: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3], tp: uplift_simd::tape::TapeRow<'_>) -> mx_polarized<S> {
     let tp = tp.fit::<S>(21);
     let _e5 = [s.splat(1e-6f32); 3];
     let _e8 = (cos_theta_3 * cos_theta_3);
@@ -5288,7 +5351,7 @@ pub fn mx_fresnel_conductor_phase_polarized_p32<S: Simd>(s: S, cos_theta_3: S::F
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_conductor_phase_polarized_g32<S: Simd>(s: S, cos_theta_3: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
+pub fn mx_fresnel_conductor_phase_polarized_g31<S: Simd>(s: S, cos_theta_3: S::F, eta1_: S::F, eta2_1: [S::F; 3], kappa2_: [S::F; 3], tg: &mut [f32]) -> mx_polarized<S> {
     assert!(tg.len() >= 21 * S::LANES, "the tape is shorter than the pass's slots");
     let _e5 = [s.splat(1e-6f32); 3];
     let _e6 = uplift_simd::vector::zip::<S, 3>(eta2_1, _e5, |x, y| x.max(y));
@@ -5349,7 +5412,7 @@ pub fn mx_fresnel_conductor_phase_polarized_g32<S: Simd>(s: S, cos_theta_3: S::F
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_dielectric_polarized_p33<S: Simd>(s: S, cos_theta_4: S::F, eta_1: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 2] {
+pub fn mx_fresnel_dielectric_polarized_p32<S: Simd>(s: S, cos_theta_4: S::F, eta_1: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 2] {
     let tp = tp.fit::<S>(1);
     let _e4 = cos_theta_4.max(s.splat(0.0f32)).min(s.splat(1.0f32));
     let _e5 = (_e4 * _e4);
@@ -5380,7 +5443,7 @@ pub fn mx_fresnel_dielectric_polarized_p33<S: Simd>(s: S, cos_theta_4: S::F, eta
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_dielectric_polarized_g33<S: Simd>(s: S, cos_theta_4: S::F, eta_1: S::F, tg: &mut [f32]) -> [S::F; 2] {
+pub fn mx_fresnel_dielectric_polarized_g32<S: Simd>(s: S, cos_theta_4: S::F, eta_1: S::F, tg: &mut [f32]) -> [S::F; 2] {
     assert!(tg.len() >= 1 * S::LANES, "the tape is shorter than the pass's slots");
     let _e8 = (eta_1 * eta_1);
     uplift_simd::tape::put(s, tg, 0, _e8);
@@ -5389,9 +5452,9 @@ pub fn mx_fresnel_dielectric_polarized_g33<S: Simd>(s: S, cos_theta_4: S::F, eta
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_airy_reflectance_p34<S: Simd>(s: S, cos_theta_5: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+pub fn mx_airy_reflectance_p33<S: Simd>(s: S, cos_theta_5: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
     let tp = tp.fit::<S>(4);
-    let _e6 = mx_fresnel_dielectric_polarized_p33(s, cos_theta_5, eta2_2, tp.at::<S>(3));
+    let _e6 = mx_fresnel_dielectric_polarized_p32(s, cos_theta_5, eta2_2, tp.at::<S>(3));
     let _e12 = tp.f(s, 0);
     let _e14 = cos_theta_5.lt(_e12);
     let _e16 = _e14.select(s.splat(0.0f32), s.splat(3.1415927f32));
@@ -5433,9 +5496,9 @@ pub fn mx_airy_reflectance_p34<S: Simd>(s: S, cos_theta_5: S::F, cos_t: S::F, et
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_airy_reflectance_g34<S: Simd>(s: S, cos_theta_5: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>, tg: &mut [f32]) -> [S::F; 3] {
+pub fn mx_airy_reflectance_g33<S: Simd>(s: S, cos_theta_5: S::F, cos_t: S::F, eta2_2: S::F, thickness: S::F, r23_1: mx_polarized<S>, phi23_: mx_polarized<S>, tg: &mut [f32]) -> [S::F; 3] {
     assert!(tg.len() >= 4 * S::LANES, "the tape is shorter than the pass's slots");
-    let _e6 = mx_fresnel_dielectric_polarized_g33(s, cos_theta_5, eta2_2, &mut tg[3 * S::LANES..]);
+    let _e6 = mx_fresnel_dielectric_polarized_g32(s, cos_theta_5, eta2_2, &mut tg[3 * S::LANES..]);
     let _e7 = (eta2_2 * eta2_2);
     let _e9 = eta2_2.mul_add(eta2_2, s.splat(1.0f32));
     let _e10 = { let x = _e9; x.sqrt() };
@@ -5456,25 +5519,25 @@ pub fn mx_airy_reflectance_g34<S: Simd>(s: S, cos_theta_5: S::F, cos_t: S::F, et
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_airy_conductor_p35<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
+pub fn mx_fresnel_airy_conductor_p34<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> [S::F; 3] {
     let tp = tp.fit::<S>(39);
     let _e6 = tp.f(s, 0);
-    let _e7 = mx_thin_film_cos_p30(s, cos_theta_6, _e6, tp.at::<S>(7));
+    let _e7 = mx_thin_film_cos_p29(s, cos_theta_6, _e6, tp.at::<S>(7));
     let _e9 = [tp.f(s, 1), tp.f(s, 2), tp.f(s, 3)];
     let _e11 = [tp.f(s, 4), tp.f(s, 5), tp.f(s, 6)];
-    let _e12 = mx_fresnel_conductor_polarized_p31(s, _e7, _e9, _e11, tp.at::<S>(8));
-    let _e13 = mx_fresnel_conductor_phase_polarized_p32(s, _e7, _e6, n_2, k_1, tp.at::<S>(14));
-    let _e14 = mx_airy_reflectance_p34(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, tp.at::<S>(35));
+    let _e12 = mx_fresnel_conductor_polarized_p30(s, _e7, _e9, _e11, tp.at::<S>(8));
+    let _e13 = mx_fresnel_conductor_phase_polarized_p31(s, _e7, _e6, n_2, k_1, tp.at::<S>(14));
+    let _e14 = mx_airy_reflectance_p33(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, tp.at::<S>(35));
     return _e14;
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
-pub fn mx_fresnel_airy_conductor_g35<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tg: &mut [f32]) -> [S::F; 3] {
+pub fn mx_fresnel_airy_conductor_g34<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::F; 3], k_1: [S::F; 3], thickness_1: S::F, film_ior: S::F, tg: &mut [f32]) -> [S::F; 3] {
     assert!(tg.len() >= 39 * S::LANES, "the tape is shorter than the pass's slots");
     let _e6 = { let (x, y) = (film_ior, s.splat(1.0f32)); x.max(y) };
     uplift_simd::tape::put(s, tg, 0, _e6);
-    let _e7 = mx_thin_film_cos_g30(s, cos_theta_6, _e6, &mut tg[7 * S::LANES..]);
+    let _e7 = mx_thin_film_cos_g29(s, cos_theta_6, _e6, &mut tg[7 * S::LANES..]);
     let _e8 = [_e6; 3];
     let _e9 = uplift_simd::vector::zip::<S, 3>(n_2, _e8, |x, y| x * y.rcp());
     uplift_simd::tape::put(s, tg, 1, _e9[0]);
@@ -5485,10 +5548,54 @@ pub fn mx_fresnel_airy_conductor_g35<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::
     uplift_simd::tape::put(s, tg, 4, _e11[0]);
     uplift_simd::tape::put(s, tg, 5, _e11[1]);
     uplift_simd::tape::put(s, tg, 6, _e11[2]);
-    let _e12 = mx_fresnel_conductor_polarized_g31(s, _e7, _e9, _e11, &mut tg[8 * S::LANES..]);
-    let _e13 = s.outline(#[inline(always)] || mx_fresnel_conductor_phase_polarized_g32(s, _e7, _e6, n_2, k_1, &mut tg[14 * S::LANES..]));
-    let _e14 = mx_airy_reflectance_g34(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, &mut tg[35 * S::LANES..]);
+    let _e12 = mx_fresnel_conductor_polarized_g30(s, _e7, _e9, _e11, &mut tg[8 * S::LANES..]);
+    let _e13 = s.outline(#[inline(always)] || mx_fresnel_conductor_phase_polarized_g31(s, _e7, _e6, n_2, k_1, &mut tg[14 * S::LANES..]));
+    let _e14 = mx_airy_reflectance_g33(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, &mut tg[35 * S::LANES..]);
     return _e14;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_dielectric_p35<S: Simd>(s: S, cos_theta: S::F, eta: S::F, tp: uplift_simd::tape::TapeRow<'_>) -> S::F {
+    let tp = tp.fit::<S>(2);
+    let _e4 = cos_theta.max(s.splat(0.0f32)).min(s.splat(1.0f32));
+    let _e5 = tp.f(s, 0);
+    let _e6 = (_e4 * _e4);
+    let _e7 = eta.mul_add(eta, _e6);
+    let _e9 = (_e7 - s.splat(1.0f32));
+    let _e11 = { let (x, y) = (_e9, s.splat(0.0f32)); x.max(y) };
+    let _e12 = { let x = _e11; x.sqrt() };
+    let _e13 = (_e12 + _e4);
+    let _e14 = (_e12 - _e4);
+    let _e16 = { let (x, y) = (_e13, s.splat(1e-30f32)); x.max(y) };
+    let _e17 = (_e14 * (_e16).rcp());
+    let _e18 = (_e4 * _e13);
+    let _e20 = _e4.mul_add(_e13, -s.splat(1.0f32));
+    let _e21 = (_e4 * _e14);
+    let _e23 = _e4.mul_add(_e14, s.splat(1.0f32));
+    let _e25 = { let (x, y) = (_e23, s.splat(1e-30f32)); x.max(y) };
+    let _e26 = (_e20 * (_e25).rcp());
+    let _e28 = (s.splat(0.5f32) * _e17);
+    let _e29 = (_e28 * _e17);
+    let _e30 = (_e26 * _e26);
+    let _e32 = _e26.mul_add(_e26, s.splat(1.0f32));
+    let _e33 = (_e29 * _e32);
+    let _e35 = tp.m(s, 1);
+    let _e37 = _e9.lt(s.splat(0.0f32));
+    let _e38 = (_e35 | _e37);
+    let _e40 = _e38.select(s.splat(1.0f32), _e33);
+    return _e40;
+}
+
+#[inline(always)]
+#[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
+pub fn mx_fresnel_dielectric_g35<S: Simd>(s: S, cos_theta: S::F, eta: S::F, tg: &mut [f32]) -> S::F {
+    assert!(tg.len() >= 2 * S::LANES, "the tape is shorter than the pass's slots");
+    let _e5 = (eta * eta);
+    uplift_simd::tape::put(s, tg, 0, _e5);
+    let _e35 = eta.le(s.splat(0.0f32));
+    uplift_simd::tape::put_m(s, tg, 1, _e35);
+    return s.splat(0.0);
 }
 
 #[inline(always)]
@@ -5647,6 +5754,9 @@ pub fn mx_ggx_pdf_g39<S: Simd>(s: S, v_9: [S::F; 3], h_4: [S::F; 3], a_4: [S::F;
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf_p40<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(133);
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e12 = tp.f(s, 0);
@@ -5665,67 +5775,80 @@ pub fn mx_dielectric_bsdf_p40<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e23 = tp.m(s, 32);
     let _e24 = [tp.f(s, 33), tp.f(s, 34), tp.f(s, 35)];
     let _e26 = [s.splat(0.0f32); 3];
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e38 = [tp.f(s, 36), tp.f(s, 37), tp.f(s, 38)];
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e51 = [tp.f(s, 39), tp.f(s, 40), tp.f(s, 41)];
-    let _e54 = cl_7.context;
-    let _e56 = tp.m(s, 42);
-    let _m2 = _e56;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e49 = [tp.f(s, 36), tp.f(s, 37), tp.f(s, 38)];
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e55 = [tp.f(s, 39), tp.f(s, 40), tp.f(s, 41)];
+    let _e58 = cl_7.context;
+    let _e60 = tp.m(s, 42);
+    let _m2 = _e60;
     if _m2.any() {
-        let _e59 = BSDF { response: [tp.f(s, 43), tp.f(s, 44), tp.f(s, 45)], throughput: [tp.f(s, 46), tp.f(s, 47), tp.f(s, 48)], lobe: [tp.f(s, 49), tp.f(s, 50), tp.f(s, 51), tp.f(s, 52)] };
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
+        let _e63 = BSDF { response: [tp.f(s, 43), tp.f(s, 44), tp.f(s, 45)], throughput: [tp.f(s, 46), tp.f(s, 47), tp.f(s, 48)], lobe: [tp.f(s, 49), tp.f(s, 50), tp.f(s, 51), tp.f(s, 52)] };
+        _ret = BSDF::<S>::select((_m2 & !_done), _e63, _ret);
         _done = _done | _m2;
     }
     if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = tp.m(s, 53);
-    let _m3 = _e62;
+    let _e64 = cl_7.context;
+    let _e66 = tp.m(s, 53);
+    let _m3 = _e66;
     if _m3.any() {
-        let _e63 = tp.f(s, 54);
-        let _e64 = mx_ggx_lobe_sample_p28(s, cl_7, _e16, _e51, _e63, tp.at::<S>(77));
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
+        let _e67 = tp.f(s, 54);
+        let _e68 = mx_ggx_lobe_sample_p28(s, cl_7, _e16, _e55, _e67, tp.at::<S>(77));
+        _ret = BSDF::<S>::select((_m3 & !_done), _e68, _ret);
         _done = _done | _m3;
     }
     if _done.all() { return _ret; }
-    let _e65 = mx_ggx_light(s, cl_7, _e16);
-    let _e66 = [tp.f(s, 55), tp.f(s, 56), tp.f(s, 57)];
-    let _e67 = mx_half_vector(s, _e66, _e65);
-    let _e68 = [tp.f(s, 58), tp.f(s, 59), tp.f(s, 60)];
-    let _e69 = uplift_simd::vector::dot::<S, 3>(_e68, _e67);
-    let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_p29(s, _e69, _e18, tp.at::<S>(84)) } else { s.splat(0.0) };
-    let _e71 = [_e70; 3];
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_p35(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(86)) } else { [s.splat(0.0); 3] };
-    let _e73 = uplift_simd::vector::select_all::<S, 3>(_e23, _e72, _e71);
-    let _e74 = [tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)];
-    let _e75 = [tp.f(s, 64), tp.f(s, 65)];
-    let _e76 = mx_ggx_reflection_p38(s, _e74, _e65, _e67, _e75, tp.at::<S>(125));
-    let _e77 = (_e12 * _e76);
-    let _e78 = uplift_simd::vector::mul::<S, 3>([_e77; 3], _e73);
-    let _e79 = uplift_simd::vector::mul::<S, 3>(_e78, _e38);
-    let _e80 = uplift_simd::vector::mul::<S, 3>(_e79, _e21);
-    let _e81 = cl_7.context;
-    let _e83 = tp.m(s, 66);
-    let _m4 = _e83;
+    let _e69 = mx_ggx_light(s, cl_7, _e16);
+    let _e70 = [tp.f(s, 55), tp.f(s, 56), tp.f(s, 57)];
+    let _e71 = mx_half_vector(s, _e70, _e69);
+    let _e72 = [tp.f(s, 58), tp.f(s, 59), tp.f(s, 60)];
+    let _e73 = uplift_simd::vector::dot::<S, 3>(_e72, _e71);
+    let _e75 = [s.splat(0.0f32); 3];
+    let _m4 = _e23;
     if _m4.any() {
-        let _e85 = [tp.f(s, 67), tp.f(s, 68), tp.f(s, 69), tp.f(s, 70)];
-        let _e86 = BSDF { response: _e80, throughput: _e51, lobe: _e85 };
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
-        _done = _done | _m4;
+        let _e77 = mx_fresnel_airy_conductor_p34(s, _e73, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(84));
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m4, _e77, f_3);
+    }
+    let _m5 = !_e23;
+    if _m5.any() {
+        let _e78 = mx_fresnel_dielectric_p35(s, _e73, _e18, tp.at::<S>(123));
+        let _e79 = [_e78; 3];
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m5, _e79, f_3);
+    }
+    let _e80 = [tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)];
+    let _e81 = [tp.f(s, 64), tp.f(s, 65)];
+    let _e82 = mx_ggx_reflection_p38(s, _e80, _e69, _e71, _e81, tp.at::<S>(125));
+    let _e83 = (_e12 * _e82);
+    let _e84 = f_3;
+    let _e85 = uplift_simd::vector::mul::<S, 3>([_e83; 3], _e84);
+    let _e86 = uplift_simd::vector::mul::<S, 3>(_e85, _e49);
+    let _e87 = uplift_simd::vector::mul::<S, 3>(_e86, _e21);
+    let _e88 = cl_7.context;
+    let _e90 = tp.m(s, 66);
+    let _m6 = _e90;
+    if _m6.any() {
+        let _e92 = [tp.f(s, 67), tp.f(s, 68), tp.f(s, 69), tp.f(s, 70)];
+        let _e93 = BSDF { response: _e87, throughput: _e55, lobe: _e92 };
+        _ret = BSDF::<S>::select((_m6 & !_done), _e93, _ret);
+        _done = _done | _m6;
     }
     if _done.all() { return _ret; }
-    let _e87 = tp.f(s, 71);
-    let _e88 = [tp.f(s, 72), tp.f(s, 73), tp.f(s, 74)];
-    let _e89 = [tp.f(s, 75), tp.f(s, 76)];
-    let _e90 = mx_ggx_pdf_p39(s, _e88, _e67, _e89, tp.at::<S>(130));
-    let _e91 = mx_lobe_with_pdf_p26(s, _e80, _e51, _e87, _e90, tp.at::<S>(132));
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e94 = tp.f(s, 71);
+    let _e95 = [tp.f(s, 72), tp.f(s, 73), tp.f(s, 74)];
+    let _e96 = [tp.f(s, 75), tp.f(s, 76)];
+    let _e97 = mx_ggx_pdf_p39(s, _e95, _e71, _e96, tp.at::<S>(130));
+    let _e98 = mx_lobe_with_pdf_p26(s, _e87, _e55, _e94, _e97, tp.at::<S>(132));
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf_g40<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 133 * S::LANES, "the tape is shorter than the pass's slots");
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e12 = mx_lobe_weight(s, weight_1);
@@ -5780,115 +5903,133 @@ pub fn mx_dielectric_bsdf_g40<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     uplift_simd::tape::put(s, tg, 34, _e24[1]);
     uplift_simd::tape::put(s, tg, 35, _e24[2]);
     let _e26 = [s.splat(0.0f32); 3];
-    let _e28 = if (!(_e23)).any() { mx_fresnel_dielectric(s, s.splat(1.0f32), _e18) } else { s.splat(0.0) };
+    let _e28 = mx_fresnel_dielectric(s, s.splat(1.0f32), _e18);
     let _e29 = [_e28; 3];
-    let _e31 = if (_e23).any() { mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior) } else { [s.splat(0.0); 3] };
-    let _e32 = uplift_simd::vector::select_all::<S, 3>(_e23, _e31, _e29);
-    let _e33 = _e16.mu;
-    let _e34 = _e16.abar;
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e37 = mx_fresnel_average(s, _e32, _e36);
-    let _e38 = mx_ggx_energy_compensation(s, _e33, _e34, _e37);
-    uplift_simd::tape::put(s, tg, 36, _e38[0]);
-    uplift_simd::tape::put(s, tg, 37, _e38[1]);
-    uplift_simd::tape::put(s, tg, 38, _e38[2]);
-    let _e39 = _e16.mu;
-    let _e40 = _e16.abar;
-    let _e41 = if (!(_e23)).any() { s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18)) } else { s.splat(0.0) };
-    let _e42 = [_e41; 3];
+    f1_ = _e29;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _m2 = _e23;
+    if _m2.any() {
+        let _e35 = mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior);
+        f1_ = uplift_simd::vector::select_all::<S, 3>(_m2, _e35, f1_);
+        let _e36 = _e16.mu;
+        let _e37 = _e16.abar;
+        let _e38 = s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e36, _e37, _e24, _e26, thinfilm_thickness, thinfilm_ior));
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m2, _e38, e_3);
+    }
+    let _m3 = !_e23;
+    if _m3.any() {
+        let _e39 = _e16.mu;
+        let _e40 = _e16.abar;
+        let _e41 = s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18));
+        let _e42 = [_e41; 3];
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m3, _e42, e_3);
+    }
     let _e43 = _e16.mu;
     let _e44 = _e16.abar;
-    let _e45 = if (_e23).any() { s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e43, _e44, _e24, _e26, thinfilm_thickness, thinfilm_ior)) } else { [s.splat(0.0); 3] };
-    let _e46 = uplift_simd::vector::select_all::<S, 3>(_e23, _e45, _e42);
-    let _e47 = uplift_simd::vector::mul::<S, 3>(_e38, _e46);
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e50 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e47);
-    let _e51 = uplift_simd::vector::sub::<S, 3>(_e49, _e50);
-    uplift_simd::tape::put(s, tg, 39, _e51[0]);
-    uplift_simd::tape::put(s, tg, 40, _e51[1]);
-    uplift_simd::tape::put(s, tg, 41, _e51[2]);
-    let _e52 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
-    let _e53 = uplift_simd::vector::mul::<S, 3>(_e52, _e47);
-    let _e54 = cl_7.context;
-    let _e56 = _e54.eq(s.splat_i(1i32));
-    uplift_simd::tape::put_m(s, tg, 42, _e56);
-    let _m2 = _e56;
-    if _m2.any() {
-        let _e57 = mx_bsdf_empty(s);
-        let _e58 = _e57.lobe;
-        let _e59 = BSDF { response: _e53, throughput: _e51, lobe: _e58 };
-        uplift_simd::tape::put(s, tg, 43, _e59.response[0]);
-        uplift_simd::tape::put(s, tg, 44, _e59.response[1]);
-        uplift_simd::tape::put(s, tg, 45, _e59.response[2]);
-        uplift_simd::tape::put(s, tg, 46, _e59.throughput[0]);
-        uplift_simd::tape::put(s, tg, 47, _e59.throughput[1]);
-        uplift_simd::tape::put(s, tg, 48, _e59.throughput[2]);
-        uplift_simd::tape::put(s, tg, 49, _e59.lobe[0]);
-        uplift_simd::tape::put(s, tg, 50, _e59.lobe[1]);
-        uplift_simd::tape::put(s, tg, 51, _e59.lobe[2]);
-        uplift_simd::tape::put(s, tg, 52, _e59.lobe[3]);
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
-        _done = _done | _m2;
-    }
-    if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = _e60.eq(s.splat_i(2i32));
-    uplift_simd::tape::put_m(s, tg, 53, _e62);
-    let _m3 = _e62;
-    if _m3.any() {
-        let _e63 = mx_luminance_rgb(s, _e53);
-        uplift_simd::tape::put(s, tg, 54, _e63);
-        let _e64 = mx_ggx_lobe_sample_g28(s, cl_7, _e16, _e51, _e63, &mut tg[77 * S::LANES..]);
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
-        _done = _done | _m3;
-    }
-    if _done.all() { return _ret; }
-    let _e66 = _e16.v;
-    uplift_simd::tape::put(s, tg, 55, _e66[0]);
-    uplift_simd::tape::put(s, tg, 56, _e66[1]);
-    uplift_simd::tape::put(s, tg, 57, _e66[2]);
-    let _e68 = _e16.v;
-    uplift_simd::tape::put(s, tg, 58, _e68[0]);
-    uplift_simd::tape::put(s, tg, 59, _e68[1]);
-    uplift_simd::tape::put(s, tg, 60, _e68[2]);
-    let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_g29(s, s.splat(0.0), _e18, &mut tg[84 * S::LANES..]) } else { s.splat(0.0) };
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_g35(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[86 * S::LANES..]) } else { [s.splat(0.0); 3] };
-    let _e74 = _e16.v;
-    uplift_simd::tape::put(s, tg, 61, _e74[0]);
-    uplift_simd::tape::put(s, tg, 62, _e74[1]);
-    uplift_simd::tape::put(s, tg, 63, _e74[2]);
-    let _e75 = _e16.a;
-    uplift_simd::tape::put(s, tg, 64, _e75[0]);
-    uplift_simd::tape::put(s, tg, 65, _e75[1]);
-    let _e76 = mx_ggx_reflection_g38(s, _e74, [s.splat(0.0); 3], [s.splat(0.0); 3], _e75, &mut tg[125 * S::LANES..]);
-    let _e81 = cl_7.context;
-    let _e83 = _e81.eq(s.splat_i(0i32));
-    uplift_simd::tape::put_m(s, tg, 66, _e83);
-    let _m4 = _e83;
+    let _e45 = f1_;
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e48 = mx_fresnel_average(s, _e45, _e47);
+    let _e49 = mx_ggx_energy_compensation(s, _e43, _e44, _e48);
+    uplift_simd::tape::put(s, tg, 36, _e49[0]);
+    uplift_simd::tape::put(s, tg, 37, _e49[1]);
+    uplift_simd::tape::put(s, tg, 38, _e49[2]);
+    let _e50 = e_3;
+    let _e51 = uplift_simd::vector::mul::<S, 3>(_e49, _e50);
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e54 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e51);
+    let _e55 = uplift_simd::vector::sub::<S, 3>(_e53, _e54);
+    uplift_simd::tape::put(s, tg, 39, _e55[0]);
+    uplift_simd::tape::put(s, tg, 40, _e55[1]);
+    uplift_simd::tape::put(s, tg, 41, _e55[2]);
+    let _e56 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
+    let _e57 = uplift_simd::vector::mul::<S, 3>(_e56, _e51);
+    let _e58 = cl_7.context;
+    let _e60 = _e58.eq(s.splat_i(1i32));
+    uplift_simd::tape::put_m(s, tg, 42, _e60);
+    let _m4 = _e60;
     if _m4.any() {
-        let _e84 = mx_bsdf_empty(s);
-        let _e85 = _e84.lobe;
-        uplift_simd::tape::put(s, tg, 67, _e85[0]);
-        uplift_simd::tape::put(s, tg, 68, _e85[1]);
-        uplift_simd::tape::put(s, tg, 69, _e85[2]);
-        uplift_simd::tape::put(s, tg, 70, _e85[3]);
-        let _e86 = BSDF { response: [s.splat(0.0); 3], throughput: _e51, lobe: _e85 };
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
+        let _e61 = mx_bsdf_empty(s);
+        let _e62 = _e61.lobe;
+        let _e63 = BSDF { response: _e57, throughput: _e55, lobe: _e62 };
+        uplift_simd::tape::put(s, tg, 43, _e63.response[0]);
+        uplift_simd::tape::put(s, tg, 44, _e63.response[1]);
+        uplift_simd::tape::put(s, tg, 45, _e63.response[2]);
+        uplift_simd::tape::put(s, tg, 46, _e63.throughput[0]);
+        uplift_simd::tape::put(s, tg, 47, _e63.throughput[1]);
+        uplift_simd::tape::put(s, tg, 48, _e63.throughput[2]);
+        uplift_simd::tape::put(s, tg, 49, _e63.lobe[0]);
+        uplift_simd::tape::put(s, tg, 50, _e63.lobe[1]);
+        uplift_simd::tape::put(s, tg, 51, _e63.lobe[2]);
+        uplift_simd::tape::put(s, tg, 52, _e63.lobe[3]);
+        _ret = BSDF::<S>::select((_m4 & !_done), _e63, _ret);
         _done = _done | _m4;
     }
     if _done.all() { return _ret; }
-    let _e87 = mx_luminance_rgb(s, _e53);
-    uplift_simd::tape::put(s, tg, 71, _e87);
-    let _e88 = _e16.v;
-    uplift_simd::tape::put(s, tg, 72, _e88[0]);
-    uplift_simd::tape::put(s, tg, 73, _e88[1]);
-    uplift_simd::tape::put(s, tg, 74, _e88[2]);
-    let _e89 = _e16.a;
-    uplift_simd::tape::put(s, tg, 75, _e89[0]);
-    uplift_simd::tape::put(s, tg, 76, _e89[1]);
-    let _e90 = mx_ggx_pdf_g39(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[130 * S::LANES..]);
-    let _e91 = mx_lobe_with_pdf_g26(s, [s.splat(0.0); 3], _e51, _e87, _e90, &mut tg[132 * S::LANES..]);
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e64 = cl_7.context;
+    let _e66 = _e64.eq(s.splat_i(2i32));
+    uplift_simd::tape::put_m(s, tg, 53, _e66);
+    let _m5 = _e66;
+    if _m5.any() {
+        let _e67 = mx_luminance_rgb(s, _e57);
+        uplift_simd::tape::put(s, tg, 54, _e67);
+        let _e68 = mx_ggx_lobe_sample_g28(s, cl_7, _e16, _e55, _e67, &mut tg[77 * S::LANES..]);
+        _ret = BSDF::<S>::select((_m5 & !_done), _e68, _ret);
+        _done = _done | _m5;
+    }
+    if _done.all() { return _ret; }
+    let _e70 = _e16.v;
+    uplift_simd::tape::put(s, tg, 55, _e70[0]);
+    uplift_simd::tape::put(s, tg, 56, _e70[1]);
+    uplift_simd::tape::put(s, tg, 57, _e70[2]);
+    let _e72 = _e16.v;
+    uplift_simd::tape::put(s, tg, 58, _e72[0]);
+    uplift_simd::tape::put(s, tg, 59, _e72[1]);
+    uplift_simd::tape::put(s, tg, 60, _e72[2]);
+    let _e75 = [s.splat(0.0f32); 3];
+    let _m6 = _e23;
+    if _m6.any() {
+        let _e77 = mx_fresnel_airy_conductor_g34(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[84 * S::LANES..]);
+    }
+    let _m7 = !_e23;
+    if _m7.any() {
+        let _e78 = mx_fresnel_dielectric_g35(s, s.splat(0.0), _e18, &mut tg[123 * S::LANES..]);
+    }
+    let _e80 = _e16.v;
+    uplift_simd::tape::put(s, tg, 61, _e80[0]);
+    uplift_simd::tape::put(s, tg, 62, _e80[1]);
+    uplift_simd::tape::put(s, tg, 63, _e80[2]);
+    let _e81 = _e16.a;
+    uplift_simd::tape::put(s, tg, 64, _e81[0]);
+    uplift_simd::tape::put(s, tg, 65, _e81[1]);
+    let _e82 = mx_ggx_reflection_g38(s, _e80, [s.splat(0.0); 3], [s.splat(0.0); 3], _e81, &mut tg[125 * S::LANES..]);
+    let _e88 = cl_7.context;
+    let _e90 = _e88.eq(s.splat_i(0i32));
+    uplift_simd::tape::put_m(s, tg, 66, _e90);
+    let _m8 = _e90;
+    if _m8.any() {
+        let _e91 = mx_bsdf_empty(s);
+        let _e92 = _e91.lobe;
+        uplift_simd::tape::put(s, tg, 67, _e92[0]);
+        uplift_simd::tape::put(s, tg, 68, _e92[1]);
+        uplift_simd::tape::put(s, tg, 69, _e92[2]);
+        uplift_simd::tape::put(s, tg, 70, _e92[3]);
+        let _e93 = BSDF { response: [s.splat(0.0); 3], throughput: _e55, lobe: _e92 };
+        _ret = BSDF::<S>::select((_m8 & !_done), _e93, _ret);
+        _done = _done | _m8;
+    }
+    if _done.all() { return _ret; }
+    let _e94 = mx_luminance_rgb(s, _e57);
+    uplift_simd::tape::put(s, tg, 71, _e94);
+    let _e95 = _e16.v;
+    uplift_simd::tape::put(s, tg, 72, _e95[0]);
+    uplift_simd::tape::put(s, tg, 73, _e95[1]);
+    uplift_simd::tape::put(s, tg, 74, _e95[2]);
+    let _e96 = _e16.a;
+    uplift_simd::tape::put(s, tg, 75, _e96[0]);
+    uplift_simd::tape::put(s, tg, 76, _e96[1]);
+    let _e97 = mx_ggx_pdf_g39(s, _e95, [s.splat(0.0); 3], _e96, &mut tg[130 * S::LANES..]);
+    let _e98 = mx_lobe_with_pdf_g26(s, [s.splat(0.0); 3], _e55, _e94, _e97, &mut tg[132 * S::LANES..]);
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]
@@ -6218,7 +6359,7 @@ pub fn mx_fresnel_airy_conductor_p46<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::
     let _e7 = mx_thin_film_cos_p42(s, cos_theta_6, _e6, tp.at::<S>(7));
     let _e9 = [tp.f(s, 1), tp.f(s, 2), tp.f(s, 3)];
     let _e11 = [tp.f(s, 4), tp.f(s, 5), tp.f(s, 6)];
-    let _e12 = mx_fresnel_conductor_polarized_p31(s, _e7, _e9, _e11, tp.at::<S>(8));
+    let _e12 = mx_fresnel_conductor_polarized_p30(s, _e7, _e9, _e11, tp.at::<S>(8));
     let _e13 = mx_fresnel_conductor_phase_polarized_p43(s, _e7, _e6, n_2, k_1, tp.at::<S>(14));
     let _e14 = mx_airy_reflectance_p45(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, tp.at::<S>(35));
     return _e14;
@@ -6241,7 +6382,7 @@ pub fn mx_fresnel_airy_conductor_g46<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::
     uplift_simd::tape::put(s, tg, 4, _e11[0]);
     uplift_simd::tape::put(s, tg, 5, _e11[1]);
     uplift_simd::tape::put(s, tg, 6, _e11[2]);
-    let _e12 = mx_fresnel_conductor_polarized_g31(s, _e7, _e9, _e11, &mut tg[8 * S::LANES..]);
+    let _e12 = mx_fresnel_conductor_polarized_g30(s, _e7, _e9, _e11, &mut tg[8 * S::LANES..]);
     let _e13 = s.outline(#[inline(always)] || mx_fresnel_conductor_phase_polarized_g43(s, _e7, _e6, n_2, k_1, &mut tg[14 * S::LANES..]));
     let _e14 = mx_airy_reflectance_g45(s, cos_theta_6, _e7, _e6, thickness_1, _e12, _e13, &mut tg[35 * S::LANES..]);
     return _e14;
@@ -7108,6 +7249,9 @@ pub fn mx_fresnel_airy_conductor_g61<S: Simd>(s: S, cos_theta_6: S::F, n_2: [S::
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf_p62<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(133);
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e12 = tp.f(s, 0);
@@ -7126,67 +7270,80 @@ pub fn mx_dielectric_bsdf_p62<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e23 = tp.m(s, 32);
     let _e24 = [tp.f(s, 33), tp.f(s, 34), tp.f(s, 35)];
     let _e26 = [s.splat(0.0f32); 3];
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e38 = [tp.f(s, 36), tp.f(s, 37), tp.f(s, 38)];
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e51 = [tp.f(s, 39), tp.f(s, 40), tp.f(s, 41)];
-    let _e54 = cl_7.context;
-    let _e56 = tp.m(s, 42);
-    let _m2 = _e56;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e49 = [tp.f(s, 36), tp.f(s, 37), tp.f(s, 38)];
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e55 = [tp.f(s, 39), tp.f(s, 40), tp.f(s, 41)];
+    let _e58 = cl_7.context;
+    let _e60 = tp.m(s, 42);
+    let _m2 = _e60;
     if _m2.any() {
-        let _e59 = BSDF { response: [tp.f(s, 43), tp.f(s, 44), tp.f(s, 45)], throughput: [tp.f(s, 46), tp.f(s, 47), tp.f(s, 48)], lobe: [tp.f(s, 49), tp.f(s, 50), tp.f(s, 51), tp.f(s, 52)] };
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
+        let _e63 = BSDF { response: [tp.f(s, 43), tp.f(s, 44), tp.f(s, 45)], throughput: [tp.f(s, 46), tp.f(s, 47), tp.f(s, 48)], lobe: [tp.f(s, 49), tp.f(s, 50), tp.f(s, 51), tp.f(s, 52)] };
+        _ret = BSDF::<S>::select((_m2 & !_done), _e63, _ret);
         _done = _done | _m2;
     }
     if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = tp.m(s, 53);
-    let _m3 = _e62;
+    let _e64 = cl_7.context;
+    let _e66 = tp.m(s, 53);
+    let _m3 = _e66;
     if _m3.any() {
-        let _e63 = tp.f(s, 54);
-        let _e64 = mx_ggx_lobe_sample_p58(s, cl_7, _e16, _e51, _e63, tp.at::<S>(77));
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
+        let _e67 = tp.f(s, 54);
+        let _e68 = mx_ggx_lobe_sample_p58(s, cl_7, _e16, _e55, _e67, tp.at::<S>(77));
+        _ret = BSDF::<S>::select((_m3 & !_done), _e68, _ret);
         _done = _done | _m3;
     }
     if _done.all() { return _ret; }
-    let _e65 = mx_ggx_light(s, cl_7, _e16);
-    let _e66 = [tp.f(s, 55), tp.f(s, 56), tp.f(s, 57)];
-    let _e67 = mx_half_vector(s, _e66, _e65);
-    let _e68 = [tp.f(s, 58), tp.f(s, 59), tp.f(s, 60)];
-    let _e69 = uplift_simd::vector::dot::<S, 3>(_e68, _e67);
-    let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_p29(s, _e69, _e18, tp.at::<S>(84)) } else { s.splat(0.0) };
-    let _e71 = [_e70; 3];
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_p61(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(86)) } else { [s.splat(0.0); 3] };
-    let _e73 = uplift_simd::vector::select_all::<S, 3>(_e23, _e72, _e71);
-    let _e74 = [tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)];
-    let _e75 = [tp.f(s, 64), tp.f(s, 65)];
-    let _e76 = mx_ggx_reflection_p50(s, _e74, _e65, _e67, _e75, tp.at::<S>(125));
-    let _e77 = (_e12 * _e76);
-    let _e78 = uplift_simd::vector::mul::<S, 3>([_e77; 3], _e73);
-    let _e79 = uplift_simd::vector::mul::<S, 3>(_e78, _e38);
-    let _e80 = uplift_simd::vector::mul::<S, 3>(_e79, _e21);
-    let _e81 = cl_7.context;
-    let _e83 = tp.m(s, 66);
-    let _m4 = _e83;
+    let _e69 = mx_ggx_light(s, cl_7, _e16);
+    let _e70 = [tp.f(s, 55), tp.f(s, 56), tp.f(s, 57)];
+    let _e71 = mx_half_vector(s, _e70, _e69);
+    let _e72 = [tp.f(s, 58), tp.f(s, 59), tp.f(s, 60)];
+    let _e73 = uplift_simd::vector::dot::<S, 3>(_e72, _e71);
+    let _e75 = [s.splat(0.0f32); 3];
+    let _m4 = _e23;
     if _m4.any() {
-        let _e85 = [tp.f(s, 67), tp.f(s, 68), tp.f(s, 69), tp.f(s, 70)];
-        let _e86 = BSDF { response: _e80, throughput: _e51, lobe: _e85 };
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
-        _done = _done | _m4;
+        let _e77 = mx_fresnel_airy_conductor_p61(s, _e73, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(84));
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m4, _e77, f_3);
+    }
+    let _m5 = !_e23;
+    if _m5.any() {
+        let _e78 = mx_fresnel_dielectric_p35(s, _e73, _e18, tp.at::<S>(123));
+        let _e79 = [_e78; 3];
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m5, _e79, f_3);
+    }
+    let _e80 = [tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)];
+    let _e81 = [tp.f(s, 64), tp.f(s, 65)];
+    let _e82 = mx_ggx_reflection_p50(s, _e80, _e69, _e71, _e81, tp.at::<S>(125));
+    let _e83 = (_e12 * _e82);
+    let _e84 = f_3;
+    let _e85 = uplift_simd::vector::mul::<S, 3>([_e83; 3], _e84);
+    let _e86 = uplift_simd::vector::mul::<S, 3>(_e85, _e49);
+    let _e87 = uplift_simd::vector::mul::<S, 3>(_e86, _e21);
+    let _e88 = cl_7.context;
+    let _e90 = tp.m(s, 66);
+    let _m6 = _e90;
+    if _m6.any() {
+        let _e92 = [tp.f(s, 67), tp.f(s, 68), tp.f(s, 69), tp.f(s, 70)];
+        let _e93 = BSDF { response: _e87, throughput: _e55, lobe: _e92 };
+        _ret = BSDF::<S>::select((_m6 & !_done), _e93, _ret);
+        _done = _done | _m6;
     }
     if _done.all() { return _ret; }
-    let _e87 = tp.f(s, 71);
-    let _e88 = [tp.f(s, 72), tp.f(s, 73), tp.f(s, 74)];
-    let _e89 = [tp.f(s, 75), tp.f(s, 76)];
-    let _e90 = mx_ggx_pdf_p53(s, _e88, _e67, _e89, tp.at::<S>(130));
-    let _e91 = mx_lobe_with_pdf_p26(s, _e80, _e51, _e87, _e90, tp.at::<S>(132));
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e94 = tp.f(s, 71);
+    let _e95 = [tp.f(s, 72), tp.f(s, 73), tp.f(s, 74)];
+    let _e96 = [tp.f(s, 75), tp.f(s, 76)];
+    let _e97 = mx_ggx_pdf_p53(s, _e95, _e71, _e96, tp.at::<S>(130));
+    let _e98 = mx_lobe_with_pdf_p26(s, _e87, _e55, _e94, _e97, tp.at::<S>(132));
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf_g62<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 133 * S::LANES, "the tape is shorter than the pass's slots");
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e12 = mx_lobe_weight(s, weight_1);
@@ -7241,115 +7398,133 @@ pub fn mx_dielectric_bsdf_g62<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     uplift_simd::tape::put(s, tg, 34, _e24[1]);
     uplift_simd::tape::put(s, tg, 35, _e24[2]);
     let _e26 = [s.splat(0.0f32); 3];
-    let _e28 = if (!(_e23)).any() { mx_fresnel_dielectric(s, s.splat(1.0f32), _e18) } else { s.splat(0.0) };
+    let _e28 = mx_fresnel_dielectric(s, s.splat(1.0f32), _e18);
     let _e29 = [_e28; 3];
-    let _e31 = if (_e23).any() { mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior) } else { [s.splat(0.0); 3] };
-    let _e32 = uplift_simd::vector::select_all::<S, 3>(_e23, _e31, _e29);
-    let _e33 = _e16.mu;
-    let _e34 = _e16.abar;
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e37 = mx_fresnel_average(s, _e32, _e36);
-    let _e38 = mx_ggx_energy_compensation(s, _e33, _e34, _e37);
-    uplift_simd::tape::put(s, tg, 36, _e38[0]);
-    uplift_simd::tape::put(s, tg, 37, _e38[1]);
-    uplift_simd::tape::put(s, tg, 38, _e38[2]);
-    let _e39 = _e16.mu;
-    let _e40 = _e16.abar;
-    let _e41 = if (!(_e23)).any() { s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18)) } else { s.splat(0.0) };
-    let _e42 = [_e41; 3];
+    f1_ = _e29;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _m2 = _e23;
+    if _m2.any() {
+        let _e35 = mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior);
+        f1_ = uplift_simd::vector::select_all::<S, 3>(_m2, _e35, f1_);
+        let _e36 = _e16.mu;
+        let _e37 = _e16.abar;
+        let _e38 = s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e36, _e37, _e24, _e26, thinfilm_thickness, thinfilm_ior));
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m2, _e38, e_3);
+    }
+    let _m3 = !_e23;
+    if _m3.any() {
+        let _e39 = _e16.mu;
+        let _e40 = _e16.abar;
+        let _e41 = s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18));
+        let _e42 = [_e41; 3];
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m3, _e42, e_3);
+    }
     let _e43 = _e16.mu;
     let _e44 = _e16.abar;
-    let _e45 = if (_e23).any() { s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e43, _e44, _e24, _e26, thinfilm_thickness, thinfilm_ior)) } else { [s.splat(0.0); 3] };
-    let _e46 = uplift_simd::vector::select_all::<S, 3>(_e23, _e45, _e42);
-    let _e47 = uplift_simd::vector::mul::<S, 3>(_e38, _e46);
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e50 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e47);
-    let _e51 = uplift_simd::vector::sub::<S, 3>(_e49, _e50);
-    uplift_simd::tape::put(s, tg, 39, _e51[0]);
-    uplift_simd::tape::put(s, tg, 40, _e51[1]);
-    uplift_simd::tape::put(s, tg, 41, _e51[2]);
-    let _e52 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
-    let _e53 = uplift_simd::vector::mul::<S, 3>(_e52, _e47);
-    let _e54 = cl_7.context;
-    let _e56 = _e54.eq(s.splat_i(1i32));
-    uplift_simd::tape::put_m(s, tg, 42, _e56);
-    let _m2 = _e56;
-    if _m2.any() {
-        let _e57 = mx_bsdf_empty(s);
-        let _e58 = _e57.lobe;
-        let _e59 = BSDF { response: _e53, throughput: _e51, lobe: _e58 };
-        uplift_simd::tape::put(s, tg, 43, _e59.response[0]);
-        uplift_simd::tape::put(s, tg, 44, _e59.response[1]);
-        uplift_simd::tape::put(s, tg, 45, _e59.response[2]);
-        uplift_simd::tape::put(s, tg, 46, _e59.throughput[0]);
-        uplift_simd::tape::put(s, tg, 47, _e59.throughput[1]);
-        uplift_simd::tape::put(s, tg, 48, _e59.throughput[2]);
-        uplift_simd::tape::put(s, tg, 49, _e59.lobe[0]);
-        uplift_simd::tape::put(s, tg, 50, _e59.lobe[1]);
-        uplift_simd::tape::put(s, tg, 51, _e59.lobe[2]);
-        uplift_simd::tape::put(s, tg, 52, _e59.lobe[3]);
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
-        _done = _done | _m2;
-    }
-    if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = _e60.eq(s.splat_i(2i32));
-    uplift_simd::tape::put_m(s, tg, 53, _e62);
-    let _m3 = _e62;
-    if _m3.any() {
-        let _e63 = mx_luminance_rgb(s, _e53);
-        uplift_simd::tape::put(s, tg, 54, _e63);
-        let _e64 = mx_ggx_lobe_sample_g58(s, cl_7, _e16, _e51, _e63, &mut tg[77 * S::LANES..]);
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
-        _done = _done | _m3;
-    }
-    if _done.all() { return _ret; }
-    let _e66 = _e16.v;
-    uplift_simd::tape::put(s, tg, 55, _e66[0]);
-    uplift_simd::tape::put(s, tg, 56, _e66[1]);
-    uplift_simd::tape::put(s, tg, 57, _e66[2]);
-    let _e68 = _e16.v;
-    uplift_simd::tape::put(s, tg, 58, _e68[0]);
-    uplift_simd::tape::put(s, tg, 59, _e68[1]);
-    uplift_simd::tape::put(s, tg, 60, _e68[2]);
-    let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_g29(s, s.splat(0.0), _e18, &mut tg[84 * S::LANES..]) } else { s.splat(0.0) };
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_g61(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[86 * S::LANES..]) } else { [s.splat(0.0); 3] };
-    let _e74 = _e16.v;
-    uplift_simd::tape::put(s, tg, 61, _e74[0]);
-    uplift_simd::tape::put(s, tg, 62, _e74[1]);
-    uplift_simd::tape::put(s, tg, 63, _e74[2]);
-    let _e75 = _e16.a;
-    uplift_simd::tape::put(s, tg, 64, _e75[0]);
-    uplift_simd::tape::put(s, tg, 65, _e75[1]);
-    let _e76 = mx_ggx_reflection_g50(s, _e74, [s.splat(0.0); 3], [s.splat(0.0); 3], _e75, &mut tg[125 * S::LANES..]);
-    let _e81 = cl_7.context;
-    let _e83 = _e81.eq(s.splat_i(0i32));
-    uplift_simd::tape::put_m(s, tg, 66, _e83);
-    let _m4 = _e83;
+    let _e45 = f1_;
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e48 = mx_fresnel_average(s, _e45, _e47);
+    let _e49 = mx_ggx_energy_compensation(s, _e43, _e44, _e48);
+    uplift_simd::tape::put(s, tg, 36, _e49[0]);
+    uplift_simd::tape::put(s, tg, 37, _e49[1]);
+    uplift_simd::tape::put(s, tg, 38, _e49[2]);
+    let _e50 = e_3;
+    let _e51 = uplift_simd::vector::mul::<S, 3>(_e49, _e50);
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e54 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e51);
+    let _e55 = uplift_simd::vector::sub::<S, 3>(_e53, _e54);
+    uplift_simd::tape::put(s, tg, 39, _e55[0]);
+    uplift_simd::tape::put(s, tg, 40, _e55[1]);
+    uplift_simd::tape::put(s, tg, 41, _e55[2]);
+    let _e56 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
+    let _e57 = uplift_simd::vector::mul::<S, 3>(_e56, _e51);
+    let _e58 = cl_7.context;
+    let _e60 = _e58.eq(s.splat_i(1i32));
+    uplift_simd::tape::put_m(s, tg, 42, _e60);
+    let _m4 = _e60;
     if _m4.any() {
-        let _e84 = mx_bsdf_empty(s);
-        let _e85 = _e84.lobe;
-        uplift_simd::tape::put(s, tg, 67, _e85[0]);
-        uplift_simd::tape::put(s, tg, 68, _e85[1]);
-        uplift_simd::tape::put(s, tg, 69, _e85[2]);
-        uplift_simd::tape::put(s, tg, 70, _e85[3]);
-        let _e86 = BSDF { response: [s.splat(0.0); 3], throughput: _e51, lobe: _e85 };
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
+        let _e61 = mx_bsdf_empty(s);
+        let _e62 = _e61.lobe;
+        let _e63 = BSDF { response: _e57, throughput: _e55, lobe: _e62 };
+        uplift_simd::tape::put(s, tg, 43, _e63.response[0]);
+        uplift_simd::tape::put(s, tg, 44, _e63.response[1]);
+        uplift_simd::tape::put(s, tg, 45, _e63.response[2]);
+        uplift_simd::tape::put(s, tg, 46, _e63.throughput[0]);
+        uplift_simd::tape::put(s, tg, 47, _e63.throughput[1]);
+        uplift_simd::tape::put(s, tg, 48, _e63.throughput[2]);
+        uplift_simd::tape::put(s, tg, 49, _e63.lobe[0]);
+        uplift_simd::tape::put(s, tg, 50, _e63.lobe[1]);
+        uplift_simd::tape::put(s, tg, 51, _e63.lobe[2]);
+        uplift_simd::tape::put(s, tg, 52, _e63.lobe[3]);
+        _ret = BSDF::<S>::select((_m4 & !_done), _e63, _ret);
         _done = _done | _m4;
     }
     if _done.all() { return _ret; }
-    let _e87 = mx_luminance_rgb(s, _e53);
-    uplift_simd::tape::put(s, tg, 71, _e87);
-    let _e88 = _e16.v;
-    uplift_simd::tape::put(s, tg, 72, _e88[0]);
-    uplift_simd::tape::put(s, tg, 73, _e88[1]);
-    uplift_simd::tape::put(s, tg, 74, _e88[2]);
-    let _e89 = _e16.a;
-    uplift_simd::tape::put(s, tg, 75, _e89[0]);
-    uplift_simd::tape::put(s, tg, 76, _e89[1]);
-    let _e90 = mx_ggx_pdf_g53(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[130 * S::LANES..]);
-    let _e91 = mx_lobe_with_pdf_g26(s, [s.splat(0.0); 3], _e51, _e87, _e90, &mut tg[132 * S::LANES..]);
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e64 = cl_7.context;
+    let _e66 = _e64.eq(s.splat_i(2i32));
+    uplift_simd::tape::put_m(s, tg, 53, _e66);
+    let _m5 = _e66;
+    if _m5.any() {
+        let _e67 = mx_luminance_rgb(s, _e57);
+        uplift_simd::tape::put(s, tg, 54, _e67);
+        let _e68 = mx_ggx_lobe_sample_g58(s, cl_7, _e16, _e55, _e67, &mut tg[77 * S::LANES..]);
+        _ret = BSDF::<S>::select((_m5 & !_done), _e68, _ret);
+        _done = _done | _m5;
+    }
+    if _done.all() { return _ret; }
+    let _e70 = _e16.v;
+    uplift_simd::tape::put(s, tg, 55, _e70[0]);
+    uplift_simd::tape::put(s, tg, 56, _e70[1]);
+    uplift_simd::tape::put(s, tg, 57, _e70[2]);
+    let _e72 = _e16.v;
+    uplift_simd::tape::put(s, tg, 58, _e72[0]);
+    uplift_simd::tape::put(s, tg, 59, _e72[1]);
+    uplift_simd::tape::put(s, tg, 60, _e72[2]);
+    let _e75 = [s.splat(0.0f32); 3];
+    let _m6 = _e23;
+    if _m6.any() {
+        let _e77 = mx_fresnel_airy_conductor_g61(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[84 * S::LANES..]);
+    }
+    let _m7 = !_e23;
+    if _m7.any() {
+        let _e78 = mx_fresnel_dielectric_g35(s, s.splat(0.0), _e18, &mut tg[123 * S::LANES..]);
+    }
+    let _e80 = _e16.v;
+    uplift_simd::tape::put(s, tg, 61, _e80[0]);
+    uplift_simd::tape::put(s, tg, 62, _e80[1]);
+    uplift_simd::tape::put(s, tg, 63, _e80[2]);
+    let _e81 = _e16.a;
+    uplift_simd::tape::put(s, tg, 64, _e81[0]);
+    uplift_simd::tape::put(s, tg, 65, _e81[1]);
+    let _e82 = mx_ggx_reflection_g50(s, _e80, [s.splat(0.0); 3], [s.splat(0.0); 3], _e81, &mut tg[125 * S::LANES..]);
+    let _e88 = cl_7.context;
+    let _e90 = _e88.eq(s.splat_i(0i32));
+    uplift_simd::tape::put_m(s, tg, 66, _e90);
+    let _m8 = _e90;
+    if _m8.any() {
+        let _e91 = mx_bsdf_empty(s);
+        let _e92 = _e91.lobe;
+        uplift_simd::tape::put(s, tg, 67, _e92[0]);
+        uplift_simd::tape::put(s, tg, 68, _e92[1]);
+        uplift_simd::tape::put(s, tg, 69, _e92[2]);
+        uplift_simd::tape::put(s, tg, 70, _e92[3]);
+        let _e93 = BSDF { response: [s.splat(0.0); 3], throughput: _e55, lobe: _e92 };
+        _ret = BSDF::<S>::select((_m8 & !_done), _e93, _ret);
+        _done = _done | _m8;
+    }
+    if _done.all() { return _ret; }
+    let _e94 = mx_luminance_rgb(s, _e57);
+    uplift_simd::tape::put(s, tg, 71, _e94);
+    let _e95 = _e16.v;
+    uplift_simd::tape::put(s, tg, 72, _e95[0]);
+    uplift_simd::tape::put(s, tg, 73, _e95[1]);
+    uplift_simd::tape::put(s, tg, 74, _e95[2]);
+    let _e96 = _e16.a;
+    uplift_simd::tape::put(s, tg, 75, _e96[0]);
+    uplift_simd::tape::put(s, tg, 76, _e96[1]);
+    let _e97 = mx_ggx_pdf_g53(s, _e95, [s.splat(0.0); 3], _e96, &mut tg[130 * S::LANES..]);
+    let _e98 = mx_lobe_with_pdf_g26(s, [s.splat(0.0); 3], _e55, _e94, _e97, &mut tg[132 * S::LANES..]);
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]
@@ -7711,6 +7886,9 @@ pub fn mx_sheen_bsdf_g64<S: Simd>(s: S, cl_3: mx_closure<S>, weight: S::F, color
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf_p65<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tp: uplift_simd::tape::TapeRow<'_>) -> BSDF<S> {
     let tp = tp.fit::<S>(133);
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e12 = tp.f(s, 0);
@@ -7729,67 +7907,80 @@ pub fn mx_dielectric_bsdf_p65<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     let _e23 = tp.m(s, 32);
     let _e24 = [tp.f(s, 33), tp.f(s, 34), tp.f(s, 35)];
     let _e26 = [s.splat(0.0f32); 3];
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e38 = [tp.f(s, 36), tp.f(s, 37), tp.f(s, 38)];
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e51 = [tp.f(s, 39), tp.f(s, 40), tp.f(s, 41)];
-    let _e54 = cl_7.context;
-    let _e56 = tp.m(s, 42);
-    let _m2 = _e56;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e49 = [tp.f(s, 36), tp.f(s, 37), tp.f(s, 38)];
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e55 = [tp.f(s, 39), tp.f(s, 40), tp.f(s, 41)];
+    let _e58 = cl_7.context;
+    let _e60 = tp.m(s, 42);
+    let _m2 = _e60;
     if _m2.any() {
-        let _e59 = BSDF { response: [tp.f(s, 43), tp.f(s, 44), tp.f(s, 45)], throughput: [tp.f(s, 46), tp.f(s, 47), tp.f(s, 48)], lobe: [tp.f(s, 49), tp.f(s, 50), tp.f(s, 51), tp.f(s, 52)] };
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
+        let _e63 = BSDF { response: [tp.f(s, 43), tp.f(s, 44), tp.f(s, 45)], throughput: [tp.f(s, 46), tp.f(s, 47), tp.f(s, 48)], lobe: [tp.f(s, 49), tp.f(s, 50), tp.f(s, 51), tp.f(s, 52)] };
+        _ret = BSDF::<S>::select((_m2 & !_done), _e63, _ret);
         _done = _done | _m2;
     }
     if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = tp.m(s, 53);
-    let _m3 = _e62;
+    let _e64 = cl_7.context;
+    let _e66 = tp.m(s, 53);
+    let _m3 = _e66;
     if _m3.any() {
-        let _e63 = tp.f(s, 54);
-        let _e64 = mx_ggx_lobe_sample_p58(s, cl_7, _e16, _e51, _e63, tp.at::<S>(77));
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
+        let _e67 = tp.f(s, 54);
+        let _e68 = mx_ggx_lobe_sample_p58(s, cl_7, _e16, _e55, _e67, tp.at::<S>(77));
+        _ret = BSDF::<S>::select((_m3 & !_done), _e68, _ret);
         _done = _done | _m3;
     }
     if _done.all() { return _ret; }
-    let _e65 = mx_ggx_light(s, cl_7, _e16);
-    let _e66 = [tp.f(s, 55), tp.f(s, 56), tp.f(s, 57)];
-    let _e67 = mx_half_vector(s, _e66, _e65);
-    let _e68 = [tp.f(s, 58), tp.f(s, 59), tp.f(s, 60)];
-    let _e69 = uplift_simd::vector::dot::<S, 3>(_e68, _e67);
-    let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_p29(s, _e69, _e18, tp.at::<S>(84)) } else { s.splat(0.0) };
-    let _e71 = [_e70; 3];
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_p61(s, _e69, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(86)) } else { [s.splat(0.0); 3] };
-    let _e73 = uplift_simd::vector::select_all::<S, 3>(_e23, _e72, _e71);
-    let _e74 = [tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)];
-    let _e75 = [tp.f(s, 64), tp.f(s, 65)];
-    let _e76 = mx_ggx_reflection_p50(s, _e74, _e65, _e67, _e75, tp.at::<S>(125));
-    let _e77 = (_e12 * _e76);
-    let _e78 = uplift_simd::vector::mul::<S, 3>([_e77; 3], _e73);
-    let _e79 = uplift_simd::vector::mul::<S, 3>(_e78, _e38);
-    let _e80 = uplift_simd::vector::mul::<S, 3>(_e79, _e21);
-    let _e81 = cl_7.context;
-    let _e83 = tp.m(s, 66);
-    let _m4 = _e83;
+    let _e69 = mx_ggx_light(s, cl_7, _e16);
+    let _e70 = [tp.f(s, 55), tp.f(s, 56), tp.f(s, 57)];
+    let _e71 = mx_half_vector(s, _e70, _e69);
+    let _e72 = [tp.f(s, 58), tp.f(s, 59), tp.f(s, 60)];
+    let _e73 = uplift_simd::vector::dot::<S, 3>(_e72, _e71);
+    let _e75 = [s.splat(0.0f32); 3];
+    let _m4 = _e23;
     if _m4.any() {
-        let _e85 = [tp.f(s, 67), tp.f(s, 68), tp.f(s, 69), tp.f(s, 70)];
-        let _e86 = BSDF { response: _e80, throughput: _e51, lobe: _e85 };
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
-        _done = _done | _m4;
+        let _e77 = mx_fresnel_airy_conductor_p61(s, _e73, _e24, _e26, thinfilm_thickness, thinfilm_ior, tp.at::<S>(84));
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m4, _e77, f_3);
+    }
+    let _m5 = !_e23;
+    if _m5.any() {
+        let _e78 = mx_fresnel_dielectric_p35(s, _e73, _e18, tp.at::<S>(123));
+        let _e79 = [_e78; 3];
+        f_3 = uplift_simd::vector::select_all::<S, 3>(_m5, _e79, f_3);
+    }
+    let _e80 = [tp.f(s, 61), tp.f(s, 62), tp.f(s, 63)];
+    let _e81 = [tp.f(s, 64), tp.f(s, 65)];
+    let _e82 = mx_ggx_reflection_p50(s, _e80, _e69, _e71, _e81, tp.at::<S>(125));
+    let _e83 = (_e12 * _e82);
+    let _e84 = f_3;
+    let _e85 = uplift_simd::vector::mul::<S, 3>([_e83; 3], _e84);
+    let _e86 = uplift_simd::vector::mul::<S, 3>(_e85, _e49);
+    let _e87 = uplift_simd::vector::mul::<S, 3>(_e86, _e21);
+    let _e88 = cl_7.context;
+    let _e90 = tp.m(s, 66);
+    let _m6 = _e90;
+    if _m6.any() {
+        let _e92 = [tp.f(s, 67), tp.f(s, 68), tp.f(s, 69), tp.f(s, 70)];
+        let _e93 = BSDF { response: _e87, throughput: _e55, lobe: _e92 };
+        _ret = BSDF::<S>::select((_m6 & !_done), _e93, _ret);
+        _done = _done | _m6;
     }
     if _done.all() { return _ret; }
-    let _e87 = tp.f(s, 71);
-    let _e88 = [tp.f(s, 72), tp.f(s, 73), tp.f(s, 74)];
-    let _e89 = [tp.f(s, 75), tp.f(s, 76)];
-    let _e90 = mx_ggx_pdf_p53(s, _e88, _e67, _e89, tp.at::<S>(130));
-    let _e91 = mx_lobe_with_pdf_p26(s, _e80, _e51, _e87, _e90, tp.at::<S>(132));
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e94 = tp.f(s, 71);
+    let _e95 = [tp.f(s, 72), tp.f(s, 73), tp.f(s, 74)];
+    let _e96 = [tp.f(s, 75), tp.f(s, 76)];
+    let _e97 = mx_ggx_pdf_p53(s, _e95, _e71, _e96, tp.at::<S>(130));
+    let _e98 = mx_lobe_with_pdf_p26(s, _e87, _e55, _e94, _e97, tp.at::<S>(132));
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]
 #[allow(unused_variables, unused_mut, unused_parens, unused_assignments, clippy::all)]
 pub fn mx_dielectric_bsdf_g65<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F, tint: [S::F; 3], ior: S::F, roughness_4: [S::F; 2], retroreflective_1: S::M, thinfilm_thickness: S::F, thinfilm_ior: S::F, normal_3: [S::F; 3], tangent_2: [S::F; 3], distribution: S::I, scatter_mode: S::I, tg: &mut [f32]) -> BSDF<S> {
     assert!(tg.len() >= 133 * S::LANES, "the tape is shorter than the pass's slots");
+    let mut f1_: [S::F; 3] = [s.splat(0.0); 3];
+    let mut e_3: [S::F; 3] = [s.splat(0.0f32); 3];
+    let mut f_3: [S::F; 3] = [s.splat(0.0f32); 3];
     let mut _ret: BSDF<S> = BSDF { response: [s.splat(0.0); 3], throughput: [s.splat(0.0); 3], lobe: [s.splat(0.0); 4] };
     let mut _done = s.first_lanes(0);
     let _e12 = mx_lobe_weight(s, weight_1);
@@ -7844,115 +8035,133 @@ pub fn mx_dielectric_bsdf_g65<S: Simd>(s: S, cl_7: mx_closure<S>, weight_1: S::F
     uplift_simd::tape::put(s, tg, 34, _e24[1]);
     uplift_simd::tape::put(s, tg, 35, _e24[2]);
     let _e26 = [s.splat(0.0f32); 3];
-    let _e28 = if (!(_e23)).any() { mx_fresnel_dielectric(s, s.splat(1.0f32), _e18) } else { s.splat(0.0) };
+    let _e28 = mx_fresnel_dielectric(s, s.splat(1.0f32), _e18);
     let _e29 = [_e28; 3];
-    let _e31 = if (_e23).any() { mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior) } else { [s.splat(0.0); 3] };
-    let _e32 = uplift_simd::vector::select_all::<S, 3>(_e23, _e31, _e29);
-    let _e33 = _e16.mu;
-    let _e34 = _e16.abar;
-    let _e36 = [s.splat(1.0f32); 3];
-    let _e37 = mx_fresnel_average(s, _e32, _e36);
-    let _e38 = mx_ggx_energy_compensation(s, _e33, _e34, _e37);
-    uplift_simd::tape::put(s, tg, 36, _e38[0]);
-    uplift_simd::tape::put(s, tg, 37, _e38[1]);
-    uplift_simd::tape::put(s, tg, 38, _e38[2]);
-    let _e39 = _e16.mu;
-    let _e40 = _e16.abar;
-    let _e41 = if (!(_e23)).any() { s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18)) } else { s.splat(0.0) };
-    let _e42 = [_e41; 3];
+    f1_ = _e29;
+    let _e32 = [s.splat(0.0f32); 3];
+    let _m2 = _e23;
+    if _m2.any() {
+        let _e35 = mx_fresnel_airy_conductor(s, s.splat(1.0f32), _e24, _e26, thinfilm_thickness, thinfilm_ior);
+        f1_ = uplift_simd::vector::select_all::<S, 3>(_m2, _e35, f1_);
+        let _e36 = _e16.mu;
+        let _e37 = _e16.abar;
+        let _e38 = s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e36, _e37, _e24, _e26, thinfilm_thickness, thinfilm_ior));
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m2, _e38, e_3);
+    }
+    let _m3 = !_e23;
+    if _m3.any() {
+        let _e39 = _e16.mu;
+        let _e40 = _e16.abar;
+        let _e41 = s.outline(#[inline(always)] || mx_albedo_ggx_dielectric(s, _e39, _e40, _e18));
+        let _e42 = [_e41; 3];
+        e_3 = uplift_simd::vector::select_all::<S, 3>(_m3, _e42, e_3);
+    }
     let _e43 = _e16.mu;
     let _e44 = _e16.abar;
-    let _e45 = if (_e23).any() { s.outline(#[inline(always)] || mx_albedo_ggx_airy_conductor(s, _e43, _e44, _e24, _e26, thinfilm_thickness, thinfilm_ior)) } else { [s.splat(0.0); 3] };
-    let _e46 = uplift_simd::vector::select_all::<S, 3>(_e23, _e45, _e42);
-    let _e47 = uplift_simd::vector::mul::<S, 3>(_e38, _e46);
-    let _e49 = [s.splat(1.0f32); 3];
-    let _e50 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e47);
-    let _e51 = uplift_simd::vector::sub::<S, 3>(_e49, _e50);
-    uplift_simd::tape::put(s, tg, 39, _e51[0]);
-    uplift_simd::tape::put(s, tg, 40, _e51[1]);
-    uplift_simd::tape::put(s, tg, 41, _e51[2]);
-    let _e52 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
-    let _e53 = uplift_simd::vector::mul::<S, 3>(_e52, _e47);
-    let _e54 = cl_7.context;
-    let _e56 = _e54.eq(s.splat_i(1i32));
-    uplift_simd::tape::put_m(s, tg, 42, _e56);
-    let _m2 = _e56;
-    if _m2.any() {
-        let _e57 = mx_bsdf_empty(s);
-        let _e58 = _e57.lobe;
-        let _e59 = BSDF { response: _e53, throughput: _e51, lobe: _e58 };
-        uplift_simd::tape::put(s, tg, 43, _e59.response[0]);
-        uplift_simd::tape::put(s, tg, 44, _e59.response[1]);
-        uplift_simd::tape::put(s, tg, 45, _e59.response[2]);
-        uplift_simd::tape::put(s, tg, 46, _e59.throughput[0]);
-        uplift_simd::tape::put(s, tg, 47, _e59.throughput[1]);
-        uplift_simd::tape::put(s, tg, 48, _e59.throughput[2]);
-        uplift_simd::tape::put(s, tg, 49, _e59.lobe[0]);
-        uplift_simd::tape::put(s, tg, 50, _e59.lobe[1]);
-        uplift_simd::tape::put(s, tg, 51, _e59.lobe[2]);
-        uplift_simd::tape::put(s, tg, 52, _e59.lobe[3]);
-        _ret = BSDF::<S>::select((_m2 & !_done), _e59, _ret);
-        _done = _done | _m2;
-    }
-    if _done.all() { return _ret; }
-    let _e60 = cl_7.context;
-    let _e62 = _e60.eq(s.splat_i(2i32));
-    uplift_simd::tape::put_m(s, tg, 53, _e62);
-    let _m3 = _e62;
-    if _m3.any() {
-        let _e63 = mx_luminance_rgb(s, _e53);
-        uplift_simd::tape::put(s, tg, 54, _e63);
-        let _e64 = mx_ggx_lobe_sample_g58(s, cl_7, _e16, _e51, _e63, &mut tg[77 * S::LANES..]);
-        _ret = BSDF::<S>::select((_m3 & !_done), _e64, _ret);
-        _done = _done | _m3;
-    }
-    if _done.all() { return _ret; }
-    let _e66 = _e16.v;
-    uplift_simd::tape::put(s, tg, 55, _e66[0]);
-    uplift_simd::tape::put(s, tg, 56, _e66[1]);
-    uplift_simd::tape::put(s, tg, 57, _e66[2]);
-    let _e68 = _e16.v;
-    uplift_simd::tape::put(s, tg, 58, _e68[0]);
-    uplift_simd::tape::put(s, tg, 59, _e68[1]);
-    uplift_simd::tape::put(s, tg, 60, _e68[2]);
-    let _e70 = if (!(_e23)).any() { mx_fresnel_dielectric_g29(s, s.splat(0.0), _e18, &mut tg[84 * S::LANES..]) } else { s.splat(0.0) };
-    let _e72 = if (_e23).any() { mx_fresnel_airy_conductor_g61(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[86 * S::LANES..]) } else { [s.splat(0.0); 3] };
-    let _e74 = _e16.v;
-    uplift_simd::tape::put(s, tg, 61, _e74[0]);
-    uplift_simd::tape::put(s, tg, 62, _e74[1]);
-    uplift_simd::tape::put(s, tg, 63, _e74[2]);
-    let _e75 = _e16.a;
-    uplift_simd::tape::put(s, tg, 64, _e75[0]);
-    uplift_simd::tape::put(s, tg, 65, _e75[1]);
-    let _e76 = mx_ggx_reflection_g50(s, _e74, [s.splat(0.0); 3], [s.splat(0.0); 3], _e75, &mut tg[125 * S::LANES..]);
-    let _e81 = cl_7.context;
-    let _e83 = _e81.eq(s.splat_i(0i32));
-    uplift_simd::tape::put_m(s, tg, 66, _e83);
-    let _m4 = _e83;
+    let _e45 = f1_;
+    let _e47 = [s.splat(1.0f32); 3];
+    let _e48 = mx_fresnel_average(s, _e45, _e47);
+    let _e49 = mx_ggx_energy_compensation(s, _e43, _e44, _e48);
+    uplift_simd::tape::put(s, tg, 36, _e49[0]);
+    uplift_simd::tape::put(s, tg, 37, _e49[1]);
+    uplift_simd::tape::put(s, tg, 38, _e49[2]);
+    let _e50 = e_3;
+    let _e51 = uplift_simd::vector::mul::<S, 3>(_e49, _e50);
+    let _e53 = [s.splat(1.0f32); 3];
+    let _e54 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e51);
+    let _e55 = uplift_simd::vector::sub::<S, 3>(_e53, _e54);
+    uplift_simd::tape::put(s, tg, 39, _e55[0]);
+    uplift_simd::tape::put(s, tg, 40, _e55[1]);
+    uplift_simd::tape::put(s, tg, 41, _e55[2]);
+    let _e56 = uplift_simd::vector::mul::<S, 3>([_e12; 3], _e21);
+    let _e57 = uplift_simd::vector::mul::<S, 3>(_e56, _e51);
+    let _e58 = cl_7.context;
+    let _e60 = _e58.eq(s.splat_i(1i32));
+    uplift_simd::tape::put_m(s, tg, 42, _e60);
+    let _m4 = _e60;
     if _m4.any() {
-        let _e84 = mx_bsdf_empty(s);
-        let _e85 = _e84.lobe;
-        uplift_simd::tape::put(s, tg, 67, _e85[0]);
-        uplift_simd::tape::put(s, tg, 68, _e85[1]);
-        uplift_simd::tape::put(s, tg, 69, _e85[2]);
-        uplift_simd::tape::put(s, tg, 70, _e85[3]);
-        let _e86 = BSDF { response: [s.splat(0.0); 3], throughput: _e51, lobe: _e85 };
-        _ret = BSDF::<S>::select((_m4 & !_done), _e86, _ret);
+        let _e61 = mx_bsdf_empty(s);
+        let _e62 = _e61.lobe;
+        let _e63 = BSDF { response: _e57, throughput: _e55, lobe: _e62 };
+        uplift_simd::tape::put(s, tg, 43, _e63.response[0]);
+        uplift_simd::tape::put(s, tg, 44, _e63.response[1]);
+        uplift_simd::tape::put(s, tg, 45, _e63.response[2]);
+        uplift_simd::tape::put(s, tg, 46, _e63.throughput[0]);
+        uplift_simd::tape::put(s, tg, 47, _e63.throughput[1]);
+        uplift_simd::tape::put(s, tg, 48, _e63.throughput[2]);
+        uplift_simd::tape::put(s, tg, 49, _e63.lobe[0]);
+        uplift_simd::tape::put(s, tg, 50, _e63.lobe[1]);
+        uplift_simd::tape::put(s, tg, 51, _e63.lobe[2]);
+        uplift_simd::tape::put(s, tg, 52, _e63.lobe[3]);
+        _ret = BSDF::<S>::select((_m4 & !_done), _e63, _ret);
         _done = _done | _m4;
     }
     if _done.all() { return _ret; }
-    let _e87 = mx_luminance_rgb(s, _e53);
-    uplift_simd::tape::put(s, tg, 71, _e87);
-    let _e88 = _e16.v;
-    uplift_simd::tape::put(s, tg, 72, _e88[0]);
-    uplift_simd::tape::put(s, tg, 73, _e88[1]);
-    uplift_simd::tape::put(s, tg, 74, _e88[2]);
-    let _e89 = _e16.a;
-    uplift_simd::tape::put(s, tg, 75, _e89[0]);
-    uplift_simd::tape::put(s, tg, 76, _e89[1]);
-    let _e90 = mx_ggx_pdf_g53(s, _e88, [s.splat(0.0); 3], _e89, &mut tg[130 * S::LANES..]);
-    let _e91 = mx_lobe_with_pdf_g26(s, [s.splat(0.0); 3], _e51, _e87, _e90, &mut tg[132 * S::LANES..]);
-    return BSDF::<S>::select((!_done), _e91, _ret);
+    let _e64 = cl_7.context;
+    let _e66 = _e64.eq(s.splat_i(2i32));
+    uplift_simd::tape::put_m(s, tg, 53, _e66);
+    let _m5 = _e66;
+    if _m5.any() {
+        let _e67 = mx_luminance_rgb(s, _e57);
+        uplift_simd::tape::put(s, tg, 54, _e67);
+        let _e68 = mx_ggx_lobe_sample_g58(s, cl_7, _e16, _e55, _e67, &mut tg[77 * S::LANES..]);
+        _ret = BSDF::<S>::select((_m5 & !_done), _e68, _ret);
+        _done = _done | _m5;
+    }
+    if _done.all() { return _ret; }
+    let _e70 = _e16.v;
+    uplift_simd::tape::put(s, tg, 55, _e70[0]);
+    uplift_simd::tape::put(s, tg, 56, _e70[1]);
+    uplift_simd::tape::put(s, tg, 57, _e70[2]);
+    let _e72 = _e16.v;
+    uplift_simd::tape::put(s, tg, 58, _e72[0]);
+    uplift_simd::tape::put(s, tg, 59, _e72[1]);
+    uplift_simd::tape::put(s, tg, 60, _e72[2]);
+    let _e75 = [s.splat(0.0f32); 3];
+    let _m6 = _e23;
+    if _m6.any() {
+        let _e77 = mx_fresnel_airy_conductor_g61(s, s.splat(0.0), _e24, _e26, thinfilm_thickness, thinfilm_ior, &mut tg[84 * S::LANES..]);
+    }
+    let _m7 = !_e23;
+    if _m7.any() {
+        let _e78 = mx_fresnel_dielectric_g35(s, s.splat(0.0), _e18, &mut tg[123 * S::LANES..]);
+    }
+    let _e80 = _e16.v;
+    uplift_simd::tape::put(s, tg, 61, _e80[0]);
+    uplift_simd::tape::put(s, tg, 62, _e80[1]);
+    uplift_simd::tape::put(s, tg, 63, _e80[2]);
+    let _e81 = _e16.a;
+    uplift_simd::tape::put(s, tg, 64, _e81[0]);
+    uplift_simd::tape::put(s, tg, 65, _e81[1]);
+    let _e82 = mx_ggx_reflection_g50(s, _e80, [s.splat(0.0); 3], [s.splat(0.0); 3], _e81, &mut tg[125 * S::LANES..]);
+    let _e88 = cl_7.context;
+    let _e90 = _e88.eq(s.splat_i(0i32));
+    uplift_simd::tape::put_m(s, tg, 66, _e90);
+    let _m8 = _e90;
+    if _m8.any() {
+        let _e91 = mx_bsdf_empty(s);
+        let _e92 = _e91.lobe;
+        uplift_simd::tape::put(s, tg, 67, _e92[0]);
+        uplift_simd::tape::put(s, tg, 68, _e92[1]);
+        uplift_simd::tape::put(s, tg, 69, _e92[2]);
+        uplift_simd::tape::put(s, tg, 70, _e92[3]);
+        let _e93 = BSDF { response: [s.splat(0.0); 3], throughput: _e55, lobe: _e92 };
+        _ret = BSDF::<S>::select((_m8 & !_done), _e93, _ret);
+        _done = _done | _m8;
+    }
+    if _done.all() { return _ret; }
+    let _e94 = mx_luminance_rgb(s, _e57);
+    uplift_simd::tape::put(s, tg, 71, _e94);
+    let _e95 = _e16.v;
+    uplift_simd::tape::put(s, tg, 72, _e95[0]);
+    uplift_simd::tape::put(s, tg, 73, _e95[1]);
+    uplift_simd::tape::put(s, tg, 74, _e95[2]);
+    let _e96 = _e16.a;
+    uplift_simd::tape::put(s, tg, 75, _e96[0]);
+    uplift_simd::tape::put(s, tg, 76, _e96[1]);
+    let _e97 = mx_ggx_pdf_g53(s, _e95, [s.splat(0.0); 3], _e96, &mut tg[130 * S::LANES..]);
+    let _e98 = mx_lobe_with_pdf_g26(s, [s.splat(0.0); 3], _e55, _e94, _e97, &mut tg[132 * S::LANES..]);
+    return BSDF::<S>::select((!_done), _e98, _ret);
 }
 
 #[inline(always)]

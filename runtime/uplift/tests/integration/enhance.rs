@@ -41,7 +41,7 @@ fn temp_dir(name: &str) -> PathBuf {
 use crate::common::cli::repo;
 
 /// Runs MaterialX's validator on `path`; `None` when it is not available.
-fn validate(path: &Path) -> Option<Result<(), String>> {
+pub(crate) fn validate(path: &Path) -> Option<Result<(), String>> {
     let tool = std::env::var_os("UPLIFT_MTLX_VALIDATOR").map(PathBuf::from).filter(|p| p.is_file())?;
     let out = Command::new("python3").arg(&tool).arg(path).output().ok()?;
     let text = String::from_utf8_lossy(&out.stdout).to_string();
@@ -51,7 +51,7 @@ fn validate(path: &Path) -> Option<Result<(), String>> {
     Some(if out.status.success() && text.starts_with("VALID") { Ok(()) } else { Err(format!("{text}{}", String::from_utf8_lossy(&out.stderr))) })
 }
 
-fn say_validator_skipped() {
+pub(crate) fn say_validator_skipped() {
     uplift_base::test_env::skip("MaterialX validation", "set UPLIFT_MTLX_VALIDATOR to shared/tools/mtlx_validate.py with python3 and the `materialx` package (.ci/run does)");
 }
 

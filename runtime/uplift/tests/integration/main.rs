@@ -36,4 +36,5 @@ mod numeric_texture;
 mod random_graphs;
 mod render;
 mod specialisation;
+mod stack_extension;
 mod uplift_stack;
