@@ -19,6 +19,7 @@ mod demo_report;
 mod enhance;
 mod glints;
 mod grazing_views;
+mod iridescence;
 mod kill_resume;
 mod layering;
 mod materials;
