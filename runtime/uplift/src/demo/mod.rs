@@ -24,7 +24,7 @@ use uplift_render::shading::{Model, Shading};
 use uplift_render::surface::SurfaceTextures;
 use uplift_base::atomic_write::write_atomically;
 use indicatif::{ProgressBar, ProgressStyle};
-use report::{parse_history, render_html, GlintMaterial, Report, ReportMaterial};
+use report::{parse_history, render_html, TwinMaterial, Report, ReportMaterial};
 use std::path::{Path, PathBuf};
 
 #[derive(Clone, Debug)]
@@ -196,7 +196,43 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         let name = format!("{}_glints", set[index].material.name);
         let (eval, images) = evaluate_material(&materials_dir.join(&name), &reference, &neural, &env, &ro, 1.0)?;
         write_eval_images(&img_dir, &name, &images, (ro.width, ro.height))?;
-        glint_rows.push(GlintMaterial {
+        glint_rows.push(TwinMaterial {
+            name: name.clone(),
+            flip_object: eval.flip_object,
+            reference_image: format!("{name}_reference.png"),
+            neural_image: format!("{name}_neural.png"),
+            flip_image: format!("{name}_flip.png"),
+        });
+    }
+
+    // 4c. An iridescent clearcoat: the first material of each coated Type (2, 3, 5) again with
+    // the iridescence option, fitted on its own (the film is two more stack parameters).
+    let iridescence = uplift_enhance::rule_option::read_option("iridescence", &stack)?;
+    let mut iridescent = Vec::new();
+    for (index, m) in set.iter().enumerate().filter(|(_, m)| [2, 3, 5].contains(&m.kind.index())) {
+        if iridescent.iter().any(|(_, kind, _): &(usize, usize, PathBuf)| *kind == m.kind.index()) {
+            continue;
+        }
+        let twin = materials_dir.join(format!("{}_iridescent", m.material.name));
+        if !MaterialFolder::is_finished(&twin) {
+            let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(index as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: false, stack: stack.clone(), rule_options: vec![iridescence.clone()] };
+            enhance(&m.material, &options, &twin, &engine)?;
+        }
+        let folder = MaterialFolder::open(&twin)?;
+        if !folder.has_fit() {
+            let ParamsImage { width: w, height: h, params, diffuse, .. } = folder.read_params(&stack)?;
+            let r = fit_material(&model, &generator, &params, diffuse.as_deref(), w, h, &fit_options, false)?;
+            folder.write_latents(&r.latent_image())?;
+            folder.write_fit(&r.record(&o.decoder, &fit_options))?;
+        }
+        iridescent.push((index, m.kind.index(), twin));
+    }
+    let mut iridescent_rows = Vec::new();
+    for (_, _, twin) in &iridescent {
+        let name = twin.file_name().unwrap_or_default().to_string_lossy().to_string();
+        let (eval, images) = evaluate_material(twin, &reference, &neural, &env, &ro, 1.0)?;
+        write_eval_images(&img_dir, &name, &images, (ro.width, ro.height))?;
+        iridescent_rows.push(TwinMaterial {
             name: name.clone(),
             flip_object: eval.flip_object,
             reference_image: format!("{name}_reference.png"),
@@ -220,6 +256,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
     let report = Report {
         materials: rows,
         glints: glint_rows,
+        iridescent: iridescent_rows,
         table,
         history,
         decoder: weights.metadata.get("command").cloned().unwrap_or_else(|| o.decoder.display().to_string()),

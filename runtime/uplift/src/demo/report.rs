@@ -27,7 +27,10 @@ pub struct Report {
     pub materials: Vec<ReportMaterial>,
     /// Materials shown again with glints (`uplift enhance --glints`, paper §5.3), on the same
     /// fitted latents.
-    pub glints: Vec<GlintMaterial>,
+    pub glints: Vec<TwinMaterial>,
+    /// Materials of the coated Types shown again with an iridescent clearcoat (`uplift enhance
+    /// --iridescence`), fitted on their own.
+    pub iridescent: Vec<TwinMaterial>,
     pub table: Vec<TypeRow>,
     /// The decoder's training history: (step, loss, loss_f, loss_t, loss_r).
     pub history: Vec<[f64; 5]>,
@@ -36,9 +39,10 @@ pub struct Report {
     pub seconds: f64,
 }
 
-/// A material with glints: its twin's name and the renders.
+/// A material shown again with an addition (glints, an iridescent coat): the twin's name and
+/// the renders.
 #[derive(Clone, Debug)]
-pub struct GlintMaterial {
+pub struct TwinMaterial {
     pub name: String,
     pub flip_object: f64,
     pub reference_image: String,
@@ -153,6 +157,17 @@ pub fn render_html(r: &Report) -> String {
             let _ = writeln!(
                 s,
                 "<tr><td class=\"l\">{}<br>FLIP {:.4}</td><td><img src=\"img/{}\" alt=\"reference with glints\"></td><td><img src=\"img/{}\" alt=\"neural with glints\"></td><td><img src=\"img/{}\" alt=\"FLIP\"></td></tr>",
+                escape(&g.name), g.flip_object, escape(&g.reference_image), escape(&g.neural_image), escape(&g.flip_image)
+            );
+        }
+        s += "</table>\n";
+    }
+    if !r.iridescent.is_empty() {
+        s += "<h2>Iridescent clearcoat</h2>\n<p>The first material of each coated Type enhanced again with <code>--iridescence</code>: a thin film on the clearcoat (thickness 100–1000 nm, IOR 1.2–2.0, drawn per material), whose Airy reflectance makes the coat iridescent. The film's two parameters are inputs of the stack, so these materials are fitted on their own against the decoder trained with them.</p>\n<table class=\"grid\"><tr><th class=\"l\">material</th><th>reference</th><th>neural</th><th>FLIP</th></tr>\n";
+        for g in &r.iridescent {
+            let _ = writeln!(
+                s,
+                "<tr><td class=\"l\">{}<br>FLIP {:.4}</td><td><img src=\"img/{}\" alt=\"reference, iridescent\"></td><td><img src=\"img/{}\" alt=\"neural, iridescent\"></td><td><img src=\"img/{}\" alt=\"FLIP\"></td></tr>",
                 escape(&g.name), g.flip_object, escape(&g.reference_image), escape(&g.neural_image), escape(&g.flip_image)
             );
         }

@@ -31,7 +31,8 @@ fn demo_writes_a_report_that_renders_without_broken_images() {
     assert_eq!(s.furnace_neural_passed, 6);
     let html = std::fs::read_to_string(&s.report).unwrap();
     let images: Vec<&str> = html.split("src=\"").skip(1).map(|t| t.split('"').next().unwrap()).collect();
-    assert_eq!(images.len(), 24 + 6, "four images per material, three per glint row (Types 0 and 1)");
+    assert_eq!(images.len(), 24 + 6 + 9, "four images per material, three per glint row (Types 0 and 1) and per iridescent row (Types 2, 3, 5)");
+    assert!(html.contains("<h2>Iridescent clearcoat</h2>"), "no iridescence section");
     assert!(html.contains("<h2>Glints (paper §5.3)</h2>"), "no glint section");
     for src in &images {
         let p = out.join("report").join(src);
@@ -44,9 +45,16 @@ fn demo_writes_a_report_that_renders_without_broken_images() {
         let name = std::fs::read_dir(&materials)
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().to_string())
-            .filter(|n| !n.ends_with("_glints"))
+            .filter(|n| !n.ends_with("_glints") && !n.ends_with("_iridescent"))
             .find(|n| uplift_material::MaterialFolder::open(&materials.join(n)).unwrap().read_meta().unwrap().kind as usize == row.kind)
             .unwrap();
+        if [2, 3, 5].contains(&row.kind) {
+            // Its iridescent twin: the same rule draws plus a coat film, fitted on its own.
+            let twin = uplift_material::MaterialFolder::open(&materials.join(format!("{name}_iridescent"))).unwrap();
+            let img = uplift_base::exr::read(&twin.params_path()).unwrap();
+            assert!(img.channel("coat_film_thickness").unwrap()[0] >= 100.0, "{name}_iridescent has no film");
+            assert!(twin.has_fit(), "{name}_iridescent is not fitted");
+        }
         if row.kind <= 1 {
             // Its glint twin: the same parameters and latents, a different (sparkling) image.
             let twin = uplift_material::MaterialFolder::open(&materials.join(format!("{name}_glints"))).unwrap();
@@ -92,8 +100,8 @@ fn demo_writes_a_report_that_renders_without_broken_images() {
         .expect("chromium runs");
     assert!(dom.status.success(), "chromium failed: {}", String::from_utf8_lossy(&dom.stderr));
     let dom = String::from_utf8_lossy(&dom.stdout);
-    assert!(dom.contains("data-images=\"30\""), "the report's load script did not run or saw another image count: {}", &dom[..dom.len().min(400)]);
+    assert!(dom.contains("data-images=\"39\""), "the report's load script did not run or saw another image count: {}", &dom[..dom.len().min(400)]);
     assert!(dom.contains("data-broken-images=\"0\""), "broken images in the report");
-    eprintln!("Chromium loaded the report: 30 images, none broken");
+    eprintln!("Chromium loaded the report: 39 images, none broken");
     let _ = std::fs::remove_dir_all(&out);
 }
