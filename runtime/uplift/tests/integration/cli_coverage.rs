@@ -248,7 +248,8 @@ fn the_remaining_subcommands_succeed_through_the_binary() {
     // first of Types 0 and 1 again with glints (three images: no PBR input of their own).
     let all: Vec<String> = std::fs::read_dir(demo.join("materials")).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     let (glinty, materials): (Vec<String>, Vec<String>) = all.into_iter().partition(|m| m.ends_with("_glints"));
-    assert_eq!((materials.len(), glinty.len()), (6, 2), "{materials:?} {glinty:?}");
+    let (iridescent, materials): (Vec<String>, Vec<String>) = materials.into_iter().partition(|m| m.ends_with("_iridescent"));
+    assert_eq!((materials.len(), glinty.len(), iridescent.len()), (6, 2, 3), "{materials:?} {glinty:?} {iridescent:?}");
     let report = std::fs::read_to_string(demo.join("report/index.html")).unwrap();
     for m in &glinty {
         assert!(demo.join("materials").join(m).join("latent.exr").is_file(), "{m} has no latents");
