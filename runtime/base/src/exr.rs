@@ -113,11 +113,54 @@ pub fn encode(img: &ExrImage, compression: Compression) -> Result<Vec<u8>, Strin
     let layer = x::Layer::new((w, h), attributes, encoding, x::AnyChannels::sort(channels));
     let mut bytes = Cursor::new(Vec::new());
     x::Image::from_layer(layer).write().non_parallel().to_buffered(&mut bytes).map_err(|e| format!("EXR: {e}"))?;
-    Ok(bytes.into_inner())
+    let mut bytes = bytes.into_inner();
+    sort_header_attributes(&mut bytes)?;
+    Ok(bytes)
+}
+
+/// Puts the header's attributes in name order. The `exr` crate keeps extra attributes in a
+/// `HashMap` and writes them in its (per-process random) order, so with two or more the same
+/// image would not give the same bytes twice; reordering entries within the header keeps its
+/// size, so the offset table after it stays valid. (A single-part file: magic, version, then
+/// `name\0 type\0 size:i32 value` entries up to an empty name.)
+fn sort_header_attributes(bytes: &mut [u8]) -> Result<(), String> {
+    let bad = || "EXR: malformed header written".to_string();
+    let mut at = 8;
+    let mut entries: Vec<(Vec<u8>, std::ops::Range<usize>)> = Vec::new();
+    loop {
+        let name_end = at + bytes.get(at..).ok_or_else(bad)?.iter().position(|&b| b == 0).ok_or_else(bad)?;
+        if name_end == at {
+            break;
+        }
+        let type_end = name_end + 1 + bytes.get(name_end + 1..).ok_or_else(bad)?.iter().position(|&b| b == 0).ok_or_else(bad)?;
+        let size_bytes: [u8; 4] = bytes.get(type_end + 1..type_end + 5).ok_or_else(bad)?.try_into().map_err(|_| bad())?;
+        let end = type_end + 5 + usize::try_from(i32::from_le_bytes(size_bytes)).map_err(|_| bad())?;
+        if end > bytes.len() {
+            return Err(bad());
+        }
+        entries.push((bytes[at..name_end].to_vec(), at..end));
+        at = end;
+    }
+    let start = entries.first().map_or(8, |e| e.1.start);
+    let mut sorted = entries.clone();
+    sorted.sort_by(|a, b| a.0.cmp(&b.0));
+    let header: Vec<u8> = sorted.iter().flat_map(|(_, r)| bytes[r.clone()].to_vec()).collect();
+    bytes[start..start + header.len()].copy_from_slice(&header);
+    Ok(())
 }
 
 /// An image from OpenEXR bytes (the first part, its largest resolution level).
 pub fn decode(bytes: &[u8]) -> Result<ExrImage, String> {
+    // A corrupt header can claim any size, and the `exr` crate allocates what it claims before
+    // reading (an abort, not an error, when that fails). Deflate expands at most 1032:1, so no
+    // valid file holds more sample bytes than about 1100 times its own size.
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), true).map_err(|e| format!("EXR: {e}"))?;
+    for header in &meta.headers {
+        let samples = (header.layer_size.0 as u128) * (header.layer_size.1 as u128) * (header.channels.list.len() as u128) * 4;
+        if samples > (bytes.len() as u128) * 1100 {
+            return Err(format!("EXR: the header claims {}x{} pixels of {} channels, more than a {}-byte file can hold", header.layer_size.0, header.layer_size.1, header.channels.list.len(), bytes.len()));
+        }
+    }
     let image = x::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -168,6 +211,23 @@ pub fn read(path: &Path) -> Result<ExrImage, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn several_attributes_give_the_same_bytes_every_time() {
+        // The exr crate's attribute map has a random order per instance; the header is sorted.
+        let mut img = ExrImage::new(3, 2);
+        img.push("a", vec![1.0; 6]).unwrap();
+        for k in 0..6 {
+            img.attributes.push((format!("attr{k}"), format!("value {k}")));
+        }
+        let first = encode(&img, Compression::Zip).unwrap();
+        for _ in 0..4 {
+            assert_eq!(encode(&img, Compression::Zip).unwrap(), first);
+        }
+        let back = decode(&first).unwrap();
+        assert_eq!(back.attributes.len(), 6);
+        assert_eq!(back.channel("a").unwrap(), &[1.0; 6]);
+    }
 
     fn sample(w: usize, h: usize, names: &[&str]) -> ExrImage {
         let mut img = ExrImage::new(w, h);

@@ -162,13 +162,15 @@ impl MaterialFolder {
         exr::write(&self.params_path(), img, Compression::Zip)
     }
 
-    /// params.exr: `stack`'s parameters (every channel required; a file recording another
-    /// stack's signature is an error naming the difference), and the diffuse colour and
+    /// params.exr: `stack`'s parameters (every channel required, but for optional inputs in a
+    /// file older than the signature attribute; a file recording another stack's signature is
+    /// an error naming the difference), and the diffuse colour and
     /// normals when present. Non-finite values are an error naming the texel.
     pub fn read_params(&self, stack: &Stack) -> Result<ParamsImage, String> {
         let path = self.params_path();
         let img = exr::read(&path)?;
-        if let Some((_, recorded)) = img.attributes.iter().find(|(k, _)| k == STACK_ATTRIBUTE) {
+        let recorded = img.attributes.iter().find(|(k, _)| k == STACK_ATTRIBUTE).map(|(_, v)| v);
+        if let Some(recorded) = recorded {
             stack.check_signature(recorded).map_err(|e| format!("{}: {e} (enhanced with --stack DIR? pass the same folder)", path.display()))?;
         }
         let (w, h) = (img.width, img.height);
@@ -176,9 +178,21 @@ impl MaterialFolder {
         let np = stack.len();
         let mut params = vec![0.0f32; n * np];
         for (k, p) in stack.parameters().iter().enumerate() {
-            let ch = img.channel(&p.channel).ok_or_else(|| format!("{}: no channel `{}` (is this an `uplift enhance` params.exr of this stack?)", path.display(), p.channel))?;
-            for t in 0..n {
-                params[t * np + k] = ch[t];
+            let optional = stack.inputs().iter().any(|i| i.name == p.input && i.optional);
+            match img.channel(&p.channel) {
+                Some(ch) => {
+                    for t in 0..n {
+                        params[t * np + k] = ch[t];
+                    }
+                }
+                // A file from before the stack had this optional input (it records no stack
+                // signature): the input's nodedef value, which is what rules bake for it.
+                None if recorded.is_none() && optional => {
+                    for t in 0..n {
+                        params[t * np + k] = p.default;
+                    }
+                }
+                None => return Err(format!("{}: no channel `{}` (is this an `uplift enhance` params.exr of this stack?)", path.display(), p.channel)),
             }
         }
         let diffuse = match DIFFUSE_CHANNELS.map(|name| img.channel(name)) {

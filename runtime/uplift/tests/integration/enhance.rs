@@ -157,7 +157,19 @@ fn baked_outputs(params: &exr::ExrImage) -> Vec<(String, Vec<String>)> {
 fn check_params_against_document(dir: &Path, texels: &[(usize, usize)], geometry: &[Geometry]) -> f32 {
     let params = exr::read(&dir.join("params.exr")).unwrap();
     let outs = baked_outputs(&params);
-    assert_eq!(outs.len(), uplift_engines::stack::Stack::builtin().inputs().len() + 2, "the uplift_stack inputs, the diffuse colour and the normal: {outs:?}");
+    let stack = uplift_engines::stack::Stack::builtin();
+    assert_eq!(outs.len(), stack.inputs().len() + 2, "the uplift_stack inputs, the diffuse colour and the normal: {outs:?}");
+    // Optional stack inputs the rule leaves out (the coat's thin film) have no output in the
+    // document: params.exr holds their nodedef values.
+    let doc = std::fs::read_to_string(dir.join("material.mtlx")).unwrap();
+    let (outs, defaults): (Vec<_>, Vec<_>) = outs.into_iter().partition(|(b, _)| doc.contains(&format!("name=\"{b}_out\"")));
+    for (base, channels) in &defaults {
+        assert!(stack.inputs().iter().any(|i| i.name == *base && i.optional), "{base}: baked without an output, but not optional");
+        for ch in channels {
+            let want = stack.parameters()[stack.index_of(ch).unwrap()].default;
+            assert!(params.channel(ch).unwrap().iter().all(|&v| v == want), "{ch}: not its nodedef value {want}");
+        }
+    }
     let names: Vec<String> = outs.iter().map(|(b, _)| format!("uplift_material/{b}_out")).collect();
     let k = compile_material(dir, Some(names), None);
     let got = run_wgpu(&k, geometry, &[]);
