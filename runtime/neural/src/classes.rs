@@ -229,7 +229,8 @@ fn read_class(stack: &Arc<Stack>, engine: &CpuEngine, name: &str, source: &str, 
                 let scope = match e.attr("uplift_scope") {
                     Some("tile") => Scope::Tile,
                     Some("cell") => Scope::Cell,
-                    other => return Err(format!("{}: `{}` has uplift_scope {other:?}: a class's random scalar is drawn per `tile` or per `cell`", at(id), e.name())),
+                    Some(other) => return Err(format!("{}: `{}` has uplift_scope `{other}`: a class's random scalar is drawn per `tile` or per `cell`", at(id), e.name())),
+                    None => return Err(format!("{}: `{}` has no uplift_scope: a class's random scalar is drawn per `tile` or per `cell`", at(id), e.name())),
                 };
                 declared.push((scalar, scope));
             }

@@ -279,3 +279,31 @@ fn a_lobe_added_as_graph_nodes_runs_through_every_stage() {
     assert!(red(&reference) > red(&plain) + 1e-3, "the tinted sheen does not show: {} vs {}", red(&reference), red(&plain));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_broken_stack_folder_is_an_error_naming_the_place() {
+    let dir = temp_dir("stack_extension", "broken");
+    // Not a folder.
+    let (code, _, err) = uplift(&["datagen", "--stack", s(&dir.join("missing")), "--count", "8", "-o", s(&dir.join("out"))]);
+    assert_eq!(code, 1);
+    assert!(err.contains("--stack") && err.contains("missing") && err.contains("not a folder"), "{err}");
+    // A stack input without its range: the nodedef's file, line and column.
+    let lib = library(&dir);
+    let stack = std::fs::read_to_string(lib.join("stack.mtlx")).unwrap();
+    std::fs::write(lib.join("stack.mtlx"), stack.replace("uplift_optional=\"true\" doc=\"Weight of the tinted sheen on top.\"", "doc=\"Weight of the tinted sheen on top.\"").replace("<input name=\"tint_weight\" type=\"float\" value=\"0.0\" uimin=\"0.0\" uimax=\"1.0\"", "<input name=\"tint_weight\" type=\"float\" value=\"0.0\"")).unwrap();
+    let (code, _, err) = uplift(&["datagen", "--stack", s(&lib), "--count", "8", "-o", s(&dir.join("out"))]);
+    assert_eq!(code, 1);
+    assert!(err.contains("stack.mtlx:") && err.contains("`tint_weight` has neither `uisoftmin` nor `uimin`"), "{err}");
+    std::fs::write(lib.join("stack.mtlx"), stack).unwrap();
+    // A class output that is not a stack input, and a random scalar without its scope.
+    let class = lib.join("classes/tinted.mtlx");
+    std::fs::write(&class, CLASS.replace("tint_weight_out", "tint_wieght_out")).unwrap();
+    let (code, _, err) = uplift(&["datagen", "--stack", s(&lib), "--count", "8", "-o", s(&dir.join("out"))]);
+    assert_eq!(code, 1);
+    assert!(err.contains("tinted.mtlx:") && err.contains("`tint_wieght_out` is not `<input>_out` of an uplift_stack input"), "{err}");
+    std::fs::write(&class, CLASS.replace(" uplift_scope=\"cell\"", "")).unwrap();
+    let (code, _, err) = uplift(&["datagen", "--stack", s(&lib), "--count", "8", "-o", s(&dir.join("out"))]);
+    assert_eq!(code, 1);
+    assert!(err.contains("tinted.mtlx:") && err.contains("`roughness` has no uplift_scope"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
