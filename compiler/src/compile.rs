@@ -46,20 +46,24 @@ pub struct Compilation {
 impl Compiler {
     /// Loads the builtin library plus `extra` folders and `MATERIALX_SEARCH_PATH`.
     pub fn new(extra: &[PathBuf]) -> Compiler {
-        let mut roots: Vec<PathBuf> = extra.iter().cloned().chain(mtlx::library::search_path_from_env()).collect();
-        let parents: Vec<PathBuf> = roots.iter().filter(|r| r.file_name().is_some_and(|n| n == "libraries")).filter_map(|r| r.parent().map(Path::to_path_buf)).collect();
-        roots.extend(parents);
-        Compiler { library: NodeLibrary::new(Library::load(extra)), file_roots: Some(roots), lower_options: LowerOptions::default(), constant_inputs: Vec::new() }
+        Self::with_library(Library::load(extra), extra)
     }
 
     /// The library with `overrides` loaded before the builtin one, so that their definitions
     /// win over builtin ones of the same name (`Library::load_overriding`; the runtime's
     /// `--stack DIR`).
     pub fn overriding(overrides: &[PathBuf]) -> Compiler {
-        let mut roots: Vec<PathBuf> = overrides.iter().cloned().chain(mtlx::library::search_path_from_env()).collect();
+        Self::with_library(Library::load_overriding(overrides), overrides)
+    }
+
+    /// A compiler over `library`, loaded from the folders `dirs` (and the builtin library): files
+    /// documents name may lie in those folders and `MATERIALX_SEARCH_PATH` (each with its parent
+    /// when it is a `libraries` folder).
+    fn with_library(library: Library, dirs: &[PathBuf]) -> Compiler {
+        let mut roots: Vec<PathBuf> = dirs.iter().cloned().chain(mtlx::library::search_path_from_env()).collect();
         let parents: Vec<PathBuf> = roots.iter().filter(|r| r.file_name().is_some_and(|n| n == "libraries")).filter_map(|r| r.parent().map(Path::to_path_buf)).collect();
         roots.extend(parents);
-        Compiler { library: NodeLibrary::new(Library::load_overriding(overrides)), file_roots: Some(roots), lower_options: LowerOptions::default(), constant_inputs: Vec::new() }
+        Compiler { library: NodeLibrary::new(library), file_roots: Some(roots), lower_options: LowerOptions::default(), constant_inputs: Vec::new() }
     }
 
     /// Only the library embedded in the crate (tests, benchmarks).

@@ -18,7 +18,7 @@ pub use diagnostic::{has_errors, Diagnostic, Severity};
 pub use document::{Document, Element, ElementId};
 pub use position::SourcePos;
 pub use library::Library;
-pub use reader::{read_file, read_str};
+pub use reader::{read_file, read_str, without_includes};
 pub use writer::{write_file, write_string};
 pub use schema::{NodeDef, PortDef};
 pub use types::DataType;

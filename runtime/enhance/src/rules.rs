@@ -93,7 +93,7 @@ impl EnhancementType {
     /// The rule document without its `xi:include` of the uplift library (which the compiler's
     /// builtin library and every written material hold anyway), readable from any folder.
     pub fn standalone_text(self) -> String {
-        without_includes(self.rule_text())
+        mtlx::without_includes(self.rule_text())
     }
 
     /// Draws a Type in the paper's proportions (10/20/20/20/10/20 %) from `u` in [0, 1); for a
@@ -147,11 +147,6 @@ impl RuleInterface {
     }
 }
 
-/// The text with its `xi:include` lines emptied (lines kept, so positions stay the file's).
-fn without_includes(text: &str) -> String {
-    text.lines().map(|l| if l.trim_start().starts_with("<xi:include") { "\n".to_string() } else { format!("{l}\n") }).collect()
-}
-
 /// Reads a built-in rule's interface. The rules are part of the binary, so an error here is a
 /// defect of a rule document; it still comes back as a message naming the rule and the input.
 pub fn interface(kind: EnhancementType, stack: &Arc<Stack>) -> Result<RuleInterface, String> {
@@ -166,7 +161,7 @@ pub fn interface(kind: EnhancementType, stack: &Arc<Stack>) -> Result<RuleInterf
 pub fn interface_file(path: &std::path::Path, stack: &Arc<Stack>) -> Result<RuleInterface, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
     let name = path.file_stem().map(|s| s.to_string_lossy().to_string()).filter(|s| !s.is_empty()).ok_or_else(|| format!("{}: not a rule file name", path.display()))?;
-    read_interface(without_includes(&text), &path.display().to_string(), &name, None, stack)
+    read_interface(mtlx::without_includes(&text), &path.display().to_string(), &name, None, stack)
 }
 
 /// A rule's outputs for `stack`: `<input>_out` for each numeric input of `uplift_stack` (from

@@ -76,12 +76,6 @@ pub struct TrainingClasses {
     classes: Vec<TrainingClass>,
 }
 
-/// Text with its `xi:include` lines emptied (lines kept, so positions stay the file's): the
-/// uplift library they include is in the compiler's library anyway.
-fn without_includes(text: &str) -> String {
-    text.lines().map(|l| if l.trim_start().starts_with("<xi:include") { "\n".to_string() } else { format!("{l}\n") }).collect()
-}
-
 impl TrainingClasses {
     /// The builtin classes and the class documents of `stack`'s folders, prepared on `engine`.
     pub fn load(stack: &Arc<Stack>, engine: &CpuEngine) -> Result<TrainingClasses, String> {
@@ -200,7 +194,7 @@ impl TrainingClasses {
 /// Reads one class document (`None`: it defines no `uplift_class`, a stack folder's other
 /// document). Errors name the file, line and column.
 fn read_class(stack: &Arc<Stack>, engine: &CpuEngine, name: &str, source: &str, text: &str) -> Result<Option<TrainingClass>, String> {
-    let text = without_includes(text);
+    let text = mtlx::without_includes(text);
     let (doc, diags) = mtlx::read_str(&text, source);
     if let Some(d) = diags.iter().find(|d| d.is_error()) {
         return Err(d.to_string());
