@@ -9,7 +9,7 @@
 //! the encoder, the fitter (`params.exr` channels), the kernels, the rules' interface check and
 //! the renderer all read this table.
 
-use mtlx::{DataType, Document, ElementId};
+use mtlx::{Document, ElementId};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 use uplift_compiler::Compiler;
@@ -316,11 +316,7 @@ impl Stack {
             .iter()
             .filter(|d| {
                 let file = d.get(d.root()).pos.file.to_string();
-                !file.starts_with("<builtin>/") || file.starts_with("<builtin>/uplift/")
-            })
-            .filter(|d| {
-                let file = d.get(d.root()).pos.file.to_string();
-                file.starts_with("<builtin>/") || self.library.iter().any(|l| Path::new(&file).starts_with(l))
+                file.starts_with("<builtin>/uplift/") || self.library.iter().any(|l| Path::new(&file).starts_with(l))
             })
             .cloned()
             .collect()
@@ -332,11 +328,6 @@ fn nodedef_element(compiler: &Compiler) -> Option<(Arc<Document>, ElementId)> {
     compiler.library.defs.documents.iter().find_map(|d| {
         d.top_level().iter().find(|&&e| d.get(e).category == "nodedef" && d.get(e).name() == STACK_NODEDEF).map(|&e| (d.clone(), e))
     })
-}
-
-/// The components of a stack input's type.
-pub fn components(ty: &str) -> usize {
-    DataType::from_name(ty).components().unwrap_or(1)
 }
 
 #[cfg(test)]
@@ -377,6 +368,6 @@ mod tests {
             assert!((p.decode(p.encode(0.5 * (p.lo + p.hi))) - 0.5 * (p.lo + p.hi)).abs() < 1e-6);
             assert_eq!(stack.index_of(&p.channel).map(|i| stack.parameters()[i].channel.clone()), Some(p.channel.clone()));
         }
-        assert_eq!(stack.inputs().iter().map(|i| components(&i.ty)).sum::<usize>(), stack.len());
+        assert_eq!(stack.inputs().iter().map(|i| mtlx::DataType::from_name(&i.ty).components().unwrap_or(1)).sum::<usize>(), stack.len());
     }
 }

@@ -215,13 +215,32 @@ fn mask_seed(seed: u64, kind: MaskKind) -> u64 {
 /// `masks/*.png` are the material's): the same kernel the runtime ships (`runtime/kernels/src/generated/`).
 pub fn rule_kernel(rule: &RuleInterface, dir: &Path) -> Result<uplift_compiler::PatternKernel, String> {
     let name = dir.join(rule.file_name()).display().to_string();
-    let (doc, diags) = mtlx::read_str(rule.standalone_text(), &name);
     let outputs: Vec<String> = stack_outputs(&rule.document).into_iter().map(|o| format!("{}/{o}", rules::RULE_GRAPH)).collect();
-    let c = rule.stack.compiler().compile_document(doc, diags, &name, &OutputSelection::Named(outputs));
+    compile_outputs(&rule.stack, rule.standalone_text(), &name, outputs)
+}
+
+/// The pattern kernel of `outputs` of the document `text` (named `source`), compiled with the
+/// stack's library; errors are the compiler's positioned diagnostics.
+fn compile_outputs(stack: &Stack, text: &str, source: &str, outputs: Vec<String>) -> Result<uplift_compiler::PatternKernel, String> {
+    let (doc, diags) = mtlx::read_str(text, source);
+    let c = stack.compiler().compile_document(doc, diags, source, &OutputSelection::Named(outputs));
     if mtlx::has_errors(&c.diagnostics) {
         return Err(c.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.to_string()).collect::<Vec<_>>().join("\n"));
     }
-    c.kernel.ok_or_else(|| format!("{name}: no pattern outputs"))
+    c.kernel.ok_or_else(|| format!("{source}: no pattern outputs"))
+}
+
+/// Puts each output of `kernel` computed in `out` into `img` as its channels (`channel_names`),
+/// replacing channels of the same name.
+fn put_channels(kernel: &uplift_compiler::PatternKernel, out: &Columns, img: &mut ExrImage) -> Result<(), String> {
+    for o in &kernel.outputs {
+        let components = o.ty.components().unwrap_or(1);
+        for (c, name) in channel_names(&o.name, components, o.ty.is_color()).iter().enumerate() {
+            img.channels.retain(|ch| ch.name != *name);
+            img.push(name, out.column(o.offset + c).to_vec())?;
+        }
+    }
+    Ok(())
 }
 
 /// The rule's baked outputs (`<name>_out`, not closures), in document order.
@@ -384,13 +403,7 @@ fn bake(
     let batch = PatternBatch { geometry: Geometry::columns(geometry), inputs: Columns::from_rows(&rows, kernel.input_stride), textures, points_per_group: 1 };
     let out = engine.run_pattern(&kernel, &batch)?;
     let mut img = ExrImage::new(w, h);
-    for o in &kernel.outputs {
-        let components = o.ty.components().unwrap_or(1);
-        let is_color = o.ty.is_color();
-        for (c, name) in channel_names(&o.name, components, is_color).iter().enumerate() {
-            img.push(name, out.column(o.offset + c).to_vec())?;
-        }
-    }
+    put_channels(&kernel, &out, &mut img)?;
     // Optional stack inputs the rule leaves out keep their nodedef values.
     for p in rule.stack.parameters() {
         if img.channel(&p.channel).is_none() {
@@ -405,13 +418,7 @@ fn bake(
 /// Bakes a rule option's outputs into `img` (replacing the rule's channels of the same name):
 /// the option's own kernel on its drawn scalars at every texel.
 fn bake_option(option: &RuleOption, stack: &Stack, scalars: &[(String, f64)], geometry: &[Geometry], img: &mut ExrImage, engine: &dyn PatternEngine) -> Result<(), String> {
-    let text = option.text();
-    let (doc, diags) = mtlx::read_str(&text, &option.path);
-    let c = stack.compiler().compile_document(doc, diags, &option.path, &OutputSelection::Named(option.kernel_outputs()));
-    if mtlx::has_errors(&c.diagnostics) {
-        return Err(c.diagnostics.iter().filter(|d| d.is_error()).map(|d| d.to_string()).collect::<Vec<_>>().join("\n"));
-    }
-    let kernel = c.kernel.ok_or_else(|| format!("{}: no pattern outputs", option.path))?;
+    let kernel = compile_outputs(stack, &option.text(), &option.path, option.kernel_outputs())?;
     let n = geometry.len();
     let mut rows = vec![0.0f32; n * kernel.input_stride];
     for input in &kernel.inputs {
@@ -421,15 +428,7 @@ fn bake_option(option: &RuleOption, stack: &Stack, scalars: &[(String, f64)], ge
         }
     }
     let batch = PatternBatch { geometry: Geometry::columns(geometry), inputs: Columns::from_rows(&rows, kernel.input_stride), textures: vec![], points_per_group: 1 };
-    let out = engine.run_pattern(&kernel, &batch)?;
-    for o in &kernel.outputs {
-        let components = o.ty.components().unwrap_or(1);
-        for (c, name) in channel_names(&o.name, components, o.ty.is_color()).iter().enumerate() {
-            img.channels.retain(|ch| ch.name != *name);
-            img.push(name, out.column(o.offset + c).to_vec())?;
-        }
-    }
-    Ok(())
+    put_channels(&kernel, &engine.run_pattern(&kernel, &batch)?, img)
 }
 
 /// meta.json of a material enhanced by `kind` with `seed`.

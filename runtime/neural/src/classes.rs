@@ -14,7 +14,7 @@
 use std::sync::Arc;
 use uplift_base::random_scalar::RandomScalar;
 use uplift_base::rng::{hash_str, mix64};
-use uplift_compiler::OutputSelection;
+use uplift_compiler::{OutputSelection, PatternKernel};
 use uplift_engines::batch::{Columns, Geometry, PatternBatch};
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_engines::prepared_kernel::{Engine, PreparedKernel};
@@ -70,6 +70,15 @@ pub struct TrainingClass {
     draw: Draw,
 }
 
+/// A class as read, its graph's kernel not yet prepared.
+struct ReadClass {
+    name: String,
+    source: String,
+    share: f64,
+    /// The graph's kernel (`None`: `uplift_draw="uniform"`), its scalars and each stack parameter's output column.
+    graph: Option<(PatternKernel, Vec<ClassScalar>, Vec<Option<usize>>)>,
+}
+
 /// The classes of a stack, their kernels prepared on a CPU engine.
 pub struct TrainingClasses {
     stack: Arc<Stack>,
@@ -94,15 +103,37 @@ impl TrainingClasses {
                 }
             }
         }
-        let mut classes = Vec::new();
+        let mut read = Vec::new();
         for (name, source, text) in docs {
-            if let Some(c) = read_class(stack, engine, &name, &source, &text)? {
-                classes.push(c);
-            }
+            read.extend(read_class(stack, &name, &source, &text)?);
         }
-        if classes.is_empty() {
+        if read.is_empty() {
             return Err("no training classes".into());
         }
+        // The graphs' kernels prepared together: classes not shipped build in one runner.
+        let mut kernels = Vec::new();
+        let read: Vec<_> = read
+            .into_iter()
+            .map(|c| {
+                let wiring = c.graph.map(|(kernel, scalars, outputs)| {
+                    kernels.push(kernel);
+                    (scalars, outputs)
+                });
+                (c.name, c.source, c.share, wiring)
+            })
+            .collect();
+        let tables = stack.compiler().library.albedo_table_data.clone();
+        let mut prepared = PreparedKernel::all(Engine::Cpu(engine), kernels, tables.as_deref())?.into_iter();
+        let classes = read
+            .into_iter()
+            .map(|(name, source, share, wiring)| {
+                let draw = match wiring {
+                    None => Draw::Uniform,
+                    Some((scalars, outputs)) => Draw::Graph { kernel: prepared.next().expect("a kernel per graph class"), scalars, outputs },
+                };
+                TrainingClass { name, source, share, draw }
+            })
+            .collect();
         Ok(TrainingClasses { stack: stack.clone(), classes })
     }
 
@@ -193,7 +224,7 @@ impl TrainingClasses {
 
 /// Reads one class document (`None`: it defines no `uplift_class`, a stack folder's other
 /// document). Errors name the file, line and column.
-fn read_class(stack: &Arc<Stack>, engine: &CpuEngine, name: &str, source: &str, text: &str) -> Result<Option<TrainingClass>, String> {
+fn read_class(stack: &Arc<Stack>, name: &str, source: &str, text: &str) -> Result<Option<ReadClass>, String> {
     let text = mtlx::without_includes(text);
     let (doc, diags) = mtlx::read_str(&text, source);
     if let Some(d) = diags.iter().find(|d| d.is_error()) {
@@ -209,8 +240,8 @@ fn read_class(stack: &Arc<Stack>, engine: &CpuEngine, name: &str, source: &str, 
         None => 1.0,
         Some(s) => s.trim().parse::<f64>().ok().filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| format!("{}: `uplift_share` is `{s}`, not a positive number", at(graph)))?,
     };
-    let draw = match g.attr("uplift_draw") {
-        Some("uniform") => Draw::Uniform,
+    let graph = match g.attr("uplift_draw") {
+        Some("uniform") => None,
         Some(other) => return Err(format!("{}: `uplift_draw` is `{other}`; the one kind is `uniform`", at(graph))),
         None => {
             let mut declared = Vec::new();
@@ -257,10 +288,10 @@ fn read_class(stack: &Arc<Stack>, engine: &CpuEngine, name: &str, source: &str, 
                 .iter()
                 .map(|p| kernel.outputs.iter().find(|o| o.name.rsplit('/').next() == Some(&format!("{}_out", p.input))).map(|o| o.offset + p.component))
                 .collect();
-            Draw::Graph { kernel: PreparedKernel::new(Engine::Cpu(engine), kernel)?, scalars, outputs }
+            Some((kernel, scalars, outputs))
         }
     };
-    Ok(Some(TrainingClass { name: name.to_string(), source: source.to_string(), share, draw }))
+    Ok(Some(ReadClass { name: name.to_string(), source: source.to_string(), share, graph }))
 }
 
 impl TrainingClass {

@@ -123,9 +123,8 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
     let model = load_model(&o.decoder, &stack)?;
     let generator = DataGenerator::new(CpuEngine::with_threads(o.threads)?, &stack, ClassMix::All, o.seed)?;
     let fit_options = FitOptions { steps: o.fit_steps, seed: o.seed, threads: o.threads, ..Default::default() };
-    let b = bar(dirs.len(), "fit");
-    for dir in &dirs {
-        b.set_message(dir.file_name().unwrap_or_default().to_string_lossy().to_string());
+    // Fits a material folder unless it has its fit already.
+    let fit = |dir: &Path| -> Result<(), String> {
         let folder = MaterialFolder::open(dir)?;
         if !folder.has_fit() {
             let ParamsImage { width: w, height: h, params, diffuse, .. } = folder.read_params(&stack)?;
@@ -133,6 +132,12 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
             folder.write_latents(&r.latent_image())?;
             folder.write_fit(&r.record(&o.decoder, &fit_options))?;
         }
+        Ok(())
+    };
+    let b = bar(dirs.len(), "fit");
+    for dir in &dirs {
+        b.set_message(dir.file_name().unwrap_or_default().to_string_lossy().to_string());
+        fit(dir)?;
         b.inc(1);
     }
     b.finish();
@@ -210,7 +215,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
     let iridescence = uplift_enhance::rule_option::read_option("iridescence", &stack)?;
     let mut iridescent = Vec::new();
     for (index, m) in set.iter().enumerate().filter(|(_, m)| [2, 3, 5].contains(&m.kind.index())) {
-        if iridescent.iter().any(|(_, kind, _): &(usize, usize, PathBuf)| *kind == m.kind.index()) {
+        if iridescent.iter().any(|(kind, _): &(usize, PathBuf)| *kind == m.kind.index()) {
             continue;
         }
         let twin = materials_dir.join(format!("{}_iridescent", m.material.name));
@@ -218,17 +223,11 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
             let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(index as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: false, stack: stack.clone(), rule_options: vec![iridescence.clone()] };
             enhance(&m.material, &options, &twin, &engine)?;
         }
-        let folder = MaterialFolder::open(&twin)?;
-        if !folder.has_fit() {
-            let ParamsImage { width: w, height: h, params, diffuse, .. } = folder.read_params(&stack)?;
-            let r = fit_material(&model, &generator, &params, diffuse.as_deref(), w, h, &fit_options, false)?;
-            folder.write_latents(&r.latent_image())?;
-            folder.write_fit(&r.record(&o.decoder, &fit_options))?;
-        }
-        iridescent.push((index, m.kind.index(), twin));
+        fit(&twin)?;
+        iridescent.push((m.kind.index(), twin));
     }
     let mut iridescent_rows = Vec::new();
-    for (_, _, twin) in &iridescent {
+    for (_, twin) in &iridescent {
         let name = twin.file_name().unwrap_or_default().to_string_lossy().to_string();
         let (eval, images) = evaluate_material(twin, &reference, &neural, &env, &ro, 1.0)?;
         write_eval_images(&img_dir, &name, &images, (ro.width, ro.height))?;

@@ -6,6 +6,7 @@
 //! `--iridescence` rule option's written material, which MaterialX's validator accepts.
 
 use super::common::cli::{repo, s, temp_dir, uplift};
+use super::common::stack_params;
 use uplift_compiler::ClosureContext;
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_engines::stack::Stack;
@@ -78,15 +79,6 @@ fn fresnel(c: f64, eta: f64) -> f64 {
     0.5 * (p + s)
 }
 
-fn params(set: &[(&str, f32)]) -> Vec<f32> {
-    let stack = Stack::builtin();
-    let mut p = stack.defaults();
-    for (name, v) in set {
-        p[stack.index_of(name).unwrap_or_else(|| panic!("no parameter {name}"))] = *v;
-    }
-    p
-}
-
 #[test]
 fn the_coat_film_is_the_airy_reflectance() {
     // Only the clearcoat reflects: a black conductor base (reflectivity 0: n = 1, k = 0) under
@@ -104,8 +96,8 @@ fn the_coat_film_is_the_airy_reflectance() {
             for mu in [0.97f32, 0.8, 0.6, 0.4] {
                 let mut with = base.to_vec();
                 with.extend([("coat_film_thickness", thickness), ("coat_film_ior", film_ior)]);
-                rows.extend(params(&with));
-                rows.extend(params(&base));
+                rows.extend(stack_params(&with));
+                rows.extend(stack_params(&base));
                 cases.push((thickness, film_ior, mu));
             }
         }
@@ -142,7 +134,7 @@ fn films_keep_the_white_furnace() {
     for thickness in [120.0f32, 350.0, 700.0, 1000.0] {
         for film_ior in [1.2f32, 1.6, 2.0] {
             for mu in [1.0f32, 0.7, 0.4, 0.15, 0.05] {
-                rows.extend(params(&[
+                rows.extend(stack_params(&[
                     ("metalness", 0.0),
                     ("coat_weight", 1.0),
                     ("coat_film_thickness", thickness),

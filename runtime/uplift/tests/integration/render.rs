@@ -15,16 +15,7 @@ use uplift_render::shading::{Model, Shading};
 use uplift_render::surface::SurfaceTextures;
 use uplift_render::tonemap::to_display;
 
-/// The stack's parameters: its nodedef's values with `set` applied (channel names).
-fn stack_params(set: &[(&str, f32)]) -> Vec<f32> {
-    let stack = Stack::builtin();
-    let mut p = stack.defaults();
-    for s in set {
-        let k = stack.index_of(s.0).unwrap_or_else(|| panic!("no parameter {}", s.0));
-        p[k] = s.1;
-    }
-    p
-}
+use super::common::stack_params;
 
 fn reference() -> Shading {
     Shading::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Reference).unwrap()

@@ -8,7 +8,7 @@
 //! new class, a decoder file records the 26-parameter signature and is refused by the builtin
 //! stack, and the lobe changes the rendered image.
 
-use super::common::cli::{command, repo, s, temp_dir};
+use super::common::cli::{repo, s, temp_dir, uplift_with};
 use std::path::{Path, PathBuf};
 
 /// The new lobe: a tinted sheen (pbrlib's sheen with a colour), as a nodedef and WGSL.
@@ -171,8 +171,7 @@ fn rule(dir: &Path) -> PathBuf {
 /// Runs the binary with its kernel runners built quickly (opt-level 0: the stack's kernels
 /// are not shipped for this library; their speed does not matter here).
 fn uplift(args: &[&str]) -> (i32, String, String) {
-    let out = command(args).env("UPLIFT_RUNNER_QUICK", "1").output().expect("run uplift");
-    (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
+    uplift_with(args, &[("UPLIFT_RUNNER_QUICK", "1")])
 }
 
 fn run(args: &[&str]) -> String {

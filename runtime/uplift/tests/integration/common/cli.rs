@@ -18,7 +18,12 @@ pub fn command(args: &[&str]) -> Command {
 
 /// Runs the binary; (exit code, or −1 for a signal; stdout; stderr).
 pub fn uplift(args: &[&str]) -> (i32, String, String) {
-    let out = command(args).output().expect("run uplift");
+    uplift_with(args, &[])
+}
+
+/// [`uplift`] with environment variables set for the run.
+pub fn uplift_with(args: &[&str], env: &[(&str, &str)]) -> (i32, String, String) {
+    let out = command(args).envs(env.iter().copied()).output().expect("run uplift");
     (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
 }
 

@@ -57,3 +57,14 @@ pub fn assert_close(what: &str, got: &[f32], want: &[f32], tol: f32) {
         assert!(err <= tol || (g.is_nan() && w.is_nan()), "{what}: component {k}: got {g}, want {w} (|err| {err} > {tol})");
     }
 }
+
+/// A row of the builtin stack's parameters: its nodedef's values with `set` applied (by
+/// params.exr channel name).
+pub fn stack_params(set: &[(&str, f32)]) -> Vec<f32> {
+    let stack = uplift_engines::stack::Stack::builtin();
+    let mut p = stack.defaults();
+    for (name, v) in set {
+        p[stack.index_of(name).unwrap_or_else(|| panic!("no parameter {name}"))] = *v;
+    }
+    p
+}
