@@ -22,11 +22,18 @@ pub const STACK_ATTRIBUTE: &str = "uplift_stack";
 /// The baked shading-normal channels of params.exr.
 pub const NORMAL_CHANNELS: [&str; 3] = ["normal.X", "normal.Y", "normal.Z"];
 
-/// Latent values per texel (two RGB latent textures).
+/// The paper's latent values per texel (two RGB latent textures).
 pub const LATENTS: usize = 6;
 
-/// The channels of latent.exr.
-pub const LATENT_CHANNELS: [&str; LATENTS] = ["latent0.R", "latent0.G", "latent0.B", "latent1.R", "latent1.G", "latent1.B"];
+/// The widest latent latent.exr holds.
+pub const MAX_LATENTS: usize = 16;
+
+/// latent.exr's channel of latent value `k`: values in RGB textures, three per texture in
+/// order (`latent0.R/G/B`, `latent1.R/G/B`, … — the paper's 6 are two textures; 8 fill a
+/// third texture's R and G).
+pub fn latent_channel(k: usize) -> String {
+    format!("latent{}.{}", k / 3, ["R", "G", "B"][k % 3])
+}
 
 /// An enhanced material's folder.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -48,11 +55,12 @@ pub struct ParamsImage {
     pub normals: Option<Vec<[f32; 3]>>,
 }
 
-/// latent.exr: [`LATENTS`] values per texel, row-major.
+/// latent.exr: `channels` values per texel (the decoder's latent width), row-major.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LatentImage {
     pub width: usize,
     pub height: usize,
+    pub channels: usize,
     pub latents: Vec<f32>,
 }
 
@@ -218,45 +226,67 @@ impl MaterialFolder {
         Ok(ParamsImage { width: w, height: h, params, diffuse, normals })
     }
 
-    /// latent.exr (every channel required; non-finite values are an error).
+    /// latent.exr: its latent channels in order (`latent_channel`; at least the paper's 6,
+    /// none missing between; non-finite values are an error).
     pub fn read_latents(&self) -> Result<LatentImage, String> {
         let path = self.latent_path();
         let img = exr::read(&path)?;
         let n = img.width * img.height;
-        let mut latents = vec![0.0f32; n * LATENTS];
-        for (k, name) in LATENT_CHANNELS.iter().enumerate() {
-            let ch = img.channel(name).ok_or_else(|| format!("{}: no channel `{name}` (written by `uplift fit`)", path.display()))?;
+        let mut columns = Vec::new();
+        while let Some(ch) = img.channel(&latent_channel(columns.len())) {
+            columns.push(ch);
+        }
+        let channels = columns.len();
+        if channels < LATENTS {
+            return Err(format!("{}: no channel `{}` (written by `uplift fit`)", path.display(), latent_channel(channels)));
+        }
+        if channels > MAX_LATENTS {
+            return Err(format!("{}: {channels} latent channels (at most {MAX_LATENTS})", path.display()));
+        }
+        if let Some(stray) = (channels..MAX_LATENTS + 3).map(latent_channel).find(|c| img.channel(c).is_some()) {
+            return Err(format!("{}: channel `{stray}` without `{}` before it", path.display(), latent_channel(channels)));
+        }
+        let mut latents = vec![0.0f32; n * channels];
+        for (k, ch) in columns.iter().enumerate() {
             for t in 0..n {
-                latents[t * LATENTS + k] = ch[t];
+                latents[t * channels + k] = ch[t];
             }
         }
         if let Some(i) = latents.iter().position(|x| !x.is_finite()) {
-            let t = i / LATENTS;
+            let t = i / channels;
             return Err(format!("{}: texel ({}, {}) holds a non-finite latent", path.display(), t % img.width, t / img.width));
         }
-        Ok(LatentImage { width: img.width, height: img.height, latents })
+        Ok(LatentImage { width: img.width, height: img.height, channels, latents })
     }
 
-    /// Writes latent.exr and latent0.png, latent1.png (each latent texture clamped to [0, 1]
-    /// and quantised to 8 bits).
+    /// Writes latent.exr and latent0.png, latent1.png, … (each latent texture clamped to [0, 1]
+    /// and quantised to 8 bits; a last texture's missing channels 0).
     pub fn write_latents(&self, latents: &LatentImage) -> Result<(), String> {
-        let (w, h) = (latents.width, latents.height);
+        let (w, h, k) = (latents.width, latents.height, latents.channels);
         let n = w * h;
-        if latents.latents.len() != n * LATENTS {
-            return Err(format!("{}: {} latent values for {w}×{h} texels", self.latent_path().display(), latents.latents.len()));
+        if !(1..=MAX_LATENTS).contains(&k) || latents.latents.len() != n * k {
+            return Err(format!("{}: {} latent values for {w}×{h} texels of {k}", self.latent_path().display(), latents.latents.len()));
         }
         let l = &latents.latents;
         let mut img = ExrImage::new(w, h);
-        for tex in 0..2 {
-            for c in 0..3 {
-                img.push(LATENT_CHANNELS[3 * tex + c], (0..n).map(|t| l[t * LATENTS + 3 * tex + c]).collect())?;
-            }
-            let px: Vec<u8> = (0..n).flat_map(|t| (0..3).map(move |c| (l[t * LATENTS + 3 * tex + c].clamp(0.0, 1.0) * 255.0).round() as u8)).collect();
+        for c in 0..k {
+            img.push(&latent_channel(c), (0..n).map(|t| l[t * k + c]).collect())?;
+        }
+        for tex in 0..k.div_ceil(3) {
+            let value = move |t: usize, c: usize| if 3 * tex + c < k { l[t * k + 3 * tex + c] } else { 0.0 };
+            let px: Vec<u8> = (0..n).flat_map(|t| (0..3).map(move |c| (value(t, c).clamp(0.0, 1.0) * 255.0).round() as u8)).collect();
             let png = image::RgbImage::from_raw(w as u32, h as u32, px).ok_or("latent image size")?;
             let mut bytes = std::io::Cursor::new(Vec::new());
             png.write_to(&mut bytes, image::ImageFormat::Png).map_err(|e| format!("encoding latent{tex}.png: {e}"))?;
             let path = self.dir.join(format!("latent{tex}.png"));
             write_atomically(&path, &bytes.into_inner()).map_err(|e| format!("{}: {e}", path.display()))?;
+        }
+        // A previous, wider fit's textures would be stale.
+        for tex in k.div_ceil(3)..MAX_LATENTS.div_ceil(3) {
+            let path = self.dir.join(format!("latent{tex}.png"));
+            if path.exists() {
+                std::fs::remove_file(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+            }
         }
         exr::write(&self.latent_path(), &img, Compression::Zip)
     }

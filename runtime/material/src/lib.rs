@@ -7,8 +7,9 @@
 //! OUT/params.exr         per texel: the uplift_stack parameters, diffuse_color.R/G/B, normal.X/Y/Z
 //! OUT/meta.json          what made it (format, Type, rule, seed, source, scalars, masks): `Meta`
 //! OUT/masks/, textures/  the rule's procedural masks and the PBR input's textures
-//! OUT/latent.exr         the fitted latents latent0.R/G/B, latent1.R/G/B (`uplift fit`)
-//! OUT/latent0.png, latent1.png   the same quantised to 8 bits
+//! OUT/latent.exr         the fitted latents latent0.R/G/B, latent1.R/G/B (`uplift fit`; a
+//!                        decoder with a wider latent adds latent2.R, …)
+//! OUT/latent0.png, latent1.png, …   the same quantised to 8 bits
 //! OUT/fit.json           the fit's record (Eq. 3 before and after, groups, time): `FitRecord`
 //! ```
 //!

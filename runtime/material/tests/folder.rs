@@ -101,12 +101,30 @@ fn what_this_build_writes_reads_back_equal() {
     folder.write_fit(&fit).unwrap();
     assert_eq!(folder.read_fit().unwrap(), uplift_material::FitRecord { format: FIT_FORMAT, ..fit });
 
-    let latents = LatentImage { width: 3, height: 2, latents: (0..36).map(|k| k as f32 / 35.0 - 0.25).collect() };
+    // A latent of 8 (a wider decoder's): a third texture's R and G, its B 0 in the PNG.
+    let wide = LatentImage { width: 3, height: 2, channels: 8, latents: (0..48).map(|k| k as f32 / 47.0).collect() };
+    folder.write_latents(&wide).unwrap();
+    assert_eq!(folder.read_latents().unwrap(), wide);
+    let png = image::open(dir.join("latent2.png")).unwrap().to_rgb8();
+    // Texel (2, 1) = 5, latent2.G = value 5·8 + 7 = 47/47 → 255; its B → 0.
+    assert_eq!((png.get_pixel(2, 1)[1], png.get_pixel(2, 1)[2]), (255, 0));
+    // The paper's 6 over it: latent2.png, now stale, is removed.
+    let latents = LatentImage { width: 3, height: 2, channels: LATENTS, latents: (0..36).map(|k| k as f32 / 35.0 - 0.25).collect() };
     folder.write_latents(&latents).unwrap();
     assert_eq!(folder.read_latents().unwrap(), latents);
+    assert!(!dir.join("latent2.png").exists());
     let png = image::open(dir.join("latent1.png")).unwrap().to_rgb8();
     // Texel (1, 0), latent1.G = value 1·6 + 4 = 10/35 − 0.25 → 0.0357 → 9 of 255.
     assert_eq!(png.get_pixel(1, 0)[1], ((10.0f32 / 35.0 - 0.25) * 255.0).round() as u8);
+    // A gap in the channels is an error naming the missing one.
+    let mut gap = uplift_base::exr::ExrImage::new(1, 1);
+    for c in (0..6).chain([7]) {
+        gap.push(&uplift_material::folder::latent_channel(c), vec![0.5]).unwrap();
+    }
+    uplift_base::exr::write(&folder.latent_path(), &gap, uplift_base::exr::Compression::Zip).unwrap();
+    let e = folder.read_latents().unwrap_err();
+    assert!(e.contains("latent.exr") && e.contains("`latent2.G` without `latent2.R`"), "{e}");
+    folder.write_latents(&latents).unwrap();
     assert!(folder.has_fit());
     assert!(std::fs::read_dir(&dir).unwrap().all(|e| !e.unwrap().file_name().to_string_lossy().ends_with(".tmp")), "no temporary files left");
 }

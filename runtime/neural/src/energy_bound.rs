@@ -23,7 +23,7 @@ use crate::datagen::DataGenerator;
 use crate::features::{cosine_hemisphere, direction_features, view_cosines, view_direction, FEATURES};
 use crate::loss::OUTPUTS;
 use crate::mlp::{Mlp, Workspace};
-use crate::model::{DECODER_INPUTS, LATENT};
+use crate::model::{latent_width, MAX_LATENT};
 use uplift_base::rng::{mix64, unit_from_key as unit};
 use uplift_engines::stack_kernel::{usable_sample, vec3_at};
 use std::f32::consts::PI;
@@ -180,15 +180,17 @@ struct Scratch {
 
 /// The bound's penalty for one group at latent `z`, its largest excess, and (when `gradient`)
 /// ∂penalty/∂z.
-fn penalty(decoder: &Mlp<f32>, probe: &GroupProbe, z: &[f32], margin: f32, gradient: bool, s: &mut Scratch) -> (f32, f32, [f32; LATENT]) {
+fn penalty(decoder: &Mlp<f32>, probe: &GroupProbe, z: &[f32], margin: f32, gradient: bool, s: &mut Scratch) -> (f32, f32, [f32; MAX_LATENT]) {
     let rows = probe.weight.len();
     let views = probe.throughput.len();
     let m = rows / views;
-    s.input.resize(rows * DECODER_INPUTS, 0.0);
+    let latent = z.len();
+    let inputs = decoder.shape.widths[0];
+    s.input.resize(rows * inputs, 0.0);
     for r in 0..rows {
-        let row = &mut s.input[r * DECODER_INPUTS..(r + 1) * DECODER_INPUTS];
-        row[..LATENT].copy_from_slice(z);
-        row[LATENT..].copy_from_slice(&probe.features[r * FEATURES..(r + 1) * FEATURES]);
+        let row = &mut s.input[r * inputs..(r + 1) * inputs];
+        row[..latent].copy_from_slice(z);
+        row[latent..].copy_from_slice(&probe.features[r * FEATURES..(r + 1) * FEATURES]);
     }
     let out = decoder.forward(&s.input, rows, &mut s.ws);
     s.d_out.clear();
@@ -212,23 +214,25 @@ fn penalty(decoder: &Mlp<f32>, probe: &GroupProbe, z: &[f32], margin: f32, gradi
             }
         }
     }
-    let mut g = [0.0f32; LATENT];
+    let mut g = [0.0f32; MAX_LATENT];
     if gradient && total > 0.0 {
         let d_in = decoder.backward(&s.input, &s.d_out, &mut s.ws, None);
         for r in 0..rows {
-            for k in 0..LATENT {
-                g[k] += d_in[r * DECODER_INPUTS + k];
+            for k in 0..latent {
+                g[k] += d_in[r * inputs + k];
             }
         }
     }
     (total, worst, g)
 }
 
-/// Moves the latents `z` (groups × 6) of groups over the bound until they are within it (or
+/// Moves the latents `z` (groups × the latent width) of groups over the bound until they are within it (or
 /// `o.steps` run out); `group_params` (groups × the stack's parameters) are the groups' parameters.
 pub fn enforce_energy_bound(decoder: &Mlp<f32>, generator: &DataGenerator, group_params: &[f32], diffuse: &[f32], z: &mut [f32], threads: usize, o: &EnergyOptions) -> Result<EnergyReport, String> {
     let groups = group_params.len() / generator.stack().len();
-    assert_eq!(z.len(), groups * LATENT, "latents per group");
+    let latent = latent_width(decoder);
+    assert!(latent <= MAX_LATENT, "a latent of {latent} values");
+    assert_eq!(z.len(), groups * latent, "latents per group");
     assert_eq!(diffuse.len(), groups * 3, "diffuse colours per group");
     let probes = probes(generator, group_params, diffuse, o)?;
     let threads = threads.max(1);
@@ -238,25 +242,25 @@ pub fn enforce_energy_bound(decoder: &Mlp<f32>, generator: &DataGenerator, group
         let per = list.len().div_ceil(threads).max(1);
         let chunks: Vec<&[usize]> = list.chunks(per).collect();
         let z_now: &[f32] = z;
-        let results: Vec<Vec<(f32, f32, [f32; LATENT])>> = std::thread::scope(|scope| {
+        let results: Vec<Vec<(f32, f32, [f32; MAX_LATENT])>> = std::thread::scope(|scope| {
             let handles: Vec<_> = chunks
                 .iter()
                 .map(|chunk| {
                     scope.spawn(move || {
                         let mut s = Scratch::default();
-                        chunk.iter().map(|&g| penalty(decoder, &probes[g], &z_now[g * LATENT..(g + 1) * LATENT], o.margin, step, &mut s)).collect::<Vec<_>>()
+                        chunk.iter().map(|&g| penalty(decoder, &probes[g], &z_now[g * latent..(g + 1) * latent], o.margin, step, &mut s)).collect::<Vec<_>>()
                     })
                 })
                 .collect();
             handles.into_iter().map(|h| h.join().expect("an energy-bound thread panicked")).collect()
         });
-        let flat: Vec<(f32, f32, [f32; LATENT])> = results.into_iter().flatten().collect();
+        let flat: Vec<(f32, f32, [f32; MAX_LATENT])> = results.into_iter().flatten().collect();
         if step {
             for (&g, (p, _, grad)) in list.iter().zip(&flat) {
                 if *p > 0.0 {
-                    let adam = adams[g].get_or_insert_with(|| Adam::new(LATENT));
-                    let zg = &mut z[g * LATENT..(g + 1) * LATENT];
-                    adam.step(zg, grad, o.lr);
+                    let adam = adams[g].get_or_insert_with(|| Adam::new(latent));
+                    let zg = &mut z[g * latent..(g + 1) * latent];
+                    adam.step(zg, &grad[..latent], o.lr);
                     zg.iter_mut().for_each(|x| *x = x.clamp(0.0, 1.0));
                 }
             }

@@ -31,11 +31,11 @@ pub fn encode(model: &NeuralModel<f32>, encoded: &[f32]) -> Vec<f32> {
     model.encoder.forward(encoded, rows, &mut Workspace::without_input_gradient()).to_vec()
 }
 
-/// Decoder outputs (rows × 7) for latents (rows × 6) and features (rows × 9).
+/// Decoder outputs (rows × 7) for latents (rows × the latent width) and features (rows × 9).
 pub fn decode(model: &NeuralModel<f32>, latents: &[f32], features: &[f32]) -> Vec<f32> {
     let rows = features.len() / FEATURES;
     let mut dec_in = Vec::new();
-    fill_decoder_input(latents, &vec![0.0; latents.len()], features, rows, &mut dec_in);
+    fill_decoder_input(latents, &vec![0.0; latents.len()], features, rows, model.latent(), &mut dec_in);
     model.decoder.forward(&dec_in, rows, &mut Workspace::default()).to_vec()
 }
 

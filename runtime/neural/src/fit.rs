@@ -1,5 +1,5 @@
-//! Per-material latent fitting (paper §4.3, lobes.md §4.4): the two RGB latent textures of an
-//! enhanced material are optimised against the frozen decoder with Eq. 3 (and the ±0.005
+//! Per-material latent fitting (paper §4.3, lobes.md §4.4): the latent textures of an
+//! enhanced material (the decoder's latent width: two RGB textures for the paper's 6) are optimised against the frozen decoder with Eq. 3 (and the ±0.005
 //! jitter), starting from the encoder's latents.
 //!
 //! Texels are grouped by their parameter vector quantised to `levels` steps per encoded channel
@@ -21,7 +21,7 @@ use crate::energy_bound::{enforce_energy_bound, EnergyOptions, EnergyReport};
 use crate::evaluate::{decode, encode};
 use crate::loss::{eq3_loss, LossParts, LossWeights, OUTPUTS};
 use crate::mlp::Mlp;
-use crate::model::{latent_slice, ModelWorkspace, NeuralModel, Slice, LATENT};
+use crate::model::{latent_slice, latent_width, ModelWorkspace, NeuralModel, Slice};
 use crate::trainer::jitter;
 use uplift_base::rng::mix64;
 use std::collections::HashMap;
@@ -72,9 +72,10 @@ pub struct FitBuffers {
     jitter: Vec<f32>,
 }
 
-/// ∂(Eq. 3)/∂latent for rows of latents (rows × 6, jitter added), over `threads` slices.
+/// ∂(Eq. 3)/∂latent for rows of latents (rows × the latent width, jitter added), over `threads` slices.
 fn latent_gradients(decoder: &Mlp<f32>, latents: &[f32], jit: &[f32], features: &[f32], target: &[f32], mu_l: &[f32], threads: usize, ws: &mut Vec<ModelWorkspace<f32>>) -> (LossParts, Vec<f32>) {
     let rows = mu_l.len();
+    let latent = latent_width(decoder);
     let threads = threads.clamp(1, rows.max(1));
     ws.resize_with(threads, ModelWorkspace::default);
     let per = rows.div_ceil(threads);
@@ -88,7 +89,7 @@ fn latent_gradients(decoder: &Mlp<f32>, latents: &[f32], jit: &[f32], features: 
                     if a == b {
                         return (LossParts::default(), Vec::new());
                     }
-                    let s = Slice { input: &latents[a * LATENT..b * LATENT], jitter: &jit[a * LATENT..b * LATENT], features: &features[a * 9..b * 9], target: &target[a * 7..b * 7], mu_l: &mu_l[a..b], batch: rows };
+                    let s = Slice { input: &latents[a * latent..b * latent], jitter: &jit[a * latent..b * latent], features: &features[a * 9..b * 9], target: &target[a * 7..b * 7], mu_l: &mu_l[a..b], batch: rows };
                     latent_slice(decoder, &s, LossWeights::PAPER, w)
                 })
             })
@@ -96,7 +97,7 @@ fn latent_gradients(decoder: &Mlp<f32>, latents: &[f32], jit: &[f32], features: 
         handles.into_iter().map(|h| h.join().expect("a fitting thread panicked")).collect()
     });
     let mut loss = LossParts::default();
-    let mut grad = Vec::with_capacity(rows * LATENT);
+    let mut grad = Vec::with_capacity(rows * latent);
     for (p, g) in parts {
         loss.add(&p);
         grad.extend_from_slice(&g);
@@ -115,7 +116,7 @@ fn adam_clamped(adam: &mut Adam, z: &mut [f32], g: &[f32], lr: f32) {
 #[allow(clippy::too_many_arguments)]
 pub fn fit_step_rows(decoder: &Mlp<f32>, latents: &mut [f32], features: &[f32], target: &[f32], mu_l: &[f32], step: u64, lr: f32, threads: usize, buf: &mut FitBuffers) -> LossParts {
     let rows = mu_l.len();
-    jitter(0, step, rows, 0.005, &mut buf.jitter);
+    jitter(0, step, rows * latent_width(decoder), 0.005, &mut buf.jitter);
     let (loss, g) = latent_gradients(decoder, latents, &buf.jitter, features, target, mu_l, threads, &mut buf.workspaces);
     let adam = buf.adam.get_or_insert_with(|| Adam::new(latents.len()));
     adam_clamped(adam, latents, &g, lr);
@@ -127,8 +128,10 @@ pub fn fit_step_rows(decoder: &Mlp<f32>, latents: &mut [f32], features: &[f32], 
 pub struct FitResult {
     pub width: usize,
     pub height: usize,
-    /// texels × 6.
+    /// texels × `latent`.
     pub latents: Vec<f32>,
+    /// Latent values per texel (the decoder's latent width).
+    pub latent: usize,
     pub groups: usize,
     /// Eq. 3 at the check texels: encoder-only latents, fitted latents (after the energy bound),
     /// and the Eq. 3 fit before the bound moved it (equal to `after` without the bound).
@@ -156,6 +159,7 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
         return Err(format!("the decoder's encoder reads {model_width} parameters; the stack has {}", stack.len()));
     }
     let np = stack.len();
+    let latent = model.latent();
     if params.len() != n * np {
         return Err(format!("{} parameter values for {width}×{height} texels", params.len()));
     }
@@ -208,13 +212,13 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     let bar = if progress { indicatif::ProgressBar::new(o.steps) } else { indicatif::ProgressBar::hidden() };
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps, eta {eta} · {msg}").unwrap());
     let (mut first_step, mut last_step) = (LossParts::default(), LossParts::default());
-    let mut row_latents = vec![0.0f32; rows * LATENT];
+    let mut row_latents = vec![0.0f32; rows * latent];
     for step in 0..o.steps {
         let data: TrainingBatch = generator.evaluate(rows_params.clone(), mix64(o.seed ^ 0x6669_74) ^ mix64(step))?;
         for r in 0..rows {
-            row_latents[r * LATENT..(r + 1) * LATENT].copy_from_slice(&z[(r / d) * LATENT..(r / d + 1) * LATENT]);
+            row_latents[r * latent..(r + 1) * latent].copy_from_slice(&z[(r / d) * latent..(r / d + 1) * latent]);
         }
-        jitter(o.seed, step, rows, o.jitter, &mut jit);
+        jitter(o.seed, step, rows * latent, o.jitter, &mut jit);
         let (loss, g) = latent_gradients(&model.decoder, &row_latents, &jit, &data.features, &data.target, &data.mu_l, o.threads, &mut ws);
         if step == 0 {
             first_step = loss;
@@ -222,8 +226,8 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
         last_step = loss;
         let mut gz = vec![0.0f32; z.len()];
         for r in 0..rows {
-            for k in 0..LATENT {
-                gz[(r / d) * LATENT + k] += g[r * LATENT + k];
+            for k in 0..latent {
+                gz[(r / d) * latent + k] += g[r * latent + k];
             }
         }
         adam_clamped(&mut adam, &mut z, &gz, cosine_lr(step, o.steps, o.lr_start, o.lr_end));
@@ -249,11 +253,11 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     // Texel latents: the encoder's, moved by the group's correction.
     let enc = encode(model, &encoded);
     let texel_latents = |z: &[f32]| -> Vec<f32> {
-        let mut latents = vec![0.0f32; n * LATENT];
+        let mut latents = vec![0.0f32; n * latent];
         for t in 0..n {
             let g = group_of[t] as usize;
-            for k in 0..LATENT {
-                latents[t * LATENT + k] = (enc[t * LATENT + k] + z[g * LATENT + k] - z0[g * LATENT + k]).clamp(0.0, 1.0);
+            for k in 0..latent {
+                latents[t * latent + k] = (enc[t * latent + k] + z[g * latent + k] - z0[g * latent + k]).clamp(0.0, 1.0);
             }
         }
         latents
@@ -264,7 +268,7 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     let cd = o.check_directions.max(1);
     let check_params: Vec<f32> = checks.iter().flat_map(|&t| (0..cd).flat_map(move |_| params[t * np..(t + 1) * np].to_vec())).collect();
     let check = generator.evaluate(check_params, mix64(o.seed ^ 0x6368_6563_6b))?;
-    let lat = |src: &[f32]| -> Vec<f32> { checks.iter().flat_map(|&t| (0..cd).flat_map(move |_| src[t * LATENT..(t + 1) * LATENT].to_vec())).collect() };
+    let lat = |src: &[f32]| -> Vec<f32> { checks.iter().flat_map(|&t| (0..cd).flat_map(move |_| src[t * latent..(t + 1) * latent].to_vec())).collect() };
     let loss_of = |z: &[f32]| {
         let out = decode(model, z, &check.features);
         let mut d = vec![0.0f32; out.len()];
@@ -274,11 +278,8 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     let after = loss_of(&lat(&latents));
     let after_unbounded = if energy.is_some() { loss_of(&lat(&texel_latents(&z_unbounded))) } else { after };
     debug_assert_eq!(OUTPUTS, 7);
-    Ok(FitResult { width, height, latents, groups, before, after, after_unbounded, first_step, last_step, energy, seconds: start.elapsed().as_secs_f64() })
+    Ok(FitResult { width, height, latents, latent, groups, before, after, after_unbounded, first_step, last_step, energy, seconds: start.elapsed().as_secs_f64() })
 }
-
-// latent.exr holds exactly the model's latents.
-const _: () = assert!(LATENT == uplift_material::folder::LATENTS);
 
 impl FitResult {
     /// The fit's record for the material folder's fit.json (`decoder` names the weights it was
@@ -305,6 +306,6 @@ impl FitResult {
 
     /// The fitted latents as latent.exr holds them.
     pub fn latent_image(&self) -> LatentImage {
-        LatentImage { width: self.width, height: self.height, latents: self.latents.clone() }
+        LatentImage { width: self.width, height: self.height, channels: self.latent, latents: self.latents.clone() }
     }
 }

@@ -8,12 +8,12 @@
 
 use crate::loss::OUTPUTS;
 use crate::mlp::{Activation, Mlp, Workspace};
-use crate::model::{BLOCK_ROWS as BLOCK, DECODER_INPUTS};
+use crate::model::BLOCK_ROWS as BLOCK;
 use uplift_engines::wgpu_engine::WgpuEngine;
 use uplift_compiler::backend_neural::{write_wgsl_decoder, DecoderSpec, NeuralActivation, DECODER_ENTRY_POINT, DECODER_WORKGROUP_SIZE};
 use wgpu::util::DeviceExt;
 
-/// Decodes `dec_in` (rows × 15) into `out` (rows × 7) on `threads` threads.
+/// Decodes `dec_in` (rows × the decoder's inputs) into `out` (rows × 7) on `threads` threads.
 pub fn decode_parallel(decoder: &Mlp<f32>, dec_in: &[f32], out: &mut [f32], threads: usize) {
     decode_parallel_in(&mut Vec::new(), decoder, dec_in, out, threads);
 }
@@ -21,7 +21,8 @@ pub fn decode_parallel(decoder: &Mlp<f32>, dec_in: &[f32], out: &mut [f32], thre
 /// [`decode_parallel`] with per-thread workspaces kept by the caller between calls (their
 /// buffers and the packed weights of a frozen decoder are then reused).
 pub fn decode_parallel_in(workspaces: &mut Vec<Workspace<f32>>, decoder: &Mlp<f32>, dec_in: &[f32], out: &mut [f32], threads: usize) {
-    let rows = dec_in.len() / DECODER_INPUTS;
+    let inputs = decoder.shape.widths[0];
+    let rows = dec_in.len() / inputs;
     assert_eq!(out.len(), rows * OUTPUTS, "output rows");
     let threads = threads.clamp(1, rows.div_ceil(BLOCK).max(1));
     let per = rows.div_ceil(threads);
@@ -30,10 +31,10 @@ pub fn decode_parallel_in(workspaces: &mut Vec<Workspace<f32>>, decoder: &Mlp<f3
     }
     std::thread::scope(|scope| {
         for ((t, chunk), ws) in out.chunks_mut(per * OUTPUTS).enumerate().zip(workspaces.iter_mut()) {
-            let input = &dec_in[t * per * DECODER_INPUTS..(t * per + chunk.len() / OUTPUTS) * DECODER_INPUTS];
+            let input = &dec_in[t * per * inputs..(t * per + chunk.len() / OUTPUTS) * inputs];
             scope.spawn(move || {
-                for (i, o) in input.chunks(BLOCK * DECODER_INPUTS).zip(chunk.chunks_mut(BLOCK * OUTPUTS)) {
-                    o.copy_from_slice(decoder.forward(i, i.len() / DECODER_INPUTS, ws));
+                for (i, o) in input.chunks(BLOCK * inputs).zip(chunk.chunks_mut(BLOCK * OUTPUTS)) {
+                    o.copy_from_slice(decoder.forward(i, i.len() / inputs, ws));
                 }
             });
         }

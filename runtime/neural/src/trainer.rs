@@ -8,7 +8,7 @@
 use crate::adam::{cosine_lr, Adam};
 use crate::datagen::{ClassMix, DataGenerator, TrainingBatch};
 use crate::loss::{LossParts, LossWeights};
-use crate::model::{ModelWorkspace, NeuralModel, Slice, LATENT};
+use crate::model::{ModelWorkspace, NeuralModel, Slice};
 use crate::weights::TensorFile;
 use uplift_engines::stack::Stack;
 use uplift_base::rng::mix64;
@@ -36,6 +36,9 @@ pub struct TrainOptions {
     pub init: Option<std::path::PathBuf>,
     /// The training views' distribution (recorded; the generator draws them).
     pub views: super::datagen::ViewDistribution,
+    /// The latent width; `None`: the `init` file's, or the paper's 6 ([`crate::model::LATENT`]).
+    /// Wider than `init`'s: its latent is widened (`weights::widen_latent`).
+    pub latent: Option<usize>,
 }
 
 impl Default for TrainOptions {
@@ -54,6 +57,7 @@ impl Default for TrainOptions {
             stop_after: None,
             init: None,
             views: super::datagen::ViewDistribution::Cosine,
+            latent: None,
         }
     }
 }
@@ -83,9 +87,9 @@ pub struct TrainState {
 }
 
 impl TrainState {
-    /// A fresh state for a stack of `parameters` parameters.
-    pub fn new(parameters: usize, seed: u64) -> TrainState {
-        let model = NeuralModel::<f32>::new(parameters, seed);
+    /// A fresh state for a stack of `parameters` parameters and a latent of `latent` values.
+    pub fn new(parameters: usize, latent: usize, seed: u64) -> TrainState {
+        let model = NeuralModel::<f32>::new(parameters, latent, seed);
         TrainState { adam_enc: Adam::new(model.encoder.params.len()), adam_dec: Adam::new(model.decoder.params.len()), model, step: 0, history: Vec::new(), seconds: 0.0, window: (LossParts::default(), 0) }
     }
 }
@@ -97,11 +101,11 @@ pub struct StepBuffers {
     jitter: Vec<f32>,
 }
 
-/// The latent jitter of `rows` rows at `step`: uniform in ±`half`.
-pub fn jitter(seed: u64, step: u64, rows: usize, half: f32, out: &mut Vec<f32>) {
+/// The latent jitter of `values` latent values (rows × the latent width) at `step`: uniform in ±`half`.
+pub fn jitter(seed: u64, step: u64, values: usize, half: f32, out: &mut Vec<f32>) {
     out.clear();
     let key = mix64(seed ^ 0x6a69_7474_6572) ^ mix64(step);
-    out.extend((0..rows * LATENT).map(|k| {
+    out.extend((0..values).map(|k| {
         let u = ((mix64(key.wrapping_add(k as u64)) >> 40) as f32) / (1u64 << 24) as f32;
         (2.0 * u - 1.0) * half
     }));
@@ -111,7 +115,8 @@ pub fn jitter(seed: u64, step: u64, rows: usize, half: f32, out: &mut Vec<f32>) 
 pub fn train_step(state: &mut TrainState, batch: &TrainingBatch, opts: &TrainOptions, buf: &mut StepBuffers) -> LossParts {
     let rows = batch.rows;
     let threads = opts.threads.clamp(1, rows.max(1));
-    jitter(opts.seed, state.step, rows, opts.jitter, &mut buf.jitter);
+    let latent = state.model.latent();
+    jitter(opts.seed, state.step, rows * latent, opts.jitter, &mut buf.jitter);
     let (ne, nd) = (state.model.encoder.params.len(), state.model.decoder.params.len());
     let np = state.model.encoder.shape.widths[0];
     buf.slices.resize_with(threads, || (ModelWorkspace::default(), Vec::new(), Vec::new()));
@@ -135,7 +140,7 @@ pub fn train_step(state: &mut TrainState, batch: &TrainingBatch, opts: &TrainOpt
                     }
                     let s = Slice {
                         input: &batch.encoded[a * np..b * np],
-                        jitter: &jit[a * LATENT..b * LATENT],
+                        jitter: &jit[a * latent..b * latent],
                         features: &batch.features[a * 9..b * 9],
                         target: &batch.target[a * 7..b * 7],
                         mu_l: &batch.mu_l[a..b],
@@ -177,6 +182,9 @@ fn option_fingerprint(o: &TrainOptions) -> String {
     }
     if let Some(init) = &o.init {
         f += &format!(" init={}", init.display());
+    }
+    if let Some(latent) = o.latent.filter(|&l| l != crate::model::LATENT) {
+        f += &format!(" latent={latent}");
     }
     f
 }
@@ -246,10 +254,12 @@ pub fn read_checkpoint(path: &Path, stack: &Stack, opts: &TrainOptions) -> Resul
     let encoder = f.mlp("encoder").map_err(at)?;
     let decoder = f.mlp("decoder").map_err(at)?;
     super::weights::check_stack(&f, &encoder, stack).map_err(at)?;
+    let model = NeuralModel { encoder, decoder };
+    model.check().map_err(at)?;
     Ok(TrainState {
-        adam_enc: f.adam("encoder", encoder.params.len()).map_err(at)?,
-        adam_dec: f.adam("decoder", decoder.params.len()).map_err(at)?,
-        model: NeuralModel { encoder, decoder },
+        adam_enc: f.adam("encoder", model.encoder.params.len()).map_err(at)?,
+        adam_dec: f.adam("decoder", model.decoder.params.len()).map_err(at)?,
+        model,
         step: f.meta("step").map_err(at)?.parse().map_err(|_| at("`step` is not a number".into()))?,
         history: parse_history(f.meta("history").map_err(at)?).map_err(at)?,
         seconds: f.meta("seconds").map_err(at)?.parse().unwrap_or(0.0),
@@ -300,11 +310,26 @@ pub fn train_checkpointed(generator: &DataGenerator, opts: &TrainOptions, out: &
     let mut state = if ckpt.exists() {
         read_checkpoint(&ckpt, generator.stack(), opts)?
     } else {
-        let mut s = TrainState::new(generator.stack().len(), opts.seed);
+        let latent = opts.latent.unwrap_or(crate::model::LATENT);
+        if latent == 0 || latent > crate::model::MAX_LATENT {
+            return Err(format!("--latent {latent}: a latent has 1 to {} values", crate::model::MAX_LATENT));
+        }
+        let mut s = TrainState::new(generator.stack().len(), latent, opts.seed);
         if let Some(init) = &opts.init {
             let f = super::weights::TensorFile::read(init)?;
             let at = |e: String| format!("{}: {e}", init.display());
             s.model = NeuralModel { encoder: f.mlp("encoder").map_err(at)?, decoder: f.mlp("decoder").map_err(at)? };
+            s.model.check().map_err(at)?;
+            match opts.latent {
+                Some(wide) if wide > s.model.latent() => {
+                    if progress {
+                        eprintln!("{}: a latent of {}; widened to {wide} (the decoder's new inputs' weights 0, so it starts as the file's)", init.display(), s.model.latent());
+                    }
+                    s.model = super::weights::widen_latent(&s.model, wide, opts.seed);
+                }
+                Some(narrow) if narrow != s.model.latent() => return Err(at(format!("a latent of {} values; --latent {narrow} cannot start from it (only a wider latent can)", s.model.latent()))),
+                _ => {}
+            }
             if let Err(e) = super::weights::check_stack(&f, &s.model.encoder, generator.stack()) {
                 // A decoder for a stack this one extends: its encoder widened, new inputs at 0.
                 s.model.encoder = super::weights::widen_encoder(&f, &s.model.encoder, generator.stack()).map_err(|w| at(format!("{e}; and it cannot be widened to this stack: {w}")))?;
@@ -313,6 +338,8 @@ pub fn train_checkpointed(generator: &DataGenerator, opts: &TrainOptions, out: &
                 }
             }
         }
+        s.adam_enc = Adam::new(s.model.encoder.params.len());
+        s.adam_dec = Adam::new(s.model.decoder.params.len());
         s
     };
     let bar = if progress { indicatif::ProgressBar::new(opts.steps) } else { indicatif::ProgressBar::hidden() };

@@ -161,6 +161,7 @@ pub fn load_model(path: &Path, stack: &Stack) -> Result<crate::model::NeuralMode
     let f = TensorFile::read(path)?;
     let at = |e: String| format!("{}: {e}", path.display());
     let model = crate::model::NeuralModel { encoder: f.mlp("encoder").map_err(at)?, decoder: f.mlp("decoder").map_err(at)? };
+    model.check().map_err(at)?;
     check_stack(&f, &model.encoder, stack).map_err(at)?;
     Ok(model)
 }
@@ -223,6 +224,41 @@ pub fn widen_encoder(f: &TensorFile, encoder: &Mlp<f32>, stack: &Stack) -> Resul
     Ok(widened)
 }
 
+/// `model` with a latent of `latent` values (wider than its own): the encoder's new outputs
+/// get fresh Xavier weights (seeded; distinct, so the new latent values differ from one
+/// another), the decoder's new inputs weights 0, so the widened model decodes exactly as
+/// `model` and training moves the new values into use. `uplift train --init F --latent N`.
+pub fn widen_latent(model: &crate::model::NeuralModel<f32>, latent: usize, seed: u64) -> crate::model::NeuralModel<f32> {
+    let old = model.latent();
+    assert!(latent >= old, "a latent is only widened");
+    let fresh = crate::model::NeuralModel::<f32>::new(model.encoder.shape.inputs(), latent, seed);
+    // Encoder: every layer as before; the last layer's rows for the new outputs from `fresh`.
+    let mut encoder = fresh.encoder.clone();
+    let last = encoder.shape.layers() - 1;
+    let (w_last, b_last) = encoder.shape.offsets(last);
+    let (w_old, b_old) = model.encoder.shape.offsets(last);
+    encoder.params[..w_last].copy_from_slice(&model.encoder.params[..w_old]);
+    let k = encoder.shape.widths[last];
+    encoder.params[w_last..w_last + old * k].copy_from_slice(&model.encoder.params[w_old..w_old + old * k]);
+    encoder.params[b_last..b_last + old].copy_from_slice(&model.encoder.params[b_old..b_old + old]);
+    // Decoder: the first layer's columns for the new latent values 0; every other weight as before.
+    let mut decoder = fresh.decoder.clone();
+    let (old_in, new_in, out) = (model.decoder.shape.inputs(), decoder.shape.inputs(), decoder.shape.widths[1]);
+    let (w0_new, b0_new) = decoder.shape.offsets(0);
+    let (w0_old, b0_old) = model.decoder.shape.offsets(0);
+    for o in 0..out {
+        let row = &mut decoder.params[w0_new + o * new_in..w0_new + (o + 1) * new_in];
+        let from = &model.decoder.params[w0_old + o * old_in..w0_old + (o + 1) * old_in];
+        row.fill(0.0);
+        row[..old].copy_from_slice(&from[..old]);
+        row[latent..].copy_from_slice(&from[old..]);
+        decoder.params[b0_new + o] = model.decoder.params[b0_old + o];
+    }
+    let (rest_new, rest_old) = (decoder.shape.offsets(1).0, model.decoder.shape.offsets(1).0);
+    decoder.params[rest_new..].copy_from_slice(&model.decoder.params[rest_old..]);
+    crate::model::NeuralModel { encoder, decoder }
+}
+
 /// How generated files name the weights: relative to the repository when inside it.
 pub fn source_name(path: &Path) -> String {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
@@ -240,7 +276,7 @@ mod tests {
     #[test]
     fn a_decoder_for_another_stack_is_refused() {
         let stack = Stack::builtin();
-        let encoder = Mlp::<f32>::new(crate::model::encoder_shape(stack.len()), 1);
+        let encoder = Mlp::<f32>::new(crate::model::encoder_shape(stack.len(), crate::model::LATENT), 1);
         let mut f = TensorFile::default();
         assert!(check_stack(&f, &encoder, &stack).is_ok(), "an old file of the right width");
         f.metadata.insert(STACK_KEY.into(), stack.signature());
@@ -248,12 +284,42 @@ mod tests {
         f.metadata.insert(STACK_KEY.into(), format!("{} film_ior[1.2,2.0]linear", stack.signature()));
         let e = check_stack(&f, &encoder, &stack).unwrap_err();
         assert!(e.contains("another uplift_stack") && e.contains("`film_ior[1.2,2.0]linear` is not in this stack"), "{e}");
-        let mut wide = crate::model::encoder_shape(stack.len());
+        let mut wide = crate::model::encoder_shape(stack.len(), crate::model::LATENT);
         wide.widths[0] += 2;
         let e = check_stack(&TensorFile::default(), &Mlp::<f32>::new(wide, 1), &stack).unwrap_err();
         assert!(e.contains(&format!("reads {} parameters", stack.len() + 2)), "{e}");
         let shipped = TensorFile::read(Path::new(SHIPPED_DECODER)).unwrap();
         assert_eq!(shipped.meta(STACK_KEY).unwrap(), stack.signature());
+    }
+
+    /// A latent widened from 6 to 8 decodes exactly as before (the decoder's new inputs are
+    /// unused) and keeps the encoder's first 6 outputs, while its 2 new outputs differ from each
+    /// other (so training can tell them apart).
+    #[test]
+    fn a_widened_latent_decodes_as_before() {
+        use crate::model::{NeuralModel, LATENT};
+        let stack = Stack::builtin();
+        let model = crate::weights::load_model(Path::new(SHIPPED_DECODER), &stack).unwrap();
+        let wide = widen_latent(&model, 8, 5);
+        wide.check().unwrap();
+        assert_eq!((wide.latent(), wide.encoder.shape.outputs(), wide.decoder.shape.inputs()), (8, 8, 17));
+        let rows = 64;
+        let mut rng = uplift_base::rng::SplitMix64::new(9);
+        let encoded: Vec<f32> = (0..rows * stack.len()).map(|_| rng.unit()).collect();
+        let features: Vec<f32> = (0..rows * crate::features::FEATURES).map(|_| rng.range(-1.0, 1.0)).collect();
+        let (z6, z8) = (crate::evaluate::encode(&model, &encoded), crate::evaluate::encode(&wide, &encoded));
+        let mut differs = 0;
+        for r in 0..rows {
+            assert_eq!(&z8[r * 8..r * 8 + LATENT], &z6[r * LATENT..(r + 1) * LATENT], "row {r}: the first six latent values");
+            differs += (z8[r * 8 + 6] != z8[r * 8 + 7]) as usize;
+        }
+        assert!(differs > rows / 2, "the new latent values are alike in {} of {rows} rows", rows - differs);
+        let (o6, o8) = (crate::evaluate::decode(&model, &z6, &features), crate::evaluate::decode(&wide, &z8, &features));
+        for (k, (a, b)) in o6.iter().zip(&o8).enumerate() {
+            assert!((a - b).abs() <= 1e-6 * a.abs().max(1e-3), "output {k}: {a} widened to {b}");
+        }
+        let fresh = NeuralModel::<f32>::new(stack.len(), 8, 1);
+        assert_eq!(fresh.latent(), 8);
     }
 
     #[test]

@@ -23,7 +23,7 @@ use uplift_neural::features::{direction_features, FEATURES};
 use uplift_neural::inference::decode_parallel;
 use uplift_neural::loss::OUTPUTS;
 use uplift_neural::mlp::Mlp;
-use uplift_neural::model::{fill_decoder_input, LATENT};
+use uplift_neural::model::{fill_decoder_input, latent_width};
 use uplift_engines::stack::Stack;
 use std::sync::Arc;
 use uplift_neural::inference::WgpuDecoder;
@@ -157,14 +157,18 @@ impl Shading {
     /// Decoder outputs (rows × 7) at (latent, wv, wl) per row.
     fn decode(&self, decoder: &Mlp<f32>, points: &[SurfaceSample], wv: &[Vec3], wl: &[Vec3]) -> Result<Vec<f32>, String> {
         let n = points.len();
-        let mut z = Vec::with_capacity(n * LATENT);
+        let latent = latent_width(decoder);
+        if let Some(p) = points.iter().find(|p| p.latents != latent) {
+            return Err(format!("the material's latent.exr has {} values per texel; the decoder reads {latent} (fit the material with this decoder)", p.latents));
+        }
+        let mut z = Vec::with_capacity(n * latent);
         let mut features = Vec::with_capacity(n * FEATURES);
         for r in 0..n {
-            z.extend_from_slice(&points[r].latent);
+            z.extend_from_slice(points[r].latent());
             features.extend_from_slice(&direction_features(wv[r], wl[r]));
         }
         let mut dec_in = Vec::new();
-        fill_decoder_input(&z, &vec![0.0; z.len()], &features, n, &mut dec_in);
+        fill_decoder_input(&z, &vec![0.0; z.len()], &features, n, latent, &mut dec_in);
         if let (ShadingEngine::Wgpu(e), Some(d)) = (&self.engine, &self.wgpu_decoder) {
             return d.decode(e, &dec_in);
         }

@@ -1,6 +1,6 @@
 //! A material's per-texel data as the renderer reads it: the `uplift_stack` parameters and
-//! the diffuse colour c (from `uplift enhance`'s params.exr), and optionally the 6 fitted latents
-//! (`uplift fit`'s latent.exr). Lookups are bilinear, repeating in u and clamped in v; v = 1 is
+//! the diffuse colour c (from `uplift enhance`'s params.exr), and optionally the fitted latents
+//! (`uplift fit`'s latent.exr: the decoder's latent width, 6 for the paper's). Lookups are bilinear, repeating in u and clamped in v; v = 1 is
 //! the image's top row (MaterialX's texcoord convention, as `uplift enhance` bakes).
 //!
 //! Normal maps (applied unchanged, as the paper does): params.exr's `normal.X/Y/Z` is the rule's
@@ -15,7 +15,7 @@ use crate::scene::Hit;
 use uplift_engines::stack::{Stack, MAX_PARAMETERS};
 use std::path::Path;
 use uplift_material::MaterialFolder;
-use uplift_neural::model::LATENT;
+use uplift_neural::model::MAX_LATENT;
 
 pub use uplift_material::NormalSpace;
 
@@ -28,6 +28,8 @@ pub struct SurfaceTextures {
     pub parameters: usize,
     pub values: Vec<f32>,
     pub has_latents: bool,
+    /// Latent values per texel (0 without latents).
+    pub latents: usize,
     /// Baked shading normals per texel (empty: no normal map) and their frame.
     pub normals: Vec<[f32; 3]>,
     pub normal_space: NormalSpace,
@@ -35,13 +37,15 @@ pub struct SurfaceTextures {
     pub glint: Option<uplift_material::GlintRecord>,
 }
 
-/// The data at one surface point (the first `count` of `params` are the stack's).
+/// The data at one surface point (the first `count` of `params` are the stack's, the first
+/// `latents` of `latent` the fitted latent).
 #[derive(Clone, Copy)]
 pub struct SurfaceSample {
     pub params: [f32; MAX_PARAMETERS],
     pub count: usize,
     pub diffuse: [f32; 3],
-    pub latent: [f32; LATENT],
+    pub latent: [f32; MAX_LATENT],
+    pub latents: usize,
 }
 
 impl SurfaceSample {
@@ -49,21 +53,28 @@ impl SurfaceSample {
     pub fn parameters(&self) -> &[f32] {
         &self.params[..self.count]
     }
+
+    /// The fitted latent (empty without one).
+    pub fn latent(&self) -> &[f32] {
+        &self.latent[..self.latents]
+    }
 }
 
 impl SurfaceTextures {
     /// One texel everywhere (`params`: one row of the stack's parameters).
-    pub fn uniform(params: &[f32], diffuse: [f32; 3], latent: Option<[f32; LATENT]>) -> SurfaceTextures {
+    pub fn uniform(params: &[f32], diffuse: [f32; 3], latent: Option<&[f32]>) -> SurfaceTextures {
         assert!(params.len() <= MAX_PARAMETERS, "a stack has at most {MAX_PARAMETERS} parameters");
+        let latent = latent.unwrap_or(&[]);
+        assert!(latent.len() <= MAX_LATENT, "a latent has at most {MAX_LATENT} values");
         let mut values = params.to_vec();
         values.extend_from_slice(&diffuse);
-        values.extend_from_slice(&latent.unwrap_or([0.0; LATENT]));
-        SurfaceTextures { width: 1, height: 1, parameters: params.len(), values, has_latents: latent.is_some(), normals: Vec::new(), normal_space: NormalSpace::Plane, glint: None }
+        values.extend_from_slice(latent);
+        SurfaceTextures { width: 1, height: 1, parameters: params.len(), values, has_latents: !latent.is_empty(), latents: latent.len(), normals: Vec::new(), normal_space: NormalSpace::Plane, glint: None }
     }
 
     /// Floats per texel: parameters, diffuse colour, latents.
     pub fn stride(&self) -> usize {
-        self.parameters + 3 + LATENT
+        self.parameters + 3 + self.latents
     }
 
     /// An enhanced material's folder: params.exr (`stack`'s parameters and the diffuse colour)
@@ -74,7 +85,12 @@ impl SurfaceTextures {
         let (w, h) = (p.width, p.height);
         let n = w * h;
         let np = stack.len();
-        let stride = np + 3 + LATENT;
+        let lat = if latents { Some(folder.read_latents()?) } else { None };
+        let k = lat.as_ref().map_or(0, |l| l.channels);
+        if k > MAX_LATENT {
+            return Err(format!("{}: {k} latent values per texel (at most {MAX_LATENT})", folder.latent_path().display()));
+        }
+        let stride = np + 3 + k;
         let diffuse = p.diffuse.ok_or_else(|| format!("{}: no channel `diffuse_color.R/G/B` (written by `uplift enhance`; re-run it if the folder predates the diffuse_color channels)", folder.params_path().display()))?;
         let mut values = vec![0.0f32; n * stride];
         for t in 0..n {
@@ -82,19 +98,18 @@ impl SurfaceTextures {
             v[..np].copy_from_slice(&p.params[t * np..(t + 1) * np]);
             v[np..np + 3].copy_from_slice(&diffuse[t * 3..t * 3 + 3]);
         }
-        if latents {
-            let lat = folder.read_latents()?;
+        if let Some(lat) = lat {
             if (lat.width, lat.height) != (w, h) {
                 return Err(format!("{}: {}×{} texels, but params.exr has {w}×{h}", folder.latent_path().display(), lat.width, lat.height));
             }
             for t in 0..n {
-                values[t * stride + np + 3..(t + 1) * stride].copy_from_slice(&lat.latents[t * LATENT..(t + 1) * LATENT]);
+                values[t * stride + np + 3..(t + 1) * stride].copy_from_slice(&lat.latents[t * k..(t + 1) * k]);
             }
         }
         let meta = folder.read_meta_if_any()?;
         let normal_space = meta.as_ref().map_or(NormalSpace::Plane, |m| m.normal_space);
         let glint = meta.and_then(|m| m.glint);
-        Ok(SurfaceTextures { width: w, height: h, parameters: np, values, has_latents: latents, normals: p.normals.unwrap_or_default(), normal_space, glint })
+        Ok(SurfaceTextures { width: w, height: h, parameters: np, values, has_latents: latents, latents: k, normals: p.normals.unwrap_or_default(), normal_space, glint })
     }
 
     /// The data of texel `t` (row-major index).
@@ -105,10 +120,11 @@ impl SurfaceTextures {
 
     fn split(&self, v: &[f32]) -> SurfaceSample {
         let np = self.parameters;
-        let mut s = SurfaceSample { params: [0.0; MAX_PARAMETERS], count: np, diffuse: [0.0; 3], latent: [0.0; LATENT] };
+        let k = self.latents;
+        let mut s = SurfaceSample { params: [0.0; MAX_PARAMETERS], count: np, diffuse: [0.0; 3], latent: [0.0; MAX_LATENT], latents: k };
         s.params[..np].copy_from_slice(&v[..np]);
         s.diffuse.copy_from_slice(&v[np..np + 3]);
-        s.latent.copy_from_slice(&v[np + 3..np + 3 + LATENT]);
+        s.latent[..k].copy_from_slice(&v[np + 3..np + 3 + k]);
         s
     }
 
@@ -127,7 +143,7 @@ impl SurfaceTextures {
     /// Bilinear lookup at texture coordinates (u, v).
     pub fn lookup(&self, uv: [f32; 2]) -> SurfaceSample {
         let stride = self.stride();
-        let mut acc = [0.0f32; MAX_PARAMETERS + 3 + LATENT];
+        let mut acc = [0.0f32; MAX_PARAMETERS + 3 + MAX_LATENT];
         for (t, wgt) in self.taps(uv) {
             for (a, v) in acc.iter_mut().zip(&self.values[t * stride..(t + 1) * stride]) {
                 *a += wgt * v;

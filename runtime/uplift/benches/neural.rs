@@ -17,7 +17,7 @@ use std::time::Instant;
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_neural::datagen::{ClassMix, DataGenerator};
 use uplift_neural::fit::{fit_step_rows, FitBuffers};
-use uplift_neural::model::{decoder_shape, encoder_shape, DECODER_INPUTS, LATENT};
+use uplift_neural::model::{decoder_shape, encoder_shape, LATENT};
 use uplift_neural::mlp::Real;
 use uplift_neural::trainer::{train_step, StepBuffers, TrainOptions, TrainState};
 
@@ -109,7 +109,8 @@ fn main() {
     };
     let generator = DataGenerator::new(CpuEngine::with_threads(o.threads).unwrap(), &uplift_engines::stack::Stack::builtin(), ClassMix::All, 1).unwrap();
     let batch = generator.batch(0, o.rows).unwrap();
-    let (enc, dec) = (encoder_shape(), decoder_shape());
+    let np = generator.stack().len();
+    let (enc, dec) = (encoder_shape(np, LATENT), decoder_shape(LATENT));
     // Multiply–adds per row: forward; training adds two GEMMs per layer backward (the
     // encoder's first layer skips its input gradient).
     let (mac_enc, mac_dec) = (enc.macs() as f64, dec.macs() as f64);
@@ -138,7 +139,7 @@ fn main() {
 
     let wants = |what: &str| o.only.as_deref().is_none_or(|w| w == what);
     let opts = TrainOptions { threads: o.threads, batch: o.rows, steps: 1 << 40, ..Default::default() };
-    let mut state = TrainState::new(1);
+    let mut state = TrainState::new(np, LATENT, 1);
     let mut buf = StepBuffers::default();
     if wants("train") {
         report("training step", rate(o.rows, o.seconds, || {
@@ -158,7 +159,7 @@ fn main() {
     }
 
     let dec_in: Vec<f32> = (0..o.rows).flat_map(|r| latents[r * LATENT..(r + 1) * LATENT].iter().chain(&batch.features[r * 9..(r + 1) * 9]).copied().collect::<Vec<_>>()).collect();
-    assert_eq!(dec_in.len(), o.rows * DECODER_INPUTS);
+    assert_eq!(dec_in.len(), o.rows * dec.inputs());
     let mut out = vec![0.0f32; o.rows * 7];
     let mut workspaces = Vec::new();
     if wants("infer") {

@@ -27,7 +27,7 @@ fn main() {
     for (name, v) in values {
         params[stack.index_of(name).expect("a stack parameter")] = v;
     }
-    let surface = SurfaceTextures::uniform(&params, [0.5, 0.35, 0.25], Some([0.5, 0.4, 0.6, 0.3, 0.2, 0.5]));
+    let surface = SurfaceTextures::uniform(&params, [0.5, 0.35, 0.25], Some(&[0.5, 0.4, 0.6, 0.3, 0.2, 0.5]));
     let decoder = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER), &uplift_engines::stack::Stack::builtin()).unwrap().decoder;
     let env = Environment::studio();
     let o = RenderOptions { width: 192, height: 192, spp: 16, bounces: 2, ..Default::default() };

@@ -1,7 +1,8 @@
-//! `uplift fit OUT/ [--decoder FILE]`: fits the two RGB latent textures of an enhanced material
-//! (`uplift enhance`'s OUT/params.exr) against the frozen decoder (default: the shipped
+//! `uplift fit OUT/ [--decoder FILE]`: fits the latent textures of an enhanced material (two RGB
+//! textures for the paper's latent of 6; the decoder's width) (`uplift enhance`'s
+//! OUT/params.exr) against the frozen decoder (default: the shipped
 //! runtime/weights/decoder.safetensors), initialised from its encoder. Writes OUT/latent.exr
-//! (channels latent0.R/G/B, latent1.R/G/B, float), OUT/latent0.png and OUT/latent1.png (the same
+//! (channels latent0.R/G/B, latent1.R/G/B, …, float), OUT/latent0.png, latent1.png, … (the same
 //! quantised to 8 bits) and OUT/fit.json (Eq. 3 per term before and after, groups, time).
 
 use clap::Args;

@@ -58,6 +58,10 @@ pub struct TrainArgs {
     /// --directions-per-view`); a divisor of --batch.
     #[arg(long, default_value_t = 1)]
     pub directions_per_view: usize,
+    /// Latent values per texel (default: the --init file's, or the paper's 6 — two RGB
+    /// textures); wider than the --init file's widens it (the new inputs start unused).
+    #[arg(long)]
+    pub latent: Option<usize>,
     #[command(flatten)]
     pub stack: super::StackArgs,
 }
@@ -72,7 +76,7 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
     }
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
     let views = ViewDistribution::parse(&args.views).map_err(|e| format!("--views: {e}"))?;
-    let opts = TrainOptions { steps: args.steps, batch: args.batch, seed: args.seed, lr_start: args.lr, lr_end: args.lr_end, jitter: args.jitter, threads, mix: mix.clone(), checkpoint_every: args.checkpoint_every, stop_after: args.stop_after, init: args.init.clone(), views, ..Default::default() };
+    let opts = TrainOptions { steps: args.steps, batch: args.batch, seed: args.seed, lr_start: args.lr, lr_end: args.lr_end, jitter: args.jitter, threads, mix: mix.clone(), checkpoint_every: args.checkpoint_every, stop_after: args.stop_after, init: args.init.clone(), views, latent: args.latent, ..Default::default() };
     if let Some(parent) = args.output.parent().filter(|p| !p.as_os_str().is_empty()) {
         std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
     }
@@ -93,6 +97,9 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
     }
     if args.directions_per_view != 1 {
         command += &format!(" --directions-per-view {}", args.directions_per_view);
+    }
+    if let Some(latent) = args.latent {
+        command += &format!(" --latent {latent}");
     }
     for dir in &args.stack.stack {
         command += &format!(" --stack {}", dir.display());

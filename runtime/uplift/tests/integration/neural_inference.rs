@@ -13,7 +13,7 @@ use uplift_engines::cpu_engine::CpuEngine;
 use uplift_neural::datagen::{ClassMix, DataGenerator};
 use uplift_neural::evaluate::{decode, encode};
 use uplift_neural::inference::{decoder_spec, WgpuDecoder};
-use uplift_neural::model::{DECODER_INPUTS, LATENT};
+use uplift_neural::model::LATENT;
 use uplift_neural::shipped_decoder;
 use uplift_compiler::backend_neural::write_rust_decoder;
 
@@ -46,7 +46,8 @@ fn committed_rust_decoder_is_current_and_agrees() {
     let committed = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../neural/src/shipped_decoder.rs")).unwrap();
     assert!(text == committed, "runtime/neural/src/shipped_decoder.rs is stale: run `cargo run --release -p uplift -- emit-decoder --rust runtime/neural/src/shipped_decoder.rs`");
     let (dec_in, want) = rows();
-    assert_eq!(shipped_decoder::INPUTS, DECODER_INPUTS);
+    assert_eq!(shipped_decoder::INPUTS, model.decoder.shape.inputs());
+    assert_eq!(model.latent(), LATENT, "the shipped decoder has the paper's latent width");
     let mut got = vec![0.0f32; want.len()];
     shipped_decoder::decode_rows(&dec_in, &mut got);
     assert_agree("Rust (shipped_decoder.rs)", &got, &want);

@@ -220,7 +220,7 @@ fn wgpu_engine_renders_what_the_cpu_engine_renders() {
     };
     let p = stack_params(&[("haze_weight", 0.4), ("coat_weight", 0.6), ("fuzz_weight", 0.3)]);
     let decoder = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER), &uplift_engines::stack::Stack::builtin()).unwrap().decoder;
-    let surface = SurfaceTextures::uniform(&p, [0.5, 0.4, 0.3], Some([0.5, 0.4, 0.6, 0.3, 0.2, 0.5]));
+    let surface = SurfaceTextures::uniform(&p, [0.5, 0.4, 0.3], Some(&[0.5, 0.4, 0.6, 0.3, 0.2, 0.5]));
     let o = RenderOptions { width: 32, height: 32, spp: 8, bounces: 1, ..Default::default() };
     let env = Environment::studio();
     let gpu = Shading::new_wgpu(engine, &uplift_engines::stack::Stack::builtin(), Model::Neural(decoder.clone())).unwrap();
@@ -275,7 +275,7 @@ fn neural_material_energy_follows_the_reference() {
             let p = &params[k * stack.len()..(k + 1) * stack.len()];
             let l: [f32; 6] = z[k * 6..k * 6 + 6].try_into().unwrap();
             for &mu in &mus {
-                pts.push(SurfaceTextures::uniform(&p, [0.0; 3], Some(l)).texel(0));
+                pts.push(SurfaceTextures::uniform(&p, [0.0; 3], Some(&l)).texel(0));
                 wv.push([(1.0 - mu * mu).sqrt(), 0.0, mu]);
             }
         }
@@ -326,7 +326,7 @@ fn energy_bound_keeps_a_fitted_metal_within_the_white_furnace() {
         let o = FitOptions { steps: 200, directions: 64, levels: 0, threads: 2, check_texels: 1, check_directions: 64, energy, ..Default::default() };
         let r = fit_material(&model, &g, &p, Some(&[0.0; 3]), 1, 1, &o, false).unwrap();
         let latent: [f32; 6] = r.latents[..6].try_into().unwrap();
-        let points: Vec<_> = mus.iter().map(|_| SurfaceTextures::uniform(&p, [0.0; 3], Some(latent)).texel(0)).collect();
+        let points: Vec<_> = mus.iter().map(|_| SurfaceTextures::uniform(&p, [0.0; 3], Some(&latent)).texel(0)).collect();
         let est = estimated_albedo_with_error(&neural, &points, &wv, 8192, 7).unwrap();
         for (k, (a, se)) in est.iter().enumerate() {
             for c in 0..3 {
@@ -547,8 +547,8 @@ fn glints_sparkle_on_reference_and_neural_alike() {
     Stack::builtin().encode_rows(&p, &mut enc);
     let z = uplift_neural::evaluate::encode(&model, &enc);
     let latent: [f32; 6] = z[..6].try_into().unwrap();
-    let plain = SurfaceTextures::uniform(&p, [0.0; 3], Some(latent));
-    let mut glinty = SurfaceTextures::uniform(&p, [0.0; 3], Some(latent));
+    let plain = SurfaceTextures::uniform(&p, [0.0; 3], Some(&latent));
+    let mut glinty = SurfaceTextures::uniform(&p, [0.0; 3], Some(&latent));
     glinty.glint = Some(uplift_material::GlintRecord { density: 0.05, size: 0.005, angle: 0.12, spread: 0.5, strength: 0.7, seed: 3.0 });
     let o = RenderOptions { width: 64, height: 64, spp: 16, bounces: 1, ..Default::default() };
     let env = Environment::constant([1.0; 3]);
@@ -577,4 +577,18 @@ fn glints_sparkle_on_reference_and_neural_alike() {
         assert!((ratio - 1.0).abs() <= 0.03, "{name}: image mean ratio {ratio}");
         assert!(cb >= 2.0 * ca, "{name}: contrast {ca} → {cb}");
     }
+}
+
+/// A material fitted for a decoder of another latent width is refused with both widths named
+/// (not decoded from misaligned rows).
+#[test]
+fn a_latent_of_another_width_is_an_error() {
+    let p = stack_params(&[("haze_weight", 0.3)]);
+    let model = uplift_neural::weights::load_model(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER), &Stack::builtin()).unwrap();
+    let neural = Shading::new(CpuEngine::new().unwrap(), &Stack::builtin(), Model::Neural(model.decoder)).unwrap();
+    let wide = SurfaceTextures::uniform(&p, [0.5; 3], Some(&[0.5; 8]));
+    let e = neural.evaluate(&[wide.texel(0)], &[[0.0, 0.6, 0.8]], &[[0.0, -0.6, 0.8]], false).err().expect("an error");
+    assert!(e.contains("8 values per texel") && e.contains("decoder reads 6"), "{e}");
+    let fits = SurfaceTextures::uniform(&p, [0.5; 3], Some(&[0.5; 6]));
+    assert_eq!(neural.evaluate(&[fits.texel(0)], &[[0.0, 0.6, 0.8]], &[[0.0, -0.6, 0.8]], false).unwrap().len(), 1);
 }

@@ -249,10 +249,11 @@ fn a_lobe_added_as_graph_nodes_runs_through_every_stage() {
     }
     assert!(rows_tinted > 4000 && on == rows_tinted, "{on} of {rows_tinted} rows of the new class have the lobe on");
 
-    // train: a short run records the new signature; the builtin stack refuses it.
+    // train: a short run records the new signature; the builtin stack refuses it. It widens the
+    // latent too (8 values: latent.exr gains a third texture through fit and render).
     let decoder = dir.join("decoder.safetensors");
-    let log = run(&["train", "--stack", &lib_s, "--init", s(&repo().join("runtime/weights/decoder.safetensors")), "--steps", "6", "--batch", "2048", "--holdout", "512", "-o", s(&decoder)]);
-    assert!(log.contains("widened") && log.contains("tinted"), "{log}");
+    let log = run(&["train", "--stack", &lib_s, "--init", s(&repo().join("runtime/weights/decoder.safetensors")), "--latent", "8", "--steps", "6", "--batch", "2048", "--holdout", "512", "-o", s(&decoder)]);
+    assert!(log.contains("widened") && log.contains("tinted") && log.contains("widened to 8"), "{log}");
     let file = uplift_neural::weights::TensorFile::read(&decoder).unwrap();
     assert_eq!(file.meta(uplift_neural::weights::STACK_KEY).unwrap(), stack.signature());
     let (code, _, err) = uplift(&["fit", s(&m), "--decoder", s(&decoder), "--steps", "2"]);
@@ -260,7 +261,9 @@ fn a_lobe_added_as_graph_nodes_runs_through_every_stage() {
 
     // fit and render with the new stack; the lobe shows in the image.
     run(&["fit", s(&m), "--stack", &lib_s, "--decoder", s(&decoder), "--steps", "4", "--directions", "8"]);
-    assert!(m.join("latent.exr").exists());
+    let latents = uplift_material::MaterialFolder::open(&m).unwrap().read_latents().unwrap();
+    assert_eq!(latents.channels, 8);
+    assert!(m.join("latent2.png").exists());
     let reference = dir.join("reference.exr");
     run(&["render", s(&m), "--stack", &lib_s, "--size", "32", "--spp", "8", "-o", s(&reference)]);
     run(&["render", s(&m), "--stack", &lib_s, "--neural", "--decoder", s(&decoder), "--size", "32", "--spp", "4", "-o", s(&dir.join("neural.png"))]);
