@@ -49,6 +49,7 @@ pub fn run(args: DemoArgs) -> Result<(), String> {
     };
     let s = run_demo(&o)?;
     println!("{}", format_table(&s.table));
+    println!("iridescent clearcoat (the coated Types' materials with --iridescence):\n{}", format_table(&s.iridescent_table));
     println!(
         "white furnace: reference {} of {} materials pass, neural {} of {}",
         s.furnace_reference_passed, s.materials, s.furnace_neural_passed, s.materials

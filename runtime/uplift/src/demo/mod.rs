@@ -46,6 +46,8 @@ pub struct DemoSummary {
     pub materials: usize,
     pub furnace_reference_passed: usize,
     pub furnace_neural_passed: usize,
+    /// The iridescent twins of the coated Types, per Type.
+    pub iridescent_table: Vec<TypeRow>,
     pub report: PathBuf,
 }
 
@@ -210,14 +212,12 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         });
     }
 
-    // 4c. An iridescent clearcoat: the first material of each coated Type (2, 3, 5) again with
-    // the iridescence option, fitted on its own (the film is two more stack parameters).
+    // 4c. An iridescent clearcoat: every material of the coated Types (2, 3, 5) again with the
+    // iridescence option, fitted on its own (the film is two more stack parameters); a median
+    // per Type, as for the Types themselves.
     let iridescence = uplift_enhance::rule_option::read_option("iridescence", &stack)?;
     let mut iridescent = Vec::new();
     for (index, m) in set.iter().enumerate().filter(|(_, m)| [2, 3, 5].contains(&m.kind.index())) {
-        if iridescent.iter().any(|(kind, _): &(usize, PathBuf)| *kind == m.kind.index()) {
-            continue;
-        }
         let twin = materials_dir.join(format!("{}_iridescent", m.material.name));
         if !MaterialFolder::is_finished(&twin) {
             let options = EnhanceOptions { kind: Some(m.kind), rules: Vec::new(), seed: o.seed ^ uplift_base::rng::mix64(index as u64), resolution: Some((o.texture_size, o.texture_size)), mask_size: o.texture_size.max(64), glints: false, stack: stack.clone(), rule_options: vec![iridescence.clone()] };
@@ -226,10 +226,11 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         fit(&twin)?;
         iridescent.push((m.kind.index(), twin));
     }
-    let mut iridescent_rows = Vec::new();
+    let (mut iridescent_rows, mut iridescent_evals) = (Vec::new(), Vec::new());
     for (_, twin) in &iridescent {
         let name = twin.file_name().unwrap_or_default().to_string_lossy().to_string();
         let (eval, images) = evaluate_material(twin, &reference, &neural, &env, &ro, 1.0)?;
+        iridescent_evals.push(eval.clone());
         write_eval_images(&img_dir, &name, &images, (ro.width, ro.height))?;
         iridescent_rows.push(TwinMaterial {
             name: name.clone(),
@@ -250,12 +251,14 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         materials: rows.len(),
         furnace_reference_passed: rows.iter().filter(|r| r.furnace_reference).count(),
         furnace_neural_passed: rows.iter().filter(|r| r.furnace_neural).count(),
+        iridescent_table: per_type(&iridescent_evals),
         report: o.out.join("report").join("index.html"),
     };
     let report = Report {
         materials: rows,
         glints: glint_rows,
         iridescent: iridescent_rows,
+        iridescent_table: summary.iridescent_table.clone(),
         table,
         history,
         decoder: weights.metadata.get("command").cloned().unwrap_or_else(|| o.decoder.display().to_string()),

@@ -29,8 +29,9 @@ pub struct Report {
     /// fitted latents.
     pub glints: Vec<TwinMaterial>,
     /// Materials of the coated Types shown again with an iridescent clearcoat (`uplift enhance
-    /// --iridescence`), fitted on their own.
+    /// --iridescence`), fitted on their own, and their per-Type FLIP table.
     pub iridescent: Vec<TwinMaterial>,
+    pub iridescent_table: Vec<TypeRow>,
     pub table: Vec<TypeRow>,
     /// The decoder's training history: (step, loss, loss_f, loss_t, loss_r).
     pub history: Vec<[f64; 5]>,
@@ -102,15 +103,10 @@ fn training_plot(history: &[[f64; 5]]) -> String {
 }
 
 /// The page.
-pub fn render_html(r: &Report) -> String {
-    let mut s = String::new();
-    s += "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>uplift demo report</title>\n<style>body{font-family:system-ui,sans-serif;margin:24px;max-width:1200px;color:#222}table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}th{background:#f4f4f4}td.l,th.l{text-align:left}.grid img{width:160px;height:160px;display:block}.grid td{text-align:center;font-size:12px}.pass{color:#080}.fail{color:#b00}code{background:#f4f4f4;padding:1px 4px}</style></head>\n<body data-broken-images=\"unknown\">\n";
-    s += "<h1>uplift demo</h1>\n";
-    let _ = writeln!(s, "<p>{}</p>", escape(&r.settings));
-    let _ = writeln!(s, "<p>Decoder: <code>{}</code>. Total time {:.0} s.</p>", escape(&r.decoder), r.seconds);
-    s += "<h2>FLIP per enhancement Type (paper Table 1 format)</h2>\n<p>Mean LDR-FLIP of reference vs neural preview-ball renders, over the ball's pixels; the whole image's figure beside it. Paper: 50 materials per Type.</p>\n";
-    s += "<table><tr><th>Type</th><th>materials</th><th>best</th><th>median</th><th>worst</th><th>full image: best / median / worst</th><th>paper best / median / worst</th><th>median ≤ paper</th></tr>\n";
-    for row in &r.table {
+/// A per-Type FLIP table beside the paper's Table 1.
+fn type_table(rows: &[TypeRow]) -> String {
+    let mut s = String::from("<table><tr><th>Type</th><th>materials</th><th>best</th><th>median</th><th>worst</th><th>full image: best / median / worst</th><th>paper best / median / worst</th><th>median ≤ paper</th></tr>\n");
+    for row in rows {
         let p = PAPER_TABLE1.iter().find(|p| p.0 == row.kind).copied().unwrap_or((row.kind, f64::NAN, f64::NAN, f64::NAN));
         let ok = row.object.1 <= p.2;
         let _ = writeln!(
@@ -121,6 +117,17 @@ pub fn render_html(r: &Report) -> String {
         );
     }
     s += "</table>\n";
+    s
+}
+
+pub fn render_html(r: &Report) -> String {
+    let mut s = String::new();
+    s += "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>uplift demo report</title>\n<style>body{font-family:system-ui,sans-serif;margin:24px;max-width:1200px;color:#222}table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}th{background:#f4f4f4}td.l,th.l{text-align:left}.grid img{width:160px;height:160px;display:block}.grid td{text-align:center;font-size:12px}.pass{color:#080}.fail{color:#b00}code{background:#f4f4f4;padding:1px 4px}</style></head>\n<body data-broken-images=\"unknown\">\n";
+    s += "<h1>uplift demo</h1>\n";
+    let _ = writeln!(s, "<p>{}</p>", escape(&r.settings));
+    let _ = writeln!(s, "<p>Decoder: <code>{}</code>. Total time {:.0} s.</p>", escape(&r.decoder), r.seconds);
+    s += "<h2>FLIP per enhancement Type (paper Table 1 format)</h2>\n<p>Mean LDR-FLIP of reference vs neural preview-ball renders, over the ball's pixels; the whole image's figure beside it. Paper: 50 materials per Type.</p>\n";
+    s += &type_table(&r.table);
     let n = r.materials.len().max(1);
     let pass_ref = r.materials.iter().filter(|m| m.furnace_reference).count();
     let pass_neu = r.materials.iter().filter(|m| m.furnace_neural).count();
@@ -163,7 +170,9 @@ pub fn render_html(r: &Report) -> String {
         s += "</table>\n";
     }
     if !r.iridescent.is_empty() {
-        s += "<h2>Iridescent clearcoat</h2>\n<p>The first material of each coated Type enhanced again with <code>--iridescence</code>: a thin film on the clearcoat (thickness 100–1000 nm, IOR 1.2–2.0, drawn per material), whose Airy reflectance makes the coat iridescent. The film's two parameters are inputs of the stack, so these materials are fitted on their own against the decoder trained with them.</p>\n<table class=\"grid\"><tr><th class=\"l\">material</th><th>reference</th><th>neural</th><th>FLIP</th></tr>\n";
+        s += "<h2>Iridescent clearcoat</h2>\n<p>Every material of the coated Types (2, 3, 5) enhanced again with <code>--iridescence</code>: a thin film on the clearcoat (thickness 100–1000 nm, IOR 1.2–2.0, drawn per material), whose Airy reflectance makes the coat iridescent. The film's two parameters are inputs of the stack, so these materials are fitted on their own against the decoder trained with them.</p>\n";
+        s += &type_table(&r.iridescent_table);
+        s += "<table class=\"grid\"><tr><th class=\"l\">material</th><th>reference</th><th>neural</th><th>FLIP</th></tr>\n";
         for g in &r.iridescent {
             let _ = writeln!(
                 s,

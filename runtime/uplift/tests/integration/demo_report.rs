@@ -25,6 +25,8 @@ fn demo_writes_a_report_that_renders_without_broken_images() {
     assert_eq!(s.materials, 6);
     assert_eq!(s.table.iter().map(|r| r.kind).collect::<Vec<_>>(), vec![0, 1, 2, 3, 4, 5]);
     assert!(s.table.iter().all(|r| r.count == 1));
+    // Every material of the coated Types has an iridescent twin, tabled per Type.
+    assert_eq!(s.iridescent_table.iter().map(|r| (r.kind, r.count)).collect::<Vec<_>>(), vec![(2, 1), (3, 1), (5, 1)]);
     // The reference stack conserves energy: every reference material passes; the fit holds the
     // neural materials to the same bound (docs/neural.md), so every neural one passes too.
     assert_eq!(s.furnace_reference_passed, 6);
