@@ -392,7 +392,14 @@ impl<T: Real> Mlp<T> {
                 let (w_at, b_at) = s.offsets(l);
                 let (gw, gb) = grads[w_at..b_at + n_out].split_at_mut(b_at - w_at);
                 // dW (out × in) += dzᵀ (out × rows) · x (rows × in).
-                T::gemm(n_out, rows, n_in, T::from_f64(1.0), &ws.grad, 1, n_out as isize, x, n_in as isize, 1, T::from_f64(1.0), gw, n_in as isize, 1);
+                let isa = if n_in <= dense::MAX_WIDTH { dense::isa() } else { None };
+                match (isa, T::as_f32(&ws.grad), T::as_f32(x)) {
+                    (Some(isa), Some(dz), Some(x32)) if T::as_f32(gw).is_some() => {
+                        let gw = T::as_f32_mut(gw).expect("an f32 network");
+                        dense::weight_gradient(isa, dz, x32, rows, n_out, n_in, gw);
+                    }
+                    _ => T::gemm(n_out, rows, n_in, T::from_f64(1.0), &ws.grad, 1, n_out as isize, x, n_in as isize, 1, T::from_f64(1.0), gw, n_in as isize, 1),
+                }
                 for r in 0..rows {
                     for (b, g) in gb.iter_mut().zip(&ws.grad[r * n_out..(r + 1) * n_out]) {
                         *b += *g;

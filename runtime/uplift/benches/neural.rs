@@ -10,9 +10,11 @@
 //!
 //! `cargo bench -p uplift --bench neural` (options after `--`: `--rows N`, `--seconds S`,
 //! `--threads T`, `--peak-gflops G`, `--only train|fit|infer|data`). The peak is measured: cores
-//! × one core's rate of independent AVX-512 FMAs in registers (`dense::fma_peak`), the most any
-//! fp32 code can reach here; the large-GEMM rate (matrixmultiply, 1024³) is printed beside it.
-//! Each figure is the median of seven windows: the machine is a shared VM.
+//! × one core's rate of independent FMAs in registers on the fused kernels' vectors
+//! (`dense::fma_peak`: AVX-512 or AVX2), the most any fp32 code can reach with them; the
+//! large-GEMM rate (matrixmultiply, 1024³) is printed beside it. `UPLIFT_DENSE=avx2` measures
+//! the AVX2 kernels on an AVX-512 machine (`gemm`: the GEMM path). Each figure is the median of
+//! seven windows: the machine is a shared VM.
 use std::time::Instant;
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_neural::datagen::{ClassMix, DataGenerator};
@@ -99,12 +101,12 @@ struct Rate {
 fn main() {
     let o = options();
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    // The fp32 peak: cores × one core's AVX-512 FMA rate (dense.rs measures it); without
-    // AVX-512, the large-GEMM rate stands in.
+    // The fp32 peak: cores × one core's FMA rate on the fused kernels' vectors (dense.rs
+    // measures it); without fused kernels, the large-GEMM rate stands in.
     let sgemm = sgemm_rate(cores);
     let (peak, peak_source) = match (o.peak_gflops, uplift_neural::dense::fma_peak(1.0)) {
         (Some(p), _) => (p, "--peak-gflops"),
-        (None, Some(f)) => (cores as f64 * f / 1e9, "cores × an AVX-512 FMA loop"),
+        (None, Some(f)) => (cores as f64 * f / 1e9, "cores × an FMA loop on the kernels' vectors"),
         (None, None) => (sgemm, "cores × a 1024³ sgemm"),
     };
     let generator = DataGenerator::new(CpuEngine::with_threads(o.threads).unwrap(), &uplift_engines::stack::Stack::builtin(), ClassMix::All, 1).unwrap();
@@ -122,7 +124,10 @@ fn main() {
         o.rows,
         o.threads,
         cores,
-        if uplift_neural::dense::available() { "fused AVX-512 layers" } else { "GEMM layers (no AVX-512)" }
+        match uplift_neural::dense::isa() {
+            Some(isa) => format!("fused {} layers", isa.name()),
+            None => "GEMM layers (no fused kernels)".to_string(),
+        }
     );
     println!("samples/s: the median of 7 windows (slowest–fastest window in brackets)");
     let report = |what: &str, r: Rate, flop: f64| {
