@@ -2,8 +2,8 @@
 //! `uplift_engines::stack`: direction features (`features`), training data generated on the fly from the compiled
 //! `uplift_stack` kernels (`classes`, `datagen`), the hand-written networks and their training
 //! (`mlp`, `model`, `loss`, `adam`, `trainer`), weights as safetensors (`weights`), held-out
-//! errors (`evaluate`), per-material latent fitting (`fit`) and its energy bound (`energy_bound`) and inference (`inference`; the
-//! shipped decoder's generated Rust in `shipped_decoder`).
+//! errors (`evaluate`), per-material latent fitting (`fit`) and its energy bound (`energy_bound`), inference (`inference`; the
+//! shipped decoder's generated Rust in `shipped_decoder`) and the sampling decoder (`sampler`).
 
 pub mod adam;
 pub mod classes;
@@ -17,6 +17,7 @@ pub mod inference;
 pub mod loss;
 pub mod mlp;
 pub mod model;
+pub mod sampler;
 pub mod shipped_decoder;
 pub mod trainer;
 pub mod weights;

@@ -166,6 +166,15 @@ pub fn load_model(path: &Path, stack: &Stack) -> Result<crate::model::NeuralMode
     Ok(model)
 }
 
+/// The sampling decoder of a weights file (`uplift train-sampler`), if it has one.
+pub fn load_sampler(path: &Path) -> Result<Option<Mlp<f32>>, String> {
+    let f = TensorFile::read(path)?;
+    if !f.metadata.contains_key("sampler.widths") {
+        return Ok(None);
+    }
+    f.mlp("sampler").map(Some).map_err(|e| format!("{}: {e}", path.display()))
+}
+
 /// The metadata key of the stack signature (`Stack::signature`).
 pub const STACK_KEY: &str = "stack";
 

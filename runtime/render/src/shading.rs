@@ -11,10 +11,12 @@
 //! wgpu engine (generated WGSL kernels, the emitted WGSL decoder).
 //!
 //! Both sample the non-diffuse part with the stack's own `sample` kernel on the material's
-//! parameters (no sampling decoder exists yet, lobes.md §4.5): any proposal keeps the estimator
-//! unbiased, and sharing it gives reference and neural renders correlated noise, which lowers the
-//! FLIP noise floor. The integrator (integrator.rs) adds the diffuse base and chooses between the
-//! parts by R.
+//! parameters by default: any proposal keeps the estimator unbiased, and sharing it gives
+//! reference and neural renders correlated noise, which lowers the FLIP noise floor. A neural
+//! material given its sampling decoder (`with_sampler`, uplift_neural::sampler) samples with
+//! that instead — the mixture it predicts from the latent alone, its pdf for MIS — as a neural
+//! material without its parameters must. The integrator (integrator.rs) adds the diffuse base
+//! and chooses between the parts by R.
 
 use crate::scene::Vec3;
 use crate::surface::SurfaceSample;
@@ -76,6 +78,8 @@ pub struct Shading {
     sample: StackKernel,
     albedo: StackKernel,
     pub model: Model,
+    /// The neural model's sampling decoder, when it samples with one.
+    sampler: Option<Mlp<f32>>,
     threads: usize,
 }
 
@@ -109,6 +113,7 @@ impl Shading {
             glint: Default::default(),
             wgpu_decoder: None,
             model,
+            sampler: None,
         })
     }
 
@@ -128,7 +133,27 @@ impl Shading {
             glint: Default::default(),
             wgpu_decoder,
             model,
+            sampler: None,
         })
+    }
+
+    /// The neural model sampling its non-diffuse part with `sampler` (uplift_neural::sampler;
+    /// run on the CPU on either engine: a 3 × 32 network). An error for the reference model or
+    /// a sampler made for another latent width.
+    pub fn with_sampler(mut self, sampler: Mlp<f32>) -> Result<Shading, String> {
+        let Model::Neural(decoder) = &self.model else { return Err("a sampling decoder serves the neural model only".into()) };
+        if sampler.shape.inputs() != latent_width(decoder) + 1 || sampler.shape.outputs() != uplift_neural::sampler::SAMPLER_OUTPUTS {
+            return Err(format!("the sampling decoder reads {} inputs; this decoder's latent has {} values (+ μv)", sampler.shape.inputs(), latent_width(decoder)));
+        }
+        self.sampler = Some(sampler);
+        Ok(self)
+    }
+
+    /// The sampling decoder's mixtures at the points' latents and views.
+    fn mixtures(&self, sampler: &Mlp<f32>, points: &[SurfaceSample], wv: &[Vec3]) -> Vec<uplift_neural::sampler::Mixture> {
+        let latents: Vec<f32> = points.iter().flat_map(|p| p.latent().iter().copied()).collect();
+        let mu: Vec<f32> = wv.iter().map(|w| w[2]).collect();
+        uplift_neural::sampler::mixtures(sampler, &latents, &mu)
     }
 
     /// The stack it shades.
@@ -211,6 +236,11 @@ impl Shading {
                     set_from_decoder(v, o, wl[k][2]);
                     v.reflectance = if o[6].is_finite() { o[6].max(0.0) } else { 0.0 };
                 }
+                if let Some(sampler) = &self.sampler {
+                    for (k, (v, m)) in values.iter_mut().zip(self.mixtures(sampler, points, wv)).enumerate() {
+                        v.pdf = m.pdf(wv[k], wl[k]);
+                    }
+                }
             }
         }
         Ok(values)
@@ -235,6 +265,24 @@ impl Shading {
         let n = points.len();
         if n == 0 {
             return Ok(vec![]);
+        }
+        if let (Model::Neural(decoder), Some(sampler)) = (&self.model, &self.sampler) {
+            // The sampling decoder's mixture: a direction and its pdf, then the decoder there.
+            let drawn: Vec<Option<(Vec3, f32)>> = self.mixtures(sampler, points, wv).iter().zip(wv).zip(u).map(|((m, v), u)| m.sample(*v, *u).map(|l| (l, m.pdf(*v, l))).filter(|(_, p)| *p > 0.0 && p.is_finite())).collect();
+            let wl: Vec<Vec3> = drawn.iter().map(|d| d.map_or([0.0, 0.0, 1.0], |d| d.0)).collect();
+            let dec = self.decode(decoder, points, wv, &wl)?;
+            return Ok(drawn
+                .iter()
+                .enumerate()
+                .map(|(k, d)| match d {
+                    Some((l, pdf)) => {
+                        let mut v = LobeValue { pdf: *pdf, ..Default::default() };
+                        set_from_decoder(&mut v, &dec[k * OUTPUTS..(k + 1) * OUTPUTS], l[2]);
+                        (*l, v)
+                    }
+                    None => ([0.0, 0.0, 1.0], LobeValue::default()),
+                })
+                .collect());
         }
         let params = params_of(points);
         let rows: Vec<usize> = (0..n).collect();

@@ -32,6 +32,8 @@ enum Command {
     Datagen(cli::datagen::DatagenArgs),
     /// Train the universal encoder and decoder (paper §4.2) on generated data.
     Train(cli::train::TrainArgs),
+    /// Train the sampling decoder for a trained decoder (docs/neural.md).
+    TrainSampler(cli::train_sampler::TrainSamplerArgs),
     /// Fit an enhanced material's latent textures against the frozen decoder (paper §4.3).
     Fit(cli::fit::FitArgs),
     /// Write a trained decoder's inference code (Rust and WGSL).
@@ -61,6 +63,7 @@ fn main() -> ExitCode {
         Command::Masks(a) => cli::masks::run(a),
         Command::Datagen(a) => cli::datagen::run(a),
         Command::Train(a) => cli::train::run(a),
+        Command::TrainSampler(a) => cli::train_sampler::run(a),
         Command::Fit(a) => cli::fit::run(a),
         Command::EmitDecoder(a) => cli::emit_decoder::run(a),
         Command::Render(a) => cli::render::run(a),

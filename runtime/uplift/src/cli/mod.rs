@@ -18,6 +18,7 @@ pub mod masks;
 pub mod render;
 pub mod tables;
 pub mod train;
+pub mod train_sampler;
 
 use mtlx::Diagnostic;
 use std::path::PathBuf;

@@ -3,12 +3,13 @@
 //! material or surface shader of the document, shaded by its own compiled closure kernels with
 //! their emission, render/mtlx_material.rs) on the preview ball under an environment (`--env FILE.hdr|FILE.exr`, `studio`,
 //! the default, or `white`, a unit environment), shaded by the compiled reference kernels or,
-//! with `--neural`, by the decoder on the material's fitted latent.exr. `--mesh FILE.gltf|.glb`
+//! with `--neural`, by the decoder on the material's fitted latent.exr (`--sampler`: sampled by the
+//! decoder file's sampling decoder). `--mesh FILE.gltf|.glb`
 //! renders a glTF scene's triangles instead of the ball (scaled into the ball's unit sphere,
 //! with their own uvs, normals and tangents; render/mesh.rs). A `.png` output is the AgX display
 //! image, an `.exr` output the linear radiance.
 
-use uplift_neural::weights::{load_model, SHIPPED_DECODER};
+use uplift_neural::weights::{load_model, load_sampler, SHIPPED_DECODER};
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_render::environment::Environment;
 use uplift_render::image_files::{write_exr, write_png};
@@ -50,6 +51,10 @@ pub struct RenderArgs {
     /// Shade with the neural decoder and the fitted latents instead of the reference kernels.
     #[arg(long)]
     pub neural: bool,
+    /// With --neural: sample the non-diffuse part with the decoder file's sampling decoder
+    /// (`uplift train-sampler`) instead of the stack's sampler on the material's parameters.
+    #[arg(long, requires = "neural")]
+    pub sampler: bool,
     /// Render this glTF scene's triangles (.gltf or .glb) instead of the preview ball.
     #[arg(long)]
     pub mesh: Option<PathBuf>,
@@ -165,7 +170,11 @@ pub fn run(args: RenderArgs) -> Result<(), String> {
     let stack = st.stack.load()?;
     let surface = SurfaceTextures::load(&args.material, &stack, args.neural)?;
     let model = if args.neural { Model::Neural(load_model(&st.decoder, &stack)?.decoder) } else { Model::Reference };
-    let shading = Shading::new(CpuEngine::with_threads(threads)?, &stack, model)?;
+    let mut shading = Shading::new(CpuEngine::with_threads(threads)?, &stack, model)?;
+    if args.sampler {
+        let sampler = load_sampler(&st.decoder)?.ok_or_else(|| format!("{}: no sampling decoder (add one with `uplift train-sampler`)", st.decoder.display()))?;
+        shading = shading.with_sampler(sampler).map_err(|e| format!("{}: {e}", st.decoder.display()))?;
+    }
     let bar = progress_bar(o.spp, format!("rendering {}", args.material.display()))?;
     let start = std::time::Instant::now();
     let img = render(scene.as_ref(), &env, &surface, &shading, &o, Some(&bar))?;

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use crate::common::cli::{s, uplift};
 
-const SUBCOMMANDS: [&str; 16] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "fit", "emit-decoder", "render", "gallery", "furnace", "eval-fit", "demo", "flip"];
+const SUBCOMMANDS: [&str; 17] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "train-sampler", "fit", "emit-decoder", "render", "gallery", "furnace", "eval-fit", "demo", "flip"];
 
 #[test]
 fn every_subcommand_has_help_and_rejects_unknown_flags() {
@@ -59,6 +59,7 @@ fn every_subcommand_reports_missing_and_foreign_inputs_with_exit_1() {
         (vec!["masks", "-o", s(&unwritable)], "a_file"),
         (vec!["datagen", "--class", "no-such-class", "--count", "1", "-o", s(&out)], "no-such-class"),
         (vec!["train", "--steps", "1", "--init", s(&missing_weights), "-o", s(&weights_out)], "missing.safetensors"),
+        (vec!["train-sampler", "--decoder", s(&missing_weights), "-o", s(&weights_out)], "missing.safetensors"),
         (vec!["fit", s(&missing_dir)], "missing_material"),
         (vec!["fit", s(&foreign)], "not_a_material"),
         (vec!["fit", s(&foreign), "--decoder", s(&missing_weights)], "missing.safetensors"),
@@ -216,6 +217,19 @@ fn the_remaining_subcommands_succeed_through_the_binary() {
     let (reference, neural) = (dir.join("reference.png"), dir.join("neural.png"));
     ok(&["render", s(&copper), "-o", s(&reference), "--size", "32", "--spp", "4", "--threads", "2"]);
     ok(&["render", s(&copper), "--neural", "-o", s(&neural), "--size", "32", "--spp", "4", "--threads", "2"]);
+    // train-sampler, briefly, and a neural render sampled by it; a decoder file without one is
+    // an error naming it.
+    let sampled = dir.join("sampled.safetensors");
+    ok(&["train-sampler", "--steps", "2", "--views", "16", "--directions", "8", "-o", s(&sampled)]);
+    ok(&["render", s(&copper), "--neural", "--sampler", "--decoder", s(&sampled), "-o", s(&dir.join("sampled.png")), "--size", "24", "--spp", "2", "--threads", "2"]);
+    let no_sampler = dir.join("no_sampler.safetensors");
+    std::fs::copy(repo.join("runtime/weights/decoder.safetensors"), &no_sampler).unwrap();
+    let mut f = uplift_neural::weights::TensorFile::read(&no_sampler).unwrap();
+    f.tensors.retain(|k, _| !k.starts_with("sampler."));
+    f.metadata.retain(|k, _| !k.starts_with("sampler."));
+    f.write(&no_sampler).unwrap();
+    let (code, _, err) = uplift(&["render", s(&copper), "--neural", "--sampler", "--decoder", s(&no_sampler), "-o", s(&dir.join("x.png"))]);
+    assert!(code == 1 && err.contains("no_sampler.safetensors") && err.contains("no sampling decoder"), "{err}");
     let same = ok(&["flip", s(&reference), s(&reference)]);
     let flip_of = |text: &str| -> f64 {
         let at = text.find("FLIP").unwrap_or_else(|| panic!("no FLIP figure in: {text}"));

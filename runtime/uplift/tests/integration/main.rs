@@ -36,6 +36,7 @@ mod numeric_smoke;
 mod numeric_texture;
 mod random_graphs;
 mod render;
+mod sampler;
 mod specialisation;
 mod stack_extension;
 mod uplift_stack;
