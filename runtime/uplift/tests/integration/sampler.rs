@@ -151,7 +151,6 @@ fn renders_sampled_by_it_have_less_error_and_converge() {
     let materials = [
         ("glossy metal", stack_params(&[("metalness", 1.0), ("core_roughness", 0.12)])),
         ("hazy dielectric", stack_params(&[("core_roughness", 0.08), ("haze_weight", 0.4), ("haze_roughness", 0.35)])),
-        ("coated", stack_params(&[("core_roughness", 0.5), ("coat_weight", 0.8)])),
     ];
     for (name, p) in materials {
         let mut enc = vec![0.0; p.len()];
