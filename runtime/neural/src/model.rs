@@ -9,11 +9,12 @@ use crate::features::FEATURES;
 use crate::loss::{eq3_loss, LossParts, LossWeights, OUTPUTS};
 use crate::mlp::{Activation, Mlp, MlpShape, Real, Workspace};
 
-/// The paper's latent width: two RGB textures.
-pub const LATENT: usize = 6;
+/// The paper's latent width: two RGB textures (latent.exr's default).
+pub const LATENT: usize = uplift_material::folder::LATENTS;
 
-/// The widest latent a model may have (the renderer's per-point storage).
-pub const MAX_LATENT: usize = 16;
+/// The widest latent a model may have: the widest latent.exr holds (and the renderer's
+/// per-point storage).
+pub const MAX_LATENT: usize = uplift_material::folder::MAX_LATENTS;
 
 /// The encoder's shape for a stack of `parameters` parameters and `latent` latent values (lobes.md §4.2).
 pub fn encoder_shape(parameters: usize, latent: usize) -> MlpShape {

@@ -224,10 +224,10 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
             enhance(&m.material, &options, &twin, &engine)?;
         }
         fit(&twin)?;
-        iridescent.push((m.kind.index(), twin));
+        iridescent.push(twin);
     }
     let (mut iridescent_rows, mut iridescent_evals) = (Vec::new(), Vec::new());
-    for (_, twin) in &iridescent {
+    for twin in &iridescent {
         let name = twin.file_name().unwrap_or_default().to_string_lossy().to_string();
         let (eval, images) = evaluate_material(twin, &reference, &neural, &env, &ro, 1.0)?;
         iridescent_evals.push(eval.clone());
