@@ -3,7 +3,8 @@
 //! `uplift_stack` kernels (`classes`, `datagen`), the hand-written networks and their training
 //! (`mlp`, `model`, `loss`, `adam`, `trainer`), weights as safetensors (`weights`), held-out
 //! errors (`evaluate`), per-material latent fitting (`fit`) and its energy bound (`energy_bound`), inference (`inference`; the
-//! shipped decoder's generated Rust in `shipped_decoder`) and the sampling decoder (`sampler`).
+//! shipped decoder's generated Rust in `shipped_decoder`) and the sampling decoder (`sampler`;
+//! its shipped network's generated Rust in `shipped_sampler`).
 
 pub mod adam;
 pub mod classes;
@@ -19,5 +20,6 @@ pub mod mlp;
 pub mod model;
 pub mod sampler;
 pub mod shipped_decoder;
+pub mod shipped_sampler;
 pub mod trainer;
 pub mod weights;

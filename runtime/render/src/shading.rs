@@ -80,6 +80,8 @@ pub struct Shading {
     pub model: Model,
     /// The neural model's sampling decoder, when it samples with one.
     sampler: Option<Mlp<f32>>,
+    /// On the wgpu engine, the sampling decoder's emitted WGSL network.
+    wgpu_sampler: Option<WgpuDecoder>,
     threads: usize,
 }
 
@@ -114,6 +116,7 @@ impl Shading {
             wgpu_decoder: None,
             model,
             sampler: None,
+            wgpu_sampler: None,
         })
     }
 
@@ -134,26 +137,40 @@ impl Shading {
             wgpu_decoder,
             model,
             sampler: None,
+            wgpu_sampler: None,
         })
     }
 
-    /// The neural model sampling its non-diffuse part with `sampler` (uplift_neural::sampler;
-    /// run on the CPU on either engine: a 3 × 32 network). An error for the reference model or
-    /// a sampler made for another latent width.
+    /// The neural model sampling its non-diffuse part with `sampler` (uplift_neural::sampler):
+    /// its network runs as the trainer's forward pass on the CPU engine and as its emitted WGSL
+    /// on the wgpu engine (like the evaluation decoder); the mixture's closed forms run on the
+    /// CPU. An error for the reference model or a sampler made for another latent width.
     pub fn with_sampler(mut self, sampler: Mlp<f32>) -> Result<Shading, String> {
         let Model::Neural(decoder) = &self.model else { return Err("a sampling decoder serves the neural model only".into()) };
         if sampler.shape.inputs() != latent_width(decoder) + 1 || sampler.shape.outputs() != uplift_neural::sampler::SAMPLER_OUTPUTS {
             return Err(format!("the sampling decoder reads {} inputs; this decoder's latent has {} values (+ μv)", sampler.shape.inputs(), latent_width(decoder)));
+        }
+        if let ShadingEngine::Wgpu(engine) = &self.engine {
+            self.wgpu_sampler = Some(WgpuDecoder::new(engine, &sampler, "render sampler")?);
         }
         self.sampler = Some(sampler);
         Ok(self)
     }
 
     /// The sampling decoder's mixtures at the points' latents and views.
-    fn mixtures(&self, sampler: &Mlp<f32>, points: &[SurfaceSample], wv: &[Vec3]) -> Vec<uplift_neural::sampler::Mixture> {
+    fn mixtures(&self, sampler: &Mlp<f32>, points: &[SurfaceSample], wv: &[Vec3]) -> Result<Vec<uplift_neural::sampler::Mixture>, String> {
         let latents: Vec<f32> = points.iter().flat_map(|p| p.latent().iter().copied()).collect();
         let mu: Vec<f32> = wv.iter().map(|w| w[2]).collect();
-        uplift_neural::sampler::mixtures(sampler, &latents, &mu)
+        if let (ShadingEngine::Wgpu(engine), Some(net)) = (&self.engine, &self.wgpu_sampler) {
+            let latent = sampler.shape.inputs() - 1;
+            let mut input = Vec::with_capacity(mu.len() * (latent + 1));
+            for (r, &m) in mu.iter().enumerate() {
+                uplift_neural::sampler::sampler_input(&latents[r * latent..(r + 1) * latent], m, &mut input);
+            }
+            let out = net.decode(engine, &input)?;
+            return Ok(out.chunks(uplift_neural::sampler::SAMPLER_OUTPUTS).map(uplift_neural::sampler::Mixture::from_outputs).collect());
+        }
+        Ok(uplift_neural::sampler::mixtures(sampler, &latents, &mu))
     }
 
     /// The stack it shades.
@@ -237,7 +254,7 @@ impl Shading {
                     v.reflectance = if o[6].is_finite() { o[6].max(0.0) } else { 0.0 };
                 }
                 if let Some(sampler) = &self.sampler {
-                    for (k, (v, m)) in values.iter_mut().zip(self.mixtures(sampler, points, wv)).enumerate() {
+                    for (k, (v, m)) in values.iter_mut().zip(self.mixtures(sampler, points, wv)?).enumerate() {
                         v.pdf = m.pdf(wv[k], wl[k]);
                     }
                 }
@@ -268,7 +285,7 @@ impl Shading {
         }
         if let (Model::Neural(decoder), Some(sampler)) = (&self.model, &self.sampler) {
             // The sampling decoder's mixture: a direction and its pdf, then the decoder there.
-            let drawn: Vec<Option<(Vec3, f32)>> = self.mixtures(sampler, points, wv).iter().zip(wv).zip(u).map(|((m, v), u)| m.sample(*v, *u).map(|l| (l, m.pdf(*v, l))).filter(|(_, p)| *p > 0.0 && p.is_finite())).collect();
+            let drawn: Vec<Option<(Vec3, f32)>> = self.mixtures(sampler, points, wv)?.iter().zip(wv).zip(u).map(|((m, v), u)| m.sample(*v, *u).map(|l| (l, m.pdf(*v, l))).filter(|(_, p)| *p > 0.0 && p.is_finite())).collect();
             let wl: Vec<Vec3> = drawn.iter().map(|d| d.map_or([0.0, 0.0, 1.0], |d| d.0)).collect();
             let dec = self.decode(decoder, points, wv, &wl)?;
             return Ok(drawn

@@ -8,8 +8,14 @@
 //! - data generation: rows per second of the training-data generator (three closure kernels),
 //!   with one light direction per (parameter set, view) and with 32 (`directions_per_view`).
 //!
+//! **Anchor.** PyTorch (CPU, the same threads) runs the same networks, batch and work per sample
+//! in the same run (`benches/torch/setup.sh` installs it from PyPI into `target/torch-venv`,
+//! `mlp_rate.py` measures); each line prints uplift's ratio to it. `--no-torch` skips it; when
+//! it cannot be installed the benchmark says so and goes on. With `UPLIFT_DENSE=avx2` PyTorch is
+//! held to AVX2 as well (ATen, oneDNN and MKL each have a switch).
+//!
 //! `cargo bench -p uplift --bench neural` (options after `--`: `--rows N`, `--seconds S`,
-//! `--threads T`, `--peak-gflops G`, `--only train|fit|infer|data`). The peak is measured: cores
+//! `--threads T`, `--peak-gflops G`, `--only train|fit|infer|data`, `--no-torch`). The peak is measured: cores
 //! × one core's rate of independent FMAs in registers on the fused kernels' vectors
 //! (`dense::fma_peak`: AVX-512 or AVX2), the most any fp32 code can reach with them; the
 //! large-GEMM rate (matrixmultiply, 1024³) is printed beside it. `UPLIFT_DENSE=avx2` measures
@@ -30,10 +36,12 @@ struct Options {
     peak_gflops: Option<f64>,
     /// Only this measurement (`train`, `fit`, `infer`, `data`), e.g. under a profiler.
     only: Option<String>,
+    /// Measure PyTorch beside uplift (the default).
+    torch: bool,
 }
 
 fn options() -> Options {
-    let mut o = Options { rows: 16384, seconds: 3.0, threads: std::thread::available_parallelism().map_or(1, |n| n.get()), peak_gflops: None, only: None };
+    let mut o = Options { rows: 16384, seconds: 3.0, threads: std::thread::available_parallelism().map_or(1, |n| n.get()), peak_gflops: None, only: None, torch: true };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let mut i = 0;
     while i < args.len() {
@@ -44,6 +52,11 @@ fn options() -> Options {
             "--threads" => o.threads = value(i).parse().expect("--threads T"),
             "--peak-gflops" => o.peak_gflops = Some(value(i).parse().expect("--peak-gflops G")),
             "--only" => o.only = Some(value(i)),
+            "--no-torch" => {
+                o.torch = false;
+                i += 1;
+                continue;
+            }
             "--bench" => {
                 i += 1;
                 continue;
@@ -92,6 +105,32 @@ fn rate(rows: usize, seconds: f64, mut f: impl FnMut()) -> Rate {
     Rate { median: windows[3], low: windows[0], high: windows[6] }
 }
 
+/// PyTorch's rows/s for `train`, `fit` and `infer` (benches/torch/), and its version; or why not.
+fn torch_rates(o: &Options, params: usize) -> Result<(serde_json::Value, String), String> {
+    let here = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/torch");
+    let target = std::env::var_os("CARGO_TARGET_DIR").map(std::path::PathBuf::from).unwrap_or_else(|| std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target"));
+    let venv = target.join("torch-venv");
+    let setup = std::process::Command::new("bash").arg(here.join("setup.sh")).arg(&venv).output().map_err(|e| format!("cannot run setup.sh: {e}"))?;
+    if !setup.status.success() {
+        return Err(format!("setup.sh failed: {}{}", String::from_utf8_lossy(&setup.stdout), String::from_utf8_lossy(&setup.stderr)));
+    }
+    let mut cmd = std::process::Command::new(venv.join("bin/python"));
+    cmd.arg(here.join("mlp_rate.py")).args(["--rows", &o.rows.to_string(), "--params", &params.to_string(), "--latent", &LATENT.to_string(), "--seconds", &o.seconds.to_string(), "--threads", &o.threads.to_string()]);
+    if let Some(only) = &o.only {
+        cmd.args(["--only", only]);
+    }
+    // Held to AVX2 (`UPLIFT_DENSE=avx2` on an AVX-512 machine): PyTorch's kernels too (ATen's
+    // dispatch, oneDNN and MKL), so that both sides measure the AVX2 machine this stands for.
+    if uplift_neural::dense::isa() == Some(uplift_neural::dense::Isa::Avx2) {
+        cmd.env("ATEN_CPU_CAPABILITY", "avx2").env("ONEDNN_MAX_CPU_ISA", "AVX2").env("MKL_ENABLE_INSTRUCTIONS", "AVX2");
+    }
+    let out = cmd.output().map_err(|e| format!("cannot run mlp_rate.py: {e}"))?;
+    let text = String::from_utf8_lossy(&out.stdout);
+    let json: serde_json::Value = serde_json::from_str(text.lines().last().unwrap_or_default()).map_err(|_| format!("mlp_rate.py said: {text}{}", String::from_utf8_lossy(&out.stderr)))?;
+    let version = json["torch"].as_str().unwrap_or("?").to_string();
+    Ok((json, version))
+}
+
 struct Rate {
     median: f64,
     low: f64,
@@ -129,11 +168,29 @@ fn main() {
             None => "GEMM layers (no fused kernels)".to_string(),
         }
     );
+    let torch = if o.torch && o.only.as_deref() != Some("data") {
+        match torch_rates(&o, np) {
+            Ok((json, version)) => {
+                println!("PyTorch {version} (CPU, {} threads, the same networks and batch): measured first, in this run", o.threads);
+                Some(json)
+            }
+            Err(e) => {
+                println!("PyTorch: could not measure it ({})", e.trim());
+                None
+            }
+        }
+    } else {
+        None
+    };
     println!("samples/s: the median of 7 windows (slowest–fastest window in brackets)");
-    let report = |what: &str, r: Rate, flop: f64| {
+    let report = |what: &str, key: &str, r: Rate, flop: f64| {
         let gflops = r.median * flop / 1e9;
+        let versus = match torch.as_ref().and_then(|j| j[key].as_f64()) {
+            Some(t) => format!("; PyTorch {t:.0} samples/s, uplift {:.2}×", r.median / t),
+            None => String::new(),
+        };
         println!(
-            "{what:<28} {:>10.0} samples/s  [{:.0}–{:.0}]  ({:.0} kflop/sample, {gflops:.1} GFLOP/s, {:.1} % of peak)",
+            "{what:<28} {:>10.0} samples/s  [{:.0}–{:.0}]  ({:.0} kflop/sample, {gflops:.1} GFLOP/s, {:.1} % of peak{versus})",
             r.median,
             r.low,
             r.high,
@@ -147,7 +204,7 @@ fn main() {
     let mut state = TrainState::new(np, LATENT, 1);
     let mut buf = StepBuffers::default();
     if wants("train") {
-        report("training step", rate(o.rows, o.seconds, || {
+        report("training step", "train", rate(o.rows, o.seconds, || {
             train_step(&mut state, &batch, &opts, &mut buf);
         }), flop_train);
     }
@@ -157,7 +214,7 @@ fn main() {
     let mut fb = FitBuffers::default();
     let mut step = 0u64;
     if wants("fit") {
-        report("latent fitting step", rate(o.rows, o.seconds, || {
+        report("latent fitting step", "fit", rate(o.rows, o.seconds, || {
             fit_step_rows(&decoder, &mut latents, &batch.features, &batch.target, &batch.mu_l, step, 1e-3, o.threads, &mut fb);
             step += 1;
         }), flop_fit);
@@ -168,7 +225,7 @@ fn main() {
     let mut out = vec![0.0f32; o.rows * 7];
     let mut workspaces = Vec::new();
     if wants("infer") {
-        report("inference (decoder forward)", rate(o.rows, o.seconds, || {
+        report("inference (decoder forward)", "infer", rate(o.rows, o.seconds, || {
             uplift_neural::inference::decode_parallel_in(&mut workspaces, &decoder, &dec_in, &mut out, o.threads);
         }), flop_infer);
     }

@@ -206,6 +206,11 @@ fn the_remaining_subcommands_succeed_through_the_binary() {
     let shipped = std::fs::read_to_string(repo.join("runtime/neural/src/shipped_decoder.rs")).unwrap();
     assert_eq!(std::fs::read_to_string(&rust).unwrap(), shipped, "`uplift emit-decoder` no longer writes the committed shipped_decoder.rs");
     assert!(std::fs::read_to_string(&wgsl).unwrap().contains("fn "), "no WGSL decoder");
+    let (rust, wgsl) = (dir.join("sampler.rs"), dir.join("sampler.wgsl"));
+    ok(&["emit-decoder", "--sampler", "--rust", s(&rust), "--wgsl", s(&wgsl)]);
+    let shipped = std::fs::read_to_string(repo.join("runtime/neural/src/shipped_sampler.rs")).unwrap();
+    assert_eq!(std::fs::read_to_string(&rust).unwrap(), shipped, "`uplift emit-decoder --sampler` no longer writes the committed shipped_sampler.rs");
+    assert!(std::fs::read_to_string(&wgsl).unwrap().contains("fn nd_main"), "no WGSL sampling decoder");
 
     // A fitted material: enhance one PBR set at 16², fit it briefly.
     let enhanced = dir.join("enhanced");

@@ -224,8 +224,13 @@ fn wgpu_engine_renders_what_the_cpu_engine_renders() {
     let o = RenderOptions { width: 32, height: 32, spp: 8, bounces: 1, ..Default::default() };
     let env = Environment::studio();
     let gpu = Shading::new_wgpu(engine, &uplift_engines::stack::Stack::builtin(), Model::Neural(decoder.clone())).unwrap();
-    let cpu = Shading::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Neural(decoder)).unwrap();
-    for (name, a, b) in [("neural", &cpu, &gpu)] {
+    let cpu = Shading::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Neural(decoder.clone())).unwrap();
+    // With the sampling decoder: its emitted WGSL network on the wgpu engine, its forward pass
+    // on the CPU engine.
+    let sampler = uplift_neural::weights::load_sampler(std::path::Path::new(uplift_neural::weights::SHIPPED_DECODER)).unwrap().expect("the shipped sampling decoder");
+    let gpu_sampled = Shading::new_wgpu(uplift_engines::wgpu_engine::WgpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Neural(decoder.clone())).unwrap().with_sampler(sampler.clone()).unwrap();
+    let cpu_sampled = Shading::new(CpuEngine::new().unwrap(), &uplift_engines::stack::Stack::builtin(), Model::Neural(decoder)).unwrap().with_sampler(sampler).unwrap();
+    for (name, a, b) in [("neural", &cpu, &gpu), ("neural, sampled by the sampling decoder", &cpu_sampled, &gpu_sampled)] {
         let x = render(&Sphere::preview(), &env, &surface, a, &o, None).unwrap();
         let y = render(&Sphere::preview(), &env, &surface, b, &o, None).unwrap();
         let (mut close, mut n) = (0usize, 0usize);
