@@ -164,10 +164,15 @@ impl TrainingClasses {
 
     /// The class a uniform number `u` ∈ [0, 1) picks, in proportion to the shares.
     pub fn pick(&self, u: f64) -> usize {
-        let total: f64 = self.classes.iter().map(|c| c.share).sum();
+        self.pick_weighted(u, &vec![1.0; self.classes.len()])
+    }
+
+    /// [`pick`](Self::pick) with each class's share multiplied by its factor.
+    pub fn pick_weighted(&self, u: f64, factors: &[f64]) -> usize {
+        let total: f64 = self.classes.iter().zip(factors).map(|(c, f)| c.share * f).sum();
         let mut acc = 0.0;
-        for (k, c) in self.classes.iter().enumerate() {
-            acc += c.share / total;
+        for (k, (c, f)) in self.classes.iter().zip(factors).enumerate() {
+            acc += c.share * f / total;
             if u < acc {
                 return k;
             }

@@ -22,30 +22,47 @@ use uplift_compiler::ClosureContext;
 pub const TILES_PER_CLASS: u64 = 1 << 16;
 
 /// Which classes a generator draws.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum ClassMix {
     /// Every class in proportion to its share (the builtin five: 1/5 each; paper §4.2:
     /// infill ≈ 20 %).
     All,
     /// One class, by name.
     Only(String),
+    /// Every class, the named ones' shares multiplied by their factors (`dust=2,inner=2`:
+    /// twice the dust and inner rows of `all`, relative to the others).
+    Weighted(Vec<(String, f64)>),
 }
 
 impl ClassMix {
-    /// `all` or a class name (checked against the classes when a batch is drawn).
+    /// `all`, a class name, or `name=factor,…` (names checked against the classes when a batch
+    /// is drawn).
     pub fn parse(text: &str) -> Result<ClassMix, String> {
         if text == "all" {
             Ok(ClassMix::All)
+        } else if text.contains('=') {
+            let mut v = Vec::new();
+            for part in text.split(',') {
+                let (name, factor) = part.split_once('=').ok_or_else(|| format!("`{part}` is not name=factor"))?;
+                let f = factor.trim().parse::<f64>().ok().filter(|f| f.is_finite() && *f >= 0.0).ok_or_else(|| format!("`{factor}` (class {name}) is not a factor ≥ 0"))?;
+                if name.trim().is_empty() {
+                    return Err(format!("`{part}` names no class"));
+                }
+                v.push((name.trim().to_string(), f));
+            }
+            Ok(ClassMix::Weighted(v))
         } else if text.is_empty() {
             Err("an empty class name".into())
         } else {
             Ok(ClassMix::Only(text.to_string()))
         }
     }
-    pub fn name(&self) -> &str {
+    /// The mix as `parse` reads it.
+    pub fn name(&self) -> String {
         match self {
-            ClassMix::All => "all",
-            ClassMix::Only(c) => c,
+            ClassMix::All => "all".into(),
+            ClassMix::Only(c) => c.clone(),
+            ClassMix::Weighted(w) => w.iter().map(|(n, f)| format!("{n}={f}")).collect::<Vec<_>>().join(","),
         }
     }
 }
@@ -180,9 +197,19 @@ impl DataGenerator {
         // rows whatever the thread count. The kernels run on the engine's threads; this part,
         // on one thread, was a sixth of data generation.
         let np = self.stack.len();
+        let mut factors = vec![1.0; self.classes.len()];
         let only = match &self.mix {
             ClassMix::All => None,
             ClassMix::Only(name) => Some(self.classes.index_of(name)?),
+            ClassMix::Weighted(w) => {
+                for (name, f) in w {
+                    factors[self.classes.index_of(name)?] = *f;
+                }
+                if factors.iter().all(|f| *f == 0.0) {
+                    return Err("the class factors are all 0".into());
+                }
+                None
+            }
         };
         // Each group of k rows draws its class, tile and cell from its own key; the classes'
         // kernels then run once per class on all of its groups.
@@ -190,7 +217,7 @@ impl DataGenerator {
         let picks: Vec<(usize, u64, u64)> = (0..groups)
             .map(|g| {
                 let rk = mix64(key.wrapping_add(g as u64));
-                let class = only.unwrap_or_else(|| self.classes.pick(unit(rk ^ 1) as f64));
+                let class = only.unwrap_or_else(|| self.classes.pick_weighted(unit(rk ^ 1) as f64, &factors));
                 (class, mix64(rk ^ 2) % TILES_PER_CLASS, mix64(rk ^ 3) % (TILE * TILE))
             })
             .collect();

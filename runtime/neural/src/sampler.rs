@@ -352,6 +352,17 @@ pub fn train_sampler(model: &NeuralModel<f32>, generator: &DataGenerator, o: &Sa
     Ok(TrainedSampler { net, history, seconds: start.elapsed().as_secs_f64() })
 }
 
+/// A sampling decoder for a latent of `latent` values that always answers the cosine lobe (its
+/// last layer's weights 0, the cosine logit's bias far above the others): the baseline the
+/// sampling decoder is measured against.
+pub fn cosine_only(latent: usize) -> Mlp<f32> {
+    let shape = sampler_shape(latent);
+    let mut params = vec![0.0; shape.parameter_count()];
+    let (_, b) = shape.offsets(shape.layers() - 1);
+    params[b..b + SAMPLER_OUTPUTS].copy_from_slice(&[-40.0, -40.0, 40.0, 0.0, 0.0]);
+    Mlp::from_params(shape, params).expect("the sampler's shape")
+}
+
 /// The mixtures of rows of (latent, μv).
 pub fn mixtures(net: &Mlp<f32>, latents: &[f32], mu_v: &[f32]) -> Vec<Mixture> {
     let latent = net.shape.inputs() - 1;

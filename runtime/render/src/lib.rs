@@ -2,7 +2,8 @@
 //! BSDF importance sampling combined by MIS (`integrator`), its environments (`environment`),
 //! geometry and camera (`scene`; glTF meshes behind a BVH in `mesh`), the material data it reads (`surface`) and the two ways of
 //! shading it — the compiled reference kernels or the neural decoder (`shading`) — the AgX
-//! display transform (`tonemap`) and the image metrics, FLIP and PSNR (`metrics`).
+//! display transform (`tonemap`) and the image metrics, FLIP and PSNR (`metrics`); what the
+//! sampling decoder buys in variance (`sampler_error`).
 
 pub mod environment;
 pub mod evaluation;
@@ -13,6 +14,7 @@ pub mod material;
 pub mod mesh;
 pub mod mtlx_material;
 pub mod metrics;
+pub mod sampler_error;
 pub mod scene;
 pub mod shading;
 pub mod surface;

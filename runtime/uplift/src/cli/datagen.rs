@@ -55,7 +55,12 @@ pub fn run(args: DatagenArgs) -> Result<(), String> {
     std::fs::create_dir_all(&args.output).map_err(|e| format!("{}: {e}", args.output.display()))?;
     let stack = args.stack.load()?;
     let mut generator = DataGenerator::new(CpuEngine::new()?, &stack, mix.clone(), args.seed)?;
-    if let ClassMix::Only(name) = &mix {
+    let named: Vec<&str> = match &mix {
+        ClassMix::All => vec![],
+        ClassMix::Only(name) => vec![name.as_str()],
+        ClassMix::Weighted(w) => w.iter().map(|(n, _)| n.as_str()).collect(),
+    };
+    for name in named {
         generator.classes().index_of(name).map_err(|e| format!("--class: {e}"))?;
     }
     generator.directions_per_view = args.directions_per_view;

@@ -32,6 +32,12 @@ pub struct DemoArgs {
     pub seed: u64,
     #[arg(long)]
     pub threads: Option<usize>,
+    /// The sampling decoder's study: samples per pixel of the compared renders.
+    #[arg(long, default_value_t = 16)]
+    pub sampler_spp: usize,
+    /// The sampling decoder's study: samples per pixel of the converged render.
+    #[arg(long, default_value_t = 1024)]
+    pub sampler_converged_spp: usize,
 }
 
 pub fn run(args: DemoArgs) -> Result<(), String> {
@@ -46,10 +52,17 @@ pub fn run(args: DemoArgs) -> Result<(), String> {
         fit_steps: args.fit_steps,
         seed: args.seed,
         threads,
+        sampler_study: uplift_render::sampler_error::SamplerErrorOptions { spp: args.sampler_spp, converged_spp: args.sampler_converged_spp, ..Default::default() },
     };
     let s = run_demo(&o)?;
     println!("{}", format_table(&s.table));
     println!("iridescent clearcoat (the coated Types' materials with --iridescence):\n{}", format_table(&s.iridescent_table));
+    if !s.sampler_table.is_empty() {
+        println!("sampling decoder: squared error of cosine sampling / of the sampling decoder at equal spp, per Type (lowest / median / highest):");
+        for r in &s.sampler_table {
+            println!("  Type {}: {} materials, {:.2}× / {:.2}× / {:.2}×", r.kind, r.count, r.ratio.0, r.ratio.1, r.ratio.2);
+        }
+    }
     println!(
         "white furnace: reference {} of {} materials pass, neural {} of {}",
         s.furnace_reference_passed, s.materials, s.furnace_neural_passed, s.materials

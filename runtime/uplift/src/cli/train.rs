@@ -30,7 +30,8 @@ pub struct TrainArgs {
     /// Half-width of the uniform latent jitter (paper: 0.005).
     #[arg(long, default_value_t = 0.005)]
     pub jitter: f32,
-    /// Training data: `all` (the five classes, 20 % each) or one class.
+    /// Training data: `all` (the five classes, 20 % each), one class, or `name=factor,…` (the
+    /// named classes' shares multiplied: `dust=2,inner=2`).
     #[arg(long, default_value = "all")]
     pub class: String,
     /// Threads (default: every core).
@@ -82,7 +83,12 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
     }
     let stack = args.stack.load()?;
     let mut generator = DataGenerator::new(CpuEngine::with_threads(threads)?, &stack, mix.clone(), args.seed)?;
-    if let ClassMix::Only(name) = &mix {
+    let named: Vec<&str> = match &mix {
+        ClassMix::All => vec![],
+        ClassMix::Only(name) => vec![name.as_str()],
+        ClassMix::Weighted(w) => w.iter().map(|(n, _)| n.as_str()).collect(),
+    };
+    for name in named {
         generator.classes().index_of(name).map_err(|e| format!("--class: {e}"))?;
     }
     generator.views = views;

@@ -19,6 +19,7 @@ use uplift_render::environment::Environment;
 use uplift_render::evaluation::{evaluate_material, per_type, write_eval_images, TypeRow};
 use uplift_render::furnace::{white_furnace, FurnaceOptions};
 use uplift_render::image_files::write_png;
+use uplift_render::sampler_error::{per_type_ratios, sampler_error, SamplerErrorOptions, SamplerRow, SamplerShadings};
 use uplift_render::integrator::RenderOptions;
 use uplift_render::shading::{Model, Shading};
 use uplift_render::surface::SurfaceTextures;
@@ -38,6 +39,9 @@ pub struct DemoOptions {
     pub fit_steps: u64,
     pub seed: u64,
     pub threads: usize,
+    /// The sampling decoder's study (image size, spp, the converged render's spp; the seed is
+    /// the demo's).
+    pub sampler_study: SamplerErrorOptions,
 }
 
 /// What the demo measured.
@@ -48,6 +52,9 @@ pub struct DemoSummary {
     pub furnace_neural_passed: usize,
     /// The iridescent twins of the coated Types, per Type.
     pub iridescent_table: Vec<TypeRow>,
+    /// Per Type, the sampling decoder's variance reduction over cosine sampling (empty when the
+    /// decoder file has no sampling decoder).
+    pub sampler_table: Vec<SamplerRow>,
     pub report: PathBuf,
 }
 
@@ -241,6 +248,22 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         });
     }
 
+    // 4d. The sampling decoder (when the decoder file has one): per material, direct-lighting
+    // renders at equal spp sampled by it and by the cosine lobe, against a converged render.
+    let mut sampler_errors = Vec::new();
+    if let Some(sampler) = uplift_neural::weights::load_sampler(&o.decoder)? {
+        let shadings = SamplerShadings::new(&stack, &model.decoder, &sampler, o.threads)?;
+        let so = SamplerErrorOptions { seed: o.seed, ..o.sampler_study };
+        let b = bar(dirs.len(), "sampler");
+        for (m, dir) in set.iter().zip(&dirs) {
+            b.set_message(m.material.name.clone());
+            let surface = SurfaceTextures::load(dir, &stack, true)?;
+            sampler_errors.push((m.kind.index(), sampler_error(&surface, &env, &shadings, &so)?));
+            b.inc(1);
+        }
+        b.finish();
+    }
+
     // 5. Report.
     let evals: Vec<_> = rows.iter().map(|r| r.eval.clone()).collect();
     let table = per_type(&evals);
@@ -252,6 +275,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         furnace_reference_passed: rows.iter().filter(|r| r.furnace_reference).count(),
         furnace_neural_passed: rows.iter().filter(|r| r.furnace_neural).count(),
         iridescent_table: per_type(&iridescent_evals),
+        sampler_table: per_type_ratios(&sampler_errors),
         report: o.out.join("report").join("index.html"),
     };
     let report = Report {
@@ -259,6 +283,8 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         glints: glint_rows,
         iridescent: iridescent_rows,
         iridescent_table: summary.iridescent_table.clone(),
+        sampler_table: summary.sampler_table.clone(),
+        sampler_settings: format!("{}² direct lighting at {} spp against the stack sampler's {} spp", o.sampler_study.size, o.sampler_study.spp, o.sampler_study.converged_spp),
         table,
         history,
         decoder: weights.metadata.get("command").cloned().unwrap_or_else(|| o.decoder.display().to_string()),

@@ -5,6 +5,7 @@
 //! `<body data-broken-images>`, which the report's test reads back from headless Chromium.
 
 use uplift_render::evaluation::{MaterialEval, TypeRow, PAPER_TABLE1};
+use uplift_render::sampler_error::SamplerRow;
 use std::fmt::Write;
 
 /// One material's row of the report.
@@ -32,6 +33,9 @@ pub struct Report {
     /// --iridescence`), fitted on their own, and their per-Type FLIP table.
     pub iridescent: Vec<TwinMaterial>,
     pub iridescent_table: Vec<TypeRow>,
+    /// The sampling decoder's variance reduction per Type, and how it was measured.
+    pub sampler_table: Vec<SamplerRow>,
+    pub sampler_settings: String,
     pub table: Vec<TypeRow>,
     /// The decoder's training history: (step, loss, loss_f, loss_t, loss_r).
     pub history: Vec<[f64; 5]>,
@@ -120,6 +124,21 @@ fn type_table(rows: &[TypeRow]) -> String {
     s
 }
 
+/// The sampling decoder's per-Type variance ratios.
+pub fn sampler_table(rows: &[SamplerRow]) -> String {
+    let mut s = String::from("<table><tr><th>Type</th><th>materials</th><th>lowest</th><th>median</th><th>highest</th><th>below cosine sampling for all</th></tr>\n");
+    for row in rows {
+        let ok = row.ratio.0 > 1.0;
+        let _ = writeln!(
+            s,
+            "<tr><td>{}</td><td>{}</td><td>{:.2}×</td><td>{:.2}×</td><td>{:.2}×</td><td class=\"{}\">{}</td></tr>",
+            row.kind, row.count, row.ratio.0, row.ratio.1, row.ratio.2, if ok { "pass" } else { "fail" }, if ok { "yes" } else { "no" }
+        );
+    }
+    s += "</table>\n";
+    s
+}
+
 pub fn render_html(r: &Report) -> String {
     let mut s = String::new();
     s += "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>uplift demo report</title>\n<style>body{font-family:system-ui,sans-serif;margin:24px;max-width:1200px;color:#222}table{border-collapse:collapse;margin:8px 0}td,th{border:1px solid #ccc;padding:4px 8px;text-align:right}th{background:#f4f4f4}td.l,th.l{text-align:left}.grid img{width:160px;height:160px;display:block}.grid td{text-align:center;font-size:12px}.pass{color:#080}.fail{color:#b00}code{background:#f4f4f4;padding:1px 4px}</style></head>\n<body data-broken-images=\"unknown\">\n";
@@ -181,6 +200,14 @@ pub fn render_html(r: &Report) -> String {
             );
         }
         s += "</table>\n";
+    }
+    if !r.sampler_table.is_empty() {
+        let _ = writeln!(
+            s,
+            "<h2>Sampling decoder (paper §4.1)</h2>\n<p>Every material above, its neural non-diffuse part importance-sampled by the sampling decoder or by the cosine lobe alone, at equal samples per pixel ({}); the ratio of their mean squared errors against the converged render (above 1: the sampling decoder leaves that many times less variance).</p>",
+            escape(&r.sampler_settings)
+        );
+        s += &sampler_table(&r.sampler_table);
     }
     s += "<script>window.addEventListener('load',function(){var b=0;for(const i of document.images){if(!i.complete||i.naturalWidth===0)b++;}document.body.dataset.brokenImages=String(b);document.body.dataset.images=String(document.images.length);});</script>\n";
     s += "</body></html>\n";

@@ -262,7 +262,7 @@ fn the_remaining_subcommands_succeed_through_the_binary() {
 
     // demo, the main job, at its smallest.
     let demo = dir.join("demo");
-    ok(&["demo", "-o", s(&demo), "--per-type", "1", "--texture-size", "16", "--render-size", "24", "--spp", "2", "--fit-steps", "5", "--threads", "2"]);
+    ok(&["demo", "-o", s(&demo), "--per-type", "1", "--texture-size", "16", "--render-size", "24", "--spp", "2", "--fit-steps", "5", "--threads", "2", "--sampler-spp", "2", "--sampler-converged-spp", "16"]);
     // One material per Type, each fitted, and a report showing each one's four images; the
     // first of Types 0 and 1 again with glints (three images: no PBR input of their own).
     let all: Vec<String> = std::fs::read_dir(demo.join("materials")).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();

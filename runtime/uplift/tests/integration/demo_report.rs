@@ -20,6 +20,7 @@ fn demo_writes_a_report_that_renders_without_broken_images() {
         fit_steps: 3,
         seed: 5,
         threads: 2,
+        sampler_study: uplift_render::sampler_error::SamplerErrorOptions { size: 16, spp: 4, converged_spp: 64, seed: 0 },
     };
     let s = run_demo(&o).unwrap();
     assert_eq!(s.materials, 6);
@@ -36,6 +37,10 @@ fn demo_writes_a_report_that_renders_without_broken_images() {
     assert_eq!(images.len(), 24 + 6 + 9, "four images per material, three per glint row (Types 0 and 1) and per iridescent row (Types 2, 3, 5)");
     assert!(html.contains("<h2>Iridescent clearcoat</h2>"), "no iridescence section");
     assert!(html.contains("<h2>Glints (paper §5.3)</h2>"), "no glint section");
+    // The shipped decoder file has a sampling decoder: its study covers every Type.
+    assert!(html.contains("<h2>Sampling decoder (paper §4.1)</h2>"), "no sampling-decoder section");
+    assert_eq!(s.sampler_table.iter().map(|r| (r.kind, r.count)).collect::<Vec<_>>(), (0..6).map(|k| (k, 1)).collect::<Vec<_>>());
+    assert!(s.sampler_table.iter().all(|r| r.ratio.1.is_finite() && r.ratio.1 > 0.0));
     for src in &images {
         let p = out.join("report").join(src);
         assert!(p.is_file(), "{} is missing", p.display());

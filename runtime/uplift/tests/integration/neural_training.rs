@@ -42,6 +42,18 @@ fn generated_targets_equal_the_stack_kernels() {
         let share = b.class.iter().filter(|&&k| k as usize == index).count() as f64 / b.rows as f64;
         assert!((share - 0.2).abs() < 0.03, "{}: {share}", c.name);
     }
+    // A weighted mix (`train --class dust=2,inner=0`): shares 1, 2, 1, 0, 1 of 5.
+    let w = generator(ClassMix::parse("dust=2,inner=0").unwrap(), 5).batch(3, 4000).unwrap();
+    for (index, c) in g.classes().iter().enumerate() {
+        let want = match c.name.as_str() { "dust" => 0.4, "inner" => 0.0, _ => 0.2 };
+        let share = w.class.iter().filter(|&&k| k as usize == index).count() as f64 / w.rows as f64;
+        assert!((share - want).abs() < 0.03, "weighted {}: {share}, expected {want}", c.name);
+    }
+    assert!(ClassMix::parse("dust=x").is_err() && ClassMix::parse("dust=-1").is_err());
+    match generator(ClassMix::parse("no-such=2").unwrap(), 5).batch(0, 64) {
+        Err(e) => assert!(e.contains("no-such"), "{e}"),
+        Ok(_) => panic!("a weighted mix naming an unknown class drew a batch"),
+    }
     let eval = bsdf("uplift_stack", ClosureContext::Eval);
     let albedo = bsdf("uplift_stack", ClosureContext::Albedo);
     // Params names inputs by `&'static str`: the process's builtin stack lives that long.

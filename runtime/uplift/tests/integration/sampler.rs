@@ -124,12 +124,10 @@ fn decode_at(model: &uplift_neural::model::NeuralModel<f32>, z: &[f32], wv: [f32
     decode(model, &latents, &features)
 }
 
-/// A "sampler" that always answers the cosine lobe.
+/// The library's cosine-lobe-only sampler: its mixture is the cosine lobe.
 fn cosine_only(latent: usize) -> Mlp<f32> {
-    let shape = sampler_shape(latent);
-    let mut net = Mlp::from_params(shape.clone(), vec![0.0; shape.parameter_count()]).unwrap();
+    let net = uplift_neural::sampler::cosine_only(latent);
     let (_, b) = net.shape.offsets(net.shape.layers() - 1);
-    net.params[b..b + SAMPLER_OUTPUTS].copy_from_slice(&[-40.0, -40.0, 40.0, 0.0, 0.0]);
     assert!(Mixture::from_outputs(&net.params[b..b + SAMPLER_OUTPUTS]).weight[2] > 0.9999);
     net
 }
