@@ -58,11 +58,13 @@ pub struct RenderOptions {
     pub jitter: bool,
     pub fov_degrees: f32,
     pub camera_distance: f32,
+    /// The camera (None: the preview camera of `fov_degrees` at `camera_distance` on +z).
+    pub camera: Option<Camera>,
 }
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        RenderOptions { width: 256, height: 256, spp: 64, bounces: 2, seed: 1, strategy: Strategy::Mis, jitter: true, fov_degrees: 30.0, camera_distance: 4.8 }
+        RenderOptions { width: 256, height: 256, spp: 64, bounces: 2, seed: 1, strategy: Strategy::Mis, jitter: true, fov_degrees: 30.0, camera_distance: 4.8, camera: None }
     }
 }
 
@@ -119,7 +121,7 @@ pub fn render_model(scene: &dyn Scene, env: &Environment, model: &dyn SurfaceMod
     if o.width == 0 || o.height == 0 || o.spp == 0 {
         return Err(format!("render: width, height and spp must be at least 1 (got {}×{}, {} spp)", o.width, o.height, o.spp));
     }
-    let camera = Camera::preview(o.fov_degrees, o.camera_distance);
+    let camera = o.camera.unwrap_or_else(|| Camera::preview(o.fov_degrees, o.camera_distance));
     let n = o.width * o.height;
     let mut sum = vec![[0.0f64; 3]; n];
     let mut sum_sq = vec![[0.0f64; 3]; n];

@@ -28,6 +28,10 @@ struct Node {
 
 /// A triangle mesh in the unit sphere.
 pub struct Mesh {
+    /// Where the source's bounding-box centre was, and its farthest vertex's distance from
+    /// there: a source point p is at (p − centre) / radius here.
+    pub centre: Vec3,
+    pub radius: f32,
     triangles: Vec<WorldTriangle>,
     nodes: Vec<Node>,
     order: Vec<u32>,
@@ -70,12 +74,17 @@ impl Mesh {
                 *p = [0, 1, 2].map(|c| (p[c] - centre[c]) / radius);
             }
         }
-        let mut mesh = Mesh { order: (0..triangles.len() as u32).collect(), triangles, nodes: Vec::new() };
+        let mut mesh = Mesh { centre, radius, order: (0..triangles.len() as u32).collect(), triangles, nodes: Vec::new() };
         let n = mesh.order.len();
         let centroids: Vec<Vec3> = mesh.triangles.iter().map(centroid).collect();
         mesh.nodes.push(Node { lo: [0.0; 3], hi: [0.0; 3], start: 0, count: 0 });
         mesh.build(&centroids, 0, 0, n);
         Ok(mesh)
+    }
+
+    /// The bounding box of the moved and scaled mesh (lo, hi).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        bounds(self.triangles.iter().flat_map(|t| t.position))
     }
 
     pub fn triangle_count(&self) -> usize {

@@ -124,7 +124,8 @@ impl Scene for Sphere {
     }
 }
 
-/// A pinhole camera.
+/// A pinhole camera (square pixels; the image's vertical field of view is 2·atan(tan_half_fov)).
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     pub position: Vec3,
     pub forward: Vec3,
@@ -144,6 +145,27 @@ impl Camera {
             up: [0.0, 1.0, 0.0],
             tan_half_fov: (fov_degrees.to_radians() * 0.5).tan(),
         }
+    }
+
+    /// A camera at `position` looking at `target`, `up` giving the image's vertical.
+    pub fn look_at(position: Vec3, target: Vec3, up: Vec3, fov_degrees: f32) -> Camera {
+        let forward = normalize(add_scaled(target, position, -1.0));
+        let right = normalize(cross(forward, up));
+        Camera { position, forward, right, up: cross(right, forward), tan_half_fov: (fov_degrees.to_radians() * 0.5).tan() }
+    }
+
+    /// The image point (x, y) in pixels (y down) where world point `p` projects, and its depth
+    /// along the view axis; None behind the camera.
+    pub fn project(&self, p: Vec3, width: usize, height: usize) -> Option<(f32, f32, f32)> {
+        let d = add_scaled(p, self.position, -1.0);
+        let z = dot(d, self.forward);
+        if z <= 0.0 {
+            return None;
+        }
+        let aspect = width as f32 / height as f32;
+        let sx = dot(d, self.right) / z / (self.tan_half_fov * aspect);
+        let sy = dot(d, self.up) / z / self.tan_half_fov;
+        Some(((sx + 1.0) * 0.5 * width as f32, (1.0 - sy) * 0.5 * height as f32, z))
     }
 
     /// The ray through image point (x, y) in pixels (y down), for a `width`×`height` image.

@@ -1,6 +1,7 @@
 //! The `uplift` command line: `check` and `compile` (the compiler spine) and `eval` (run an
 //! output over CSV rows); `enhance` and `masks` (uplift rules);
-//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render`, `eval-fit`, `furnace` and `flip` (evaluation); `demo` (the main job).
+//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render`, `eval-fit`, `furnace` and `flip` (evaluation); `demo` (the main job); `export`
+//! (intrinsic videos for generative models).
 
 mod cli;
 
@@ -48,6 +49,8 @@ enum Command {
     EvalFit(cli::eval_fit::EvalFitArgs),
     /// The main job: enhance a procedural PBR set across all Types, fit, render, FLIP, furnace, report.
     Demo(cli::demo::DemoArgs),
+    /// A fitted material on a mesh as a multi-view intrinsic video for generative models.
+    Export(cli::export::ExportArgs),
     /// LDR-FLIP (and PSNR) of two images.
     Flip(cli::flip::FlipArgs),
 }
@@ -72,6 +75,7 @@ fn main() -> ExitCode {
         Command::Flip(a) => cli::flip::run(a),
         Command::Demo(a) => cli::demo::run(a),
         Command::EvalFit(a) => cli::eval_fit::run(a),
+        Command::Export(a) => cli::export::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

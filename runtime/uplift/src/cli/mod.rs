@@ -10,6 +10,7 @@ pub mod emit_decoder;
 pub mod enhance;
 pub mod eval;
 pub mod eval_fit;
+pub mod export;
 pub mod fit;
 pub mod flip;
 pub mod furnace;

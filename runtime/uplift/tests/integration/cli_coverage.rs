@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use crate::common::cli::{s, uplift};
 
-const SUBCOMMANDS: [&str; 17] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "train-sampler", "fit", "emit-decoder", "render", "gallery", "furnace", "eval-fit", "demo", "flip"];
+const SUBCOMMANDS: [&str; 18] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "train-sampler", "fit", "emit-decoder", "render", "gallery", "furnace", "eval-fit", "demo", "flip", "export"];
 
 #[test]
 fn every_subcommand_has_help_and_rejects_unknown_flags() {
@@ -36,6 +36,7 @@ fn every_subcommand_reports_missing_and_foreign_inputs_with_exit_1() {
     let dir = temp_dir("errors");
     let missing_mtlx = dir.join("missing.mtlx");
     let missing_dir = dir.join("missing_material");
+    let missing_mesh = dir.join("m.glb");
     let foreign = dir.join("not_a_material");
     std::fs::create_dir_all(&foreign).unwrap();
     std::fs::write(foreign.join("notes.txt"), "not a material").unwrap();
@@ -65,6 +66,7 @@ fn every_subcommand_reports_missing_and_foreign_inputs_with_exit_1() {
         (vec!["fit", s(&foreign), "--decoder", s(&missing_weights)], "missing.safetensors"),
         (vec!["emit-decoder", "--decoder", s(&missing_weights), "--rust", s(&decoder_rs)], "missing.safetensors"),
         (vec!["render", s(&missing_dir), "-o", s(&render_png)], "missing_material"),
+        (vec!["export", s(&missing_dir), "--mesh", s(&missing_mesh), "-o", s(&out)], "m.glb"),
         (vec!["render", s(&foreign), "-o", s(&render_png)], "not_a_material"),
         (vec!["render", s(&missing_mtlx), "-o", s(&render_png)], "missing.mtlx"),
         (vec!["gallery", s(&missing_dir), "-o", s(&out)], "missing_material"),
@@ -217,6 +219,15 @@ fn the_remaining_subcommands_succeed_through_the_binary() {
     ok(&["enhance", s(&repo.join("examples/pbr_materials.mtlx")), "--seed", "3", "--resolution", "16x16", "--mask-size", "32", "-o", s(&enhanced)]);
     let copper = enhanced.join("copper");
     ok(&["fit", s(&copper), "--steps", "20", "--threads", "2"]);
+    // export: a short orbit of the fitted material on a UV sphere, every modality written.
+    let sphere = crate::render::write_uv_sphere_gltf(&dir.join("sphere"), 16, 8);
+    let exported = dir.join("exported");
+    ok(&["export", s(&copper), "--mesh", s(&sphere), "-o", s(&exported), "--frames", "2", "--size", "16", "--spp", "1", "--threads", "2"]);
+    for (name, ext) in uplift::export::MODALITIES {
+        assert!(uplift::export::frame_path(&exported, name, 1, ext).is_file(), "export wrote no {name}.{ext}");
+    }
+    let (code, _, err) = uplift(&["export", s(&copper), "--mesh", s(&sphere), "-o", s(&exported), "--frames", "0"]);
+    assert!(code == 1 && err.contains("--frames"), "{err}");
 
     // render (reference and neural) and flip between them; flip of an image with itself is 0.
     let (reference, neural) = (dir.join("reference.png"), dir.join("neural.png"));

@@ -17,6 +17,7 @@ mod closures;
 mod cpu_engine;
 mod demo_report;
 mod enhance;
+mod export;
 mod glints;
 mod grazing_views;
 mod iridescence;

@@ -349,7 +349,7 @@ fn energy_bound_keeps_a_fitted_metal_within_the_white_furnace() {
 
 /// A UV sphere of radius 1 as a .gltf with a separate .bin (smooth normals, glTF uvs matching
 /// the analytic sphere's: u = φ/2π, v = θ/π from the top).
-fn write_uv_sphere_gltf(dir: &std::path::Path, nu: usize, nv: usize) -> std::path::PathBuf {
+pub(crate) fn write_uv_sphere_gltf(dir: &std::path::Path, nu: usize, nv: usize) -> std::path::PathBuf {
     use std::f32::consts::{PI, TAU};
     std::fs::create_dir_all(dir).unwrap();
     let (mut pos, mut nrm, mut uv, mut idx) = (vec![], vec![], vec![], vec![]);

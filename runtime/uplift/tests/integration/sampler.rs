@@ -14,7 +14,7 @@ use uplift_neural::datagen::{ClassMix, DataGenerator};
 use uplift_neural::evaluate::{decode, encode};
 use uplift_neural::features::direction_features;
 use uplift_neural::mlp::Mlp;
-use uplift_neural::sampler::{chi_square, mixtures, reference_views, sampler_shape, Mixture, SAMPLER_OUTPUTS};
+use uplift_neural::sampler::{chi_square, mixtures, reference_views, Mixture, SAMPLER_OUTPUTS};
 use uplift_neural::weights::{load_model, load_sampler, SHIPPED_DECODER};
 use uplift_render::environment::Environment;
 use uplift_render::integrator::{render, RenderOptions};
