@@ -79,6 +79,7 @@ pub fn frame_path(out: &Path, name: &str, k: usize, ext: &str) -> PathBuf {
 }
 
 /// What an export wrote.
+#[derive(Debug)]
 pub struct ExportSummary {
     pub frames: usize,
     pub skipped: usize,

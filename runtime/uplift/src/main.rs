@@ -1,7 +1,7 @@
 //! The `uplift` command line: `check` and `compile` (the compiler spine) and `eval` (run an
 //! output over CSV rows); `enhance` and `masks` (uplift rules);
-//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render`, `eval-fit`, `furnace` and `flip` (evaluation); `demo` (the main job); `export`
-//! (intrinsic videos for generative models).
+//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render`, `eval-fit`, `furnace` and `flip` (evaluation); `demo` (the main job); `export` and
+//! `pack` (intrinsic videos for generative models, as WebDataset shards).
 
 mod cli;
 
@@ -51,6 +51,8 @@ enum Command {
     Demo(cli::demo::DemoArgs),
     /// A fitted material on a mesh as a multi-view intrinsic video for generative models.
     Export(cli::export::ExportArgs),
+    /// Exported assets as WebDataset tar shards with an index.
+    Pack(cli::pack::PackArgs),
     /// LDR-FLIP (and PSNR) of two images.
     Flip(cli::flip::FlipArgs),
 }
@@ -76,6 +78,7 @@ fn main() -> ExitCode {
         Command::Demo(a) => cli::demo::run(a),
         Command::EvalFit(a) => cli::eval_fit::run(a),
         Command::Export(a) => cli::export::run(a),
+        Command::Pack(a) => cli::pack::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

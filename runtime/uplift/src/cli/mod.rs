@@ -16,6 +16,7 @@ pub mod flip;
 pub mod furnace;
 pub mod gallery;
 pub mod masks;
+pub mod pack;
 pub mod render;
 pub mod tables;
 pub mod train;

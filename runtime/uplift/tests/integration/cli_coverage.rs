@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use crate::common::cli::{s, uplift};
 
-const SUBCOMMANDS: [&str; 18] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "train-sampler", "fit", "emit-decoder", "render", "gallery", "furnace", "eval-fit", "demo", "flip", "export"];
+const SUBCOMMANDS: [&str; 19] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "train-sampler", "fit", "emit-decoder", "render", "gallery", "furnace", "eval-fit", "demo", "flip", "export", "pack"];
 
 #[test]
 fn every_subcommand_has_help_and_rejects_unknown_flags() {
@@ -66,6 +66,7 @@ fn every_subcommand_reports_missing_and_foreign_inputs_with_exit_1() {
         (vec!["fit", s(&foreign), "--decoder", s(&missing_weights)], "missing.safetensors"),
         (vec!["emit-decoder", "--decoder", s(&missing_weights), "--rust", s(&decoder_rs)], "missing.safetensors"),
         (vec!["render", s(&missing_dir), "-o", s(&render_png)], "missing_material"),
+        (vec!["pack", s(&missing_dir), "-o", s(&out)], "missing_material"),
         (vec!["export", s(&missing_dir), "--mesh", s(&missing_mesh), "-o", s(&out)], "m.glb"),
         (vec!["render", s(&foreign), "-o", s(&render_png)], "not_a_material"),
         (vec!["render", s(&missing_mtlx), "-o", s(&render_png)], "missing.mtlx"),
@@ -226,6 +227,10 @@ fn the_remaining_subcommands_succeed_through_the_binary() {
     for (name, ext) in uplift::export::MODALITIES {
         assert!(uplift::export::frame_path(&exported, name, 1, ext).is_file(), "export wrote no {name}.{ext}");
     }
+    // pack: the export as one WebDataset shard and its index.
+    let shards = dir.join("shards");
+    ok(&["pack", s(&exported), "-o", s(&shards)]);
+    assert!(shards.join("shard-000000.tar").is_file() && shards.join("index.json").is_file(), "pack wrote no shard");
     let (code, _, err) = uplift(&["export", s(&copper), "--mesh", s(&sphere), "-o", s(&exported), "--frames", "0"]);
     assert!(code == 1 && err.contains("--frames"), "{err}");
 

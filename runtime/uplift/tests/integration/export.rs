@@ -129,6 +129,21 @@ fn png16(path: &Path) -> (usize, usize, Vec<u16>) {
     (img.width() as usize, img.height() as usize, img.into_raw())
 }
 
+/// A small export (`frames` frames of 24², 1 spp) of a fitted material on a UV sphere under
+/// `root`, into `root/<name>`.
+pub(crate) fn small_export(root: &Path, name: &str, frames: usize, seed: u64) -> std::path::PathBuf {
+    let material = root.join("material");
+    if !material.join("fit.json").is_file() {
+        fitted_material(&material);
+    }
+    let mesh_path = crate::render::write_uv_sphere_gltf(&root.join("mesh"), 16, 8);
+    let mesh = uplift_render::mesh::Mesh::new(uplift_enhance::gltf_input::load(&mesh_path).unwrap().world_triangles()).unwrap();
+    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames, width: 24, height: 24, seed, ..Default::default() }, spp: 1, bounces: 1, exposure: 1.0, threads: 2, neural: None };
+    let out = root.join(name);
+    uplift::export::export_asset(&material, &mesh, &uplift_render::environment::Environment::studio(), &Stack::builtin(), &out, &o, false).unwrap();
+    out
+}
+
 #[test]
 fn exported_frames_reproject_and_decode_to_their_floats() {
     let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("export_test");

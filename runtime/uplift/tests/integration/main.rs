@@ -34,6 +34,7 @@ mod numeric_math;
 mod numeric_noise;
 mod numeric_procedural;
 mod numeric_smoke;
+mod pack;
 mod numeric_texture;
 mod random_graphs;
 mod render;
