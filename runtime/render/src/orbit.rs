@@ -110,6 +110,31 @@ pub fn nerfstudio_json(cameras: &[Camera], width: usize, height: usize, frame_pa
     })
 }
 
+/// Cameras from nerfstudio's `transforms.json` layout (as [`nerfstudio_json`] writes it: square
+/// pixels, principal point at the centre): the cameras, the image size and each frame's
+/// `file_path`.
+pub fn cameras_from_json(v: &serde_json::Value) -> Result<(Vec<Camera>, usize, usize, Vec<String>), String> {
+    let num = |k: &str| v[k].as_f64().ok_or_else(|| format!("cameras.json: no number `{k}`"));
+    let (w, h, fl_y) = (num("w")? as usize, num("h")? as usize, num("fl_y")?);
+    if w == 0 || h == 0 || !(fl_y > 0.0) {
+        return Err(format!("cameras.json: w {w}, h {h}, fl_y {fl_y}: not an image"));
+    }
+    if (num("fl_x")? - fl_y).abs() > 1e-3 * fl_y || (num("cx")? - 0.5 * w as f64).abs() > 1e-3 || (num("cy")? - 0.5 * h as f64).abs() > 1e-3 {
+        return Err("cameras.json: only square pixels with the principal point at the image centre are read".into());
+    }
+    let frames = v["frames"].as_array().ok_or("cameras.json: no `frames`")?;
+    let mut cams = Vec::new();
+    let mut paths = Vec::new();
+    for (k, f) in frames.iter().enumerate() {
+        let m = |r: usize, c: usize| f["transform_matrix"][r][c].as_f64().map(|x| x as f32).ok_or_else(|| format!("cameras.json: frame {k}: no transform_matrix[{r}][{c}]"));
+        let col = |c: usize| -> Result<Vec3, String> { Ok([m(0, c)?, m(1, c)?, m(2, c)?]) };
+        let back = col(2)?;
+        cams.push(Camera { position: col(3)?, right: col(0)?, up: col(1)?, forward: back.map(|x| -x), tan_half_fov: (0.5 * h as f64 / fl_y) as f32 });
+        paths.push(f["file_path"].as_str().unwrap_or_default().to_string());
+    }
+    Ok((cams, w, h, paths))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -136,5 +161,12 @@ mod tests {
         assert_eq!(orbit(&o).unwrap(), cams);
         assert_ne!(orbit(&OrbitOptions { seed: 2, ..o }).unwrap()[0], cams[0]);
         assert!(orbit(&OrbitOptions { frames: 0, ..o }).is_err());
+        // cameras.json reads back as the same cameras.
+        let (read, w, h, paths) = cameras_from_json(&nerfstudio_json(&cams, 64, 48, |k| format!("f{k}"), ([-1.0; 3], [1.0; 3]))).unwrap();
+        assert_eq!((w, h, paths[3].as_str()), (64, 48, "f3"));
+        for (a, b) in read.iter().zip(&cams) {
+            let far = [a.position, a.forward, a.right, a.up].iter().zip([b.position, b.forward, b.right, b.up]).map(|(x, y)| (0..3).map(|c| (x[c] - y[c]).abs()).fold(0.0f32, f32::max)).fold(0.0f32, f32::max);
+            assert!(far < 1e-6 && (a.tan_half_fov - b.tan_half_fov).abs() < 1e-6, "{a:?} vs {b:?}");
+        }
     }
 }

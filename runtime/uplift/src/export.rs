@@ -9,7 +9,7 @@
 //! and the tokenizer convention 2v − 1 gives u ∈ [−1, 1]; the physical value is
 //! `offset + scale·u` per channel: normals (scale 1, offset 0), positions (the bounding box:
 //! scale (hi − lo)/2, offset (hi + lo)/2), latents (the decoder's range [0, 1]: scale ½,
-//! offset ½). Base colour is the material's sRGB-encoded base colour texture. Floats (depth,
+//! offset ½). Base colour is the material's base colour texture as stored. Floats (depth,
 //! positions, normals) are also written as EXR. Frames already written (their shaded PNG, the
 //! last file of a frame, exists) are skipped, so an interrupted export resumes.
 
@@ -114,8 +114,9 @@ fn xyz(v: &[Vec3]) -> Vec<(&'static str, Vec<f32>)> {
     ["X", "Y", "Z"].iter().enumerate().map(|(c, n)| (*n, v.iter().map(|p| p[c]).collect())).collect()
 }
 
-/// The material's base colour texture (textures/base_color.png, sRGB-encoded values), or its
-/// diffuse colour encoded to sRGB where it has none.
+/// The material's base colour texture (textures/base_color.png, its values as stored: linear
+/// for uplift's materials, where they are the diffuse colour), or its diffuse colour where it
+/// has none.
 fn base_color_texture(dir: &Path, surface: &SurfaceTextures) -> Result<SurfaceTextures, String> {
     let path = dir.join("textures").join("base_color.png");
     if path.is_file() {
@@ -123,7 +124,7 @@ fn base_color_texture(dir: &Path, surface: &SurfaceTextures) -> Result<SurfaceTe
         let (w, h) = (img.width() as usize, img.height() as usize);
         return Ok(colour_texture(w, h, img.into_raw()));
     }
-    let rgb = (0..surface.width * surface.height).flat_map(|t| surface.texel(t).diffuse.map(|x| uplift_render::agx_blender::srgb_encode(x.clamp(0.0, 1.0) as f64) as f32)).collect();
+    let rgb = (0..surface.width * surface.height).flat_map(|t| surface.texel(t).diffuse.map(|x| x.clamp(0.0, 1.0))).collect();
     Ok(colour_texture(surface.width, surface.height, rgb))
 }
 
@@ -164,7 +165,7 @@ pub fn export_asset(dir: &Path, mesh: &Mesh, env: &Environment, stack: &Arc<Stac
             "normal_camera": {"file": "png16", "space": "camera, OpenGL axes (x right, y up, z towards the viewer)", "scale": [1.0, 1.0, 1.0], "offset": [0.0, 0.0, 0.0], "float": null},
             "normal_world": {"file": "png16", "space": "world (+Y up)", "scale": [1.0, 1.0, 1.0], "offset": [0.0, 0.0, 0.0], "float": "normal_world/NNNN.exr (X, Y, Z)"},
             "position": {"file": "png16", "space": "world, normalised to the bounding box", "scale": pos_scale, "offset": pos_offset, "float": "position/NNNN.exr (X, Y, Z)"},
-            "base_color": {"file": "png16", "encoding": "sRGB-encoded base colour (the material's textures/base_color.png), v as is"},
+            "base_color": {"file": "png16", "encoding": "the material's base colour texture (textures/base_color.png) as stored, v as is (linear for uplift's materials)"},
             "latent0": {"file": "png16", "values": "latent values 0, 1, 2", "scale": [0.5, 0.5, 0.5], "offset": [0.5, 0.5, 0.5]},
             "latent1": {"file": "png16", "values": "latent values 3, 4, 5", "scale": [0.5, 0.5, 0.5], "offset": [0.5, 0.5, 0.5]},
             "mask": {"file": "png8", "encoding": "255 where the object covers the pixel centre, else 0"},

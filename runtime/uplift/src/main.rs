@@ -1,7 +1,8 @@
 //! The `uplift` command line: `check` and `compile` (the compiler spine) and `eval` (run an
 //! output over CSV rows); `enhance` and `masks` (uplift rules);
-//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render`, `eval-fit`, `furnace` and `flip` (evaluation); `demo` (the main job); `export` and
-//! `pack` (intrinsic videos for generative models, as WebDataset shards).
+//! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render`, `eval-fit`, `furnace` and `flip` (evaluation); `demo` (the main job); `export`, `pack`
+//! and `project` (intrinsic videos for generative models, their WebDataset shards, and
+//! generated views back into a material).
 
 mod cli;
 
@@ -53,6 +54,8 @@ enum Command {
     Export(cli::export::ExportArgs),
     /// Exported assets as WebDataset tar shards with an index.
     Pack(cli::pack::PackArgs),
+    /// Generated latent and base-colour views back into a fitted material's texture space.
+    Project(cli::project::ProjectArgs),
     /// LDR-FLIP (and PSNR) of two images.
     Flip(cli::flip::FlipArgs),
 }
@@ -79,6 +82,7 @@ fn main() -> ExitCode {
         Command::EvalFit(a) => cli::eval_fit::run(a),
         Command::Export(a) => cli::export::run(a),
         Command::Pack(a) => cli::pack::run(a),
+        Command::Project(a) => cli::project::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -17,6 +17,7 @@ pub mod furnace;
 pub mod gallery;
 pub mod masks;
 pub mod pack;
+pub mod project;
 pub mod render;
 pub mod tables;
 pub mod train;

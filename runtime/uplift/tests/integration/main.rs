@@ -35,6 +35,7 @@ mod numeric_noise;
 mod numeric_procedural;
 mod numeric_smoke;
 mod pack;
+mod project;
 mod numeric_texture;
 mod random_graphs;
 mod render;

@@ -1,0 +1,49 @@
+//! `uplift project GENERATED_DIR --mesh FILE -o MATERIAL_DIR`: frames of latent and base-colour
+//! videos (as `uplift export` writes them, or as a generator returns them) with cameras.json,
+//! projected into the mesh's texture space as a fitted material folder (uplift::project).
+
+use clap::Args;
+use std::path::PathBuf;
+use uplift::project::{project, ProjectOptions};
+use uplift_enhance::gltf_input;
+
+#[derive(Args)]
+pub struct ProjectArgs {
+    /// The generated (or exported) frames: cameras.json, latent0/, latent1/, base_color/.
+    #[arg(value_name = "GENERATED_DIR")]
+    pub generated: PathBuf,
+    /// The mesh (.gltf or .glb) the frames show.
+    #[arg(long)]
+    pub mesh: PathBuf,
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Texture size (width and height).
+    #[arg(long, default_value_t = 512)]
+    pub resolution: usize,
+    /// The glTF material whose texture space is filled.
+    #[arg(long, default_value_t = 0)]
+    pub gltf_material: usize,
+    #[command(flatten)]
+    pub stack: super::StackArgs,
+}
+
+pub fn run(args: ProjectArgs) -> Result<(), String> {
+    if args.resolution == 0 || args.resolution > 8192 {
+        return Err(format!("--resolution {}: between 1 and 8192", args.resolution));
+    }
+    let asset = gltf_input::load(&args.mesh)?;
+    let stack = args.stack.load()?;
+    let o = ProjectOptions { width: args.resolution, height: args.resolution, material: args.gltf_material };
+    let s = project(&args.generated, &asset, &stack, &args.output, &o)?;
+    eprintln!(
+        "projected {} into {}: {} of {} texels in the UV charts seen by the frames, {} inpainted; {:.1} s ({:.0} k texels/s)",
+        args.generated.display(),
+        args.output.display(),
+        s.projected,
+        s.in_charts,
+        s.filled,
+        s.seconds,
+        s.texels as f64 / s.seconds / 1e3
+    );
+    Ok(())
+}
