@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use crate::common::cli::{s, uplift};
 
-const SUBCOMMANDS: [&str; 19] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "train-sampler", "fit", "emit-decoder", "render", "gallery", "furnace", "eval-fit", "demo", "flip", "export", "pack"];
+const SUBCOMMANDS: [&str; 20] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "train-sampler", "fit", "emit-decoder", "render", "gallery", "furnace", "eval-fit", "demo", "flip", "export", "pack", "project"];
 
 #[test]
 fn every_subcommand_has_help_and_rejects_unknown_flags() {
@@ -67,6 +67,7 @@ fn every_subcommand_reports_missing_and_foreign_inputs_with_exit_1() {
         (vec!["emit-decoder", "--decoder", s(&missing_weights), "--rust", s(&decoder_rs)], "missing.safetensors"),
         (vec!["render", s(&missing_dir), "-o", s(&render_png)], "missing_material"),
         (vec!["pack", s(&missing_dir), "-o", s(&out)], "missing_material"),
+        (vec!["project", s(&missing_dir), "--mesh", s(&missing_mesh), "-o", s(&out)], "m.glb"),
         (vec!["export", s(&missing_dir), "--mesh", s(&missing_mesh), "-o", s(&out)], "m.glb"),
         (vec!["render", s(&foreign), "-o", s(&render_png)], "not_a_material"),
         (vec!["render", s(&missing_mtlx), "-o", s(&render_png)], "missing.mtlx"),
@@ -223,7 +224,7 @@ fn the_remaining_subcommands_succeed_through_the_binary() {
     // export: a short orbit of the fitted material on a UV sphere, every modality written.
     let sphere = crate::render::write_uv_sphere_gltf(&dir.join("sphere"), 16, 8);
     let exported = dir.join("exported");
-    ok(&["export", s(&copper), "--mesh", s(&sphere), "-o", s(&exported), "--frames", "2", "--size", "16", "--spp", "1", "--threads", "2"]);
+    ok(&["export", s(&copper), "--mesh", s(&sphere), "-o", s(&exported), "--frames", "4", "--size", "48", "--spp", "1", "--bounces", "0", "--threads", "2"]);
     for (name, ext) in uplift::export::MODALITIES {
         assert!(uplift::export::frame_path(&exported, name, 1, ext).is_file(), "export wrote no {name}.{ext}");
     }
@@ -231,6 +232,12 @@ fn the_remaining_subcommands_succeed_through_the_binary() {
     let shards = dir.join("shards");
     ok(&["pack", s(&exported), "-o", s(&shards)]);
     assert!(shards.join("shard-000000.tar").is_file() && shards.join("index.json").is_file(), "pack wrote no shard");
+    // project: the export's own frames back into a material folder that render accepts.
+    let projected = dir.join("projected");
+    ok(&["project", s(&exported), "--mesh", s(&sphere), "-o", s(&projected), "--resolution", "32"]);
+    ok(&["render", s(&projected), "--neural", "--sampler", "--mesh", s(&sphere), "-o", s(&dir.join("projected.png")), "--size", "16", "--spp", "1", "--threads", "2"]);
+    let (code, _, err) = uplift(&["project", s(&copper), "--mesh", s(&sphere), "-o", s(&dir.join("p2"))]);
+    assert!(code == 1 && err.contains("cameras.json"), "{err}");
     let (code, _, err) = uplift(&["export", s(&copper), "--mesh", s(&sphere), "-o", s(&exported), "--frames", "0"]);
     assert!(code == 1 && err.contains("--frames"), "{err}");
 
