@@ -26,7 +26,7 @@ fn main() {
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     // A UV sphere with a constant fitted-like material: 6 latent values, the stack's defaults.
     let root = std::env::temp_dir().join(format!("uplift-export-bench-{}", std::process::id()));
-    let mesh_path = write_sphere(&root, 96, 48);
+    let mesh_path = uplift_enhance::uv_sphere::write_uv_sphere_gltf(&root, 96, 48).unwrap();
     let asset = uplift_enhance::gltf_input::load(&mesh_path).unwrap();
     let mesh = uplift_render::mesh::Mesh::new(asset.world_triangles()).unwrap();
     let stack = Stack::builtin();
@@ -93,43 +93,4 @@ fn fitted_material(dir: &Path, stack: &std::sync::Arc<Stack>) {
 
 fn uplift_simd_isa() -> String {
     if std::is_x86_feature_detected!("avx512f") { "AVX-512".into() } else if std::is_x86_feature_detected!("avx2") { "AVX2".into() } else { "no AVX2".into() }
-}
-
-/// A UV sphere .gltf (positions, normals, uvs) under `dir`.
-fn write_sphere(dir: &Path, nu: usize, nv: usize) -> std::path::PathBuf {
-    use std::f32::consts::{PI, TAU};
-    std::fs::create_dir_all(dir).unwrap();
-    let (mut pos, mut uv, mut idx) = (vec![], vec![], vec![]);
-    for j in 0..=nv {
-        for i in 0..=nu {
-            let (theta, phi) = (PI * j as f32 / nv as f32, TAU * i as f32 / nu as f32);
-            let p = [theta.sin() * phi.sin(), theta.cos(), theta.sin() * phi.cos()];
-            pos.extend_from_slice(&p);
-            uv.extend_from_slice(&[i as f32 / nu as f32, j as f32 / nv as f32]);
-        }
-    }
-    let at = |i: usize, j: usize| (j * (nu + 1) + i) as u32;
-    for j in 0..nv {
-        for i in 0..nu {
-            idx.extend_from_slice(&[at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
-        }
-    }
-    let mut bin: Vec<u8> = vec![];
-    let mut views = vec![];
-    for chunk in [pos.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>(), pos.iter().flat_map(|x| x.to_le_bytes()).collect(), uv.iter().flat_map(|x| x.to_le_bytes()).collect(), idx.iter().flat_map(|x| x.to_le_bytes()).collect()] {
-        views.push((bin.len(), chunk.len()));
-        bin.extend_from_slice(&chunk);
-    }
-    std::fs::write(dir.join("sphere.bin"), &bin).unwrap();
-    let n = (nu + 1) * (nv + 1);
-    let v: Vec<String> = views.iter().map(|(o, l)| format!("{{\"buffer\":0,\"byteOffset\":{o},\"byteLength\":{l}}}")).collect();
-    let json = format!(
-        "{{\"asset\":{{\"version\":\"2.0\"}},\"scene\":0,\"scenes\":[{{\"nodes\":[0]}}],\"nodes\":[{{\"mesh\":0}}],\"meshes\":[{{\"primitives\":[{{\"attributes\":{{\"POSITION\":0,\"NORMAL\":1,\"TEXCOORD_0\":2}},\"indices\":3,\"material\":0}}]}}],\"materials\":[{{\"name\":\"ball\"}}],\"accessors\":[{{\"bufferView\":0,\"componentType\":5126,\"count\":{n},\"type\":\"VEC3\",\"min\":[-1,-1,-1],\"max\":[1,1,1]}},{{\"bufferView\":1,\"componentType\":5126,\"count\":{n},\"type\":\"VEC3\"}},{{\"bufferView\":2,\"componentType\":5126,\"count\":{n},\"type\":\"VEC2\"}},{{\"bufferView\":3,\"componentType\":5125,\"count\":{},\"type\":\"SCALAR\"}}],\"bufferViews\":[{}],\"buffers\":[{{\"uri\":\"sphere.bin\",\"byteLength\":{}}}]}}",
-        idx.len(),
-        v.join(","),
-        bin.len()
-    );
-    let path = dir.join("sphere.gltf");
-    std::fs::write(&path, json).unwrap();
-    path
 }

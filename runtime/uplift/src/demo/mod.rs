@@ -4,6 +4,7 @@
 //! (`report`). Each stage shows progress; enhanced and fitted materials already on disk are
 //! reused, so an interrupted run resumes.
 
+pub mod orbit_section;
 pub mod pbr_set;
 pub mod report;
 
@@ -264,6 +265,19 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         b.finish();
     }
 
+    // 4e. Data for generative models: the first material's orbit on a UV sphere (export) and its
+    // own frames projected back (project), when the decoder file has a sampling decoder (the
+    // projected material renders with it).
+    let mut orbit = None;
+    if let Some(sampler) = uplift_neural::weights::load_sampler(&o.decoder)? {
+        let shading = Shading::new(CpuEngine::with_threads(o.threads)?, &stack, Model::Neural(model.decoder.clone()))?.with_sampler(sampler)?;
+        let b = bar(1, "export");
+        let name = set[0].material.name.clone();
+        orbit = Some(orbit_section::orbit_section(&dirs[0], &name, &o.out, &img_dir, &stack, &shading, o.render_size.clamp(96, 128), o.texture_size.max(64), o.spp, o.seed, o.threads)?);
+        b.inc(1);
+        b.finish();
+    }
+
     // 5. Report.
     let evals: Vec<_> = rows.iter().map(|r| r.eval.clone()).collect();
     let table = per_type(&evals);
@@ -284,6 +298,7 @@ pub fn run_demo(o: &DemoOptions) -> Result<DemoSummary, String> {
         iridescent: iridescent_rows,
         iridescent_table: summary.iridescent_table.clone(),
         sampler_table: summary.sampler_table.clone(),
+        orbit,
         sampler_settings: format!("{}² direct lighting at {} spp against the stack sampler's {} spp", o.sampler_study.size, o.sampler_study.spp, o.sampler_study.converged_spp),
         table,
         history,

@@ -36,6 +36,8 @@ pub struct Report {
     /// The sampling decoder's variance reduction per Type, and how it was measured.
     pub sampler_table: Vec<SamplerRow>,
     pub sampler_settings: String,
+    /// One material exported as an orbit and projected back (`uplift export`, `uplift project`).
+    pub orbit: Option<crate::demo::orbit_section::OrbitSection>,
     pub table: Vec<TypeRow>,
     /// The decoder's training history: (step, loss, loss_f, loss_t, loss_r).
     pub history: Vec<[f64; 5]>,
@@ -208,6 +210,23 @@ pub fn render_html(r: &Report) -> String {
             escape(&r.sampler_settings)
         );
         s += &sampler_table(&r.sampler_table);
+    }
+    if let Some(o) = &r.orbit {
+        let _ = writeln!(
+            s,
+            "<h2>Data for generative models (paper §5.2)</h2>\n<p><code>uplift export</code>: {} on a UV sphere, an orbit of {} frames per modality (intrinsic buffers from one ray per pixel centre; the shaded frame path traced, Blender's AgX). <code>uplift project</code>: its own latent and base-colour frames back into texture space — {} of {} texels of the UV chart seen by the frames; base colour PSNR {} on them; neural renders (sampling decoder) of the original and the projected material from a new viewpoint differ by FLIP {:.4} over the object.</p>",
+            escape(&o.material), o.frames, o.projected_texels, o.chart_texels, if o.base_color_psnr.is_finite() { format!("{:.1} dB", o.base_color_psnr) } else { "n/a (the projection's texture size differs from the material's)".into() }, o.flip
+        );
+        s += "<table class=\"grid\">\n";
+        for (m, file) in &o.strips {
+            let _ = writeln!(s, "<tr><td class=\"l\">{}</td><td><img style=\"width:auto;height:96px\" src=\"img/{}\" alt=\"{} frames\"></td></tr>", escape(m), escape(file), escape(m));
+        }
+        s += "</table>\n";
+        let _ = writeln!(
+            s,
+            "<table class=\"grid\"><tr><th>original (neural)</th><th>projected back (neural)</th><th>texture coverage</th></tr><tr><td><img src=\"img/{}\" alt=\"original\"></td><td><img src=\"img/{}\" alt=\"projected\"></td><td><img src=\"img/{}\" alt=\"coverage\"></td></tr></table>\n<p>Coverage: green projected, orange inpainted inside the chart, blue gutter.</p>",
+            escape(&o.original_image), escape(&o.projected_image), escape(&o.coverage_image)
+        );
     }
     s += "<script>window.addEventListener('load',function(){var b=0;for(const i of document.images){if(!i.complete||i.naturalWidth===0)b++;}document.body.dataset.brokenImages=String(b);document.body.dataset.images=String(document.images.length);});</script>\n";
     s += "</body></html>\n";

@@ -34,7 +34,8 @@ fn demo_writes_a_report_that_renders_without_broken_images() {
     assert_eq!(s.furnace_neural_passed, 6);
     let html = std::fs::read_to_string(&s.report).unwrap();
     let images: Vec<&str> = html.split("src=\"").skip(1).map(|t| t.split('"').next().unwrap()).collect();
-    assert_eq!(images.len(), 24 + 6 + 9, "four images per material, three per glint row (Types 0 and 1) and per iridescent row (Types 2, 3, 5)");
+    assert_eq!(images.len(), 24 + 6 + 9 + 8 + 3, "four images per material, three per glint row (Types 0 and 1) and per iridescent row (Types 2, 3, 5), eight orbit strips and three projection images");
+    assert!(html.contains("<h2>Data for generative models (paper §5.2)</h2>"), "no export/projection section");
     assert!(html.contains("<h2>Iridescent clearcoat</h2>"), "no iridescence section");
     assert!(html.contains("<h2>Glints (paper §5.3)</h2>"), "no glint section");
     // The shipped decoder file has a sampling decoder: its study covers every Type.
@@ -107,8 +108,8 @@ fn demo_writes_a_report_that_renders_without_broken_images() {
         .expect("chromium runs");
     assert!(dom.status.success(), "chromium failed: {}", String::from_utf8_lossy(&dom.stderr));
     let dom = String::from_utf8_lossy(&dom.stdout);
-    assert!(dom.contains("data-images=\"39\""), "the report's load script did not run or saw another image count: {}", &dom[..dom.len().min(400)]);
+    assert!(dom.contains("data-images=\"50\""), "the report's load script did not run or saw another image count: {}", &dom[..dom.len().min(400)]);
     assert!(dom.contains("data-broken-images=\"0\""), "broken images in the report");
-    eprintln!("Chromium loaded the report: 39 images, none broken");
+    eprintln!("Chromium loaded the report: 50 images, none broken");
     let _ = std::fs::remove_dir_all(&out);
 }

@@ -347,58 +347,9 @@ fn energy_bound_keeps_a_fitted_metal_within_the_white_furnace() {
     assert!(worst[1] <= 1.0, "with the bound the neural albedo reaches {:.4} (beyond 3σ)", worst[1]);
 }
 
-/// A UV sphere of radius 1 as a .gltf with a separate .bin (smooth normals, glTF uvs matching
-/// the analytic sphere's: u = φ/2π, v = θ/π from the top).
+/// A UV sphere of radius 1 as a .gltf with a separate .bin (uplift_enhance::uv_sphere).
 pub(crate) fn write_uv_sphere_gltf(dir: &std::path::Path, nu: usize, nv: usize) -> std::path::PathBuf {
-    use std::f32::consts::{PI, TAU};
-    std::fs::create_dir_all(dir).unwrap();
-    let (mut pos, mut nrm, mut uv, mut idx) = (vec![], vec![], vec![], vec![]);
-    for j in 0..=nv {
-        for i in 0..=nu {
-            let (theta, phi) = (PI * j as f32 / nv as f32, TAU * i as f32 / nu as f32);
-            // The analytic sphere's φ = atan2(x, z) + π.
-            let (st, ct) = if j == 0 || j == nv { (0.0, if j == 0 { 1.0 } else { -1.0 }) } else { (theta.sin(), theta.cos()) };
-            let p = [st * (phi - PI).sin(), ct, st * (phi - PI).cos()];
-            pos.extend_from_slice(&p);
-            nrm.extend_from_slice(&p);
-            uv.extend_from_slice(&[i as f32 / nu as f32, j as f32 / nv as f32]);
-        }
-    }
-    let at = |i: usize, j: usize| (j * (nu + 1) + i) as u32;
-    for j in 0..nv {
-        for i in 0..nu {
-            // Counter-clockwise seen from outside.
-            idx.extend_from_slice(&[at(i, j), at(i, j + 1), at(i + 1, j + 1), at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
-        }
-    }
-    let mut bin: Vec<u8> = vec![];
-    let mut views = vec![];
-    for chunk in [bytemuck_f32(&pos), bytemuck_f32(&nrm), bytemuck_f32(&uv), idx.iter().flat_map(|x| x.to_le_bytes()).collect()] {
-        views.push((bin.len(), chunk.len()));
-        bin.extend_from_slice(&chunk);
-    }
-    std::fs::write(dir.join("sphere.bin"), &bin).unwrap();
-    let n = (nu + 1) * (nv + 1);
-    let view_json: Vec<String> = views.iter().map(|(o, l)| format!("{{\"buffer\":0,\"byteOffset\":{o},\"byteLength\":{l}}}")).collect();
-    let json = format!(
-        "{{\"asset\":{{\"version\":\"2.0\"}},\"scene\":0,\"scenes\":[{{\"nodes\":[0]}}],\"nodes\":[{{\"mesh\":0}}],\
-         \"meshes\":[{{\"primitives\":[{{\"attributes\":{{\"POSITION\":0,\"NORMAL\":1,\"TEXCOORD_0\":2}},\"indices\":3,\"material\":0}}]}}],\
-         \"materials\":[{{\"name\":\"ball\"}}],\
-         \"accessors\":[{{\"bufferView\":0,\"componentType\":5126,\"count\":{n},\"type\":\"VEC3\",\"min\":[-1,-1,-1],\"max\":[1,1,1]}},\
-         {{\"bufferView\":1,\"componentType\":5126,\"count\":{n},\"type\":\"VEC3\"}},{{\"bufferView\":2,\"componentType\":5126,\"count\":{n},\"type\":\"VEC2\"}},\
-         {{\"bufferView\":3,\"componentType\":5125,\"count\":{},\"type\":\"SCALAR\"}}],\
-         \"bufferViews\":[{}],\"buffers\":[{{\"uri\":\"sphere.bin\",\"byteLength\":{}}}]}}",
-        idx.len(),
-        view_json.join(","),
-        bin.len()
-    );
-    let path = dir.join("sphere.gltf");
-    std::fs::write(&path, json).unwrap();
-    path
-}
-
-fn bytemuck_f32(v: &[f32]) -> Vec<u8> {
-    v.iter().flat_map(|x| x.to_le_bytes()).collect()
+    uplift_enhance::uv_sphere::write_uv_sphere_gltf(dir, nu, nv).unwrap()
 }
 
 #[test]
