@@ -23,6 +23,7 @@
 //! naming the projection, and `coverage.png` (per texel: projected, filled, gutter) with
 //! `projection.json` (counts and settings).
 
+use rayon::prelude::*;
 use std::path::Path;
 use uplift_base::exr::ExrImage;
 use uplift_enhance::gltf_input::{rasterize_uv, GltfAsset};
@@ -136,32 +137,33 @@ pub fn project(generated: &Path, asset: &GltfAsset, stack: &Stack, out: &Path, o
         }
         // The frame's own depth at pixel centres (our mesh, this camera), for the edge test.
         let depth: Vec<Option<f32>> = (0..fw * fh)
+            .into_par_iter()
             .map(|p| {
                 let (ro, rd) = cam.ray((p % fw) as f32 + 0.5, (p / fw) as f32 + 0.5, fw, fh);
                 mesh.intersect(ro, rd).map(|hit| hit.t * dot(rd, cam.forward))
             })
             .collect();
-        for t in 0..n {
+        acc.par_iter_mut().zip(weight.par_iter_mut()).enumerate().for_each(|(t, (acc, weight))| {
             if !bake.covered[t] {
-                continue;
+                return;
             }
             let p = to_mesh(bake.position[t]);
             let nrm = bake.normal[t];
-            let Some((x, y, z)) = cam.project(p, fw, fh) else { continue };
+            let Some((x, y, z)) = cam.project(p, fw, fh) else { return };
             if !(x >= 1.0 && y >= 1.0 && x <= fw as f32 - 1.0 && y <= fh as f32 - 1.0) {
-                continue;
+                return;
             }
             let to_cam = [0, 1, 2].map(|c| cam.position[c] - p[c]);
             let dist = dot(to_cam, to_cam).sqrt();
             let cos = dot(nrm, to_cam) / dist;
             if cos <= MIN_COS {
-                continue;
+                return;
             }
             // Depth test: the camera's ray towards the point hits it first.
             let dir = to_cam.map(|c| -c / dist);
             match mesh.intersect(cam.position, dir) {
                 Some(hit) if (hit.t - dist).abs() <= 2e-3 * dist => {}
-                _ => continue,
+                _ => return,
             }
             // Depth edges and the object's border around the pixel.
             let (px, py) = (x as i64, y as i64);
@@ -175,16 +177,16 @@ pub fn project(generated: &Path, asset: &GltfAsset, stack: &Stack, out: &Path, o
                 }
             }
             if edge {
-                continue;
+                return;
             }
             let wgt = cos.powi(COS_POWER);
             let (a, b, c) = (l0.sample(x, y), l1.sample(x, y), base.sample(x, y));
             let v = [a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]];
             for i in 0..9 {
-                acc[t][i] += wgt * v[i];
+                acc[i] += wgt * v[i];
             }
-            weight[t] += wgt;
-        }
+            *weight += wgt;
+        });
     }
     let mut value: Vec<Option<[f32; 9]>> = (0..n).map(|t| (weight[t] > 0.0).then(|| acc[t].map(|x| x / weight[t]))).collect();
     // Erode the projected region inside the charts.
