@@ -4,11 +4,13 @@
 //! (`mlp`, `model`, `loss`, `adam`, `trainer`), weights as safetensors (`weights`), held-out
 //! errors (`evaluate`), per-material latent fitting (`fit`) and its energy bound (`energy_bound`), inference (`inference`; the
 //! shipped decoder's generated Rust in `shipped_decoder`) and the sampling decoder (`sampler`;
-//! its shipped network's generated Rust in `shipped_sampler`).
+//! its shipped network's generated Rust in `shipped_sampler`), and a decoder's "diffuse" latent
+//! (`diffuse_latent`: the fill of texels no generated view saw).
 
 pub mod adam;
 pub mod classes;
 pub mod datagen;
+pub mod diffuse_latent;
 pub mod dense;
 pub mod energy_bound;
 pub mod evaluate;

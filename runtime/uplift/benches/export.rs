@@ -59,7 +59,7 @@ fn main() {
     let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames, width: size, height: size, ..Default::default() }, spp: 1, bounces: 0, exposure: 1.0, threads, neural: None };
     uplift::export::export_asset(&material, &mesh, &env, &stack, &exported, &o, false).unwrap();
     let start = Instant::now();
-    let s = uplift::project::project(&exported, &asset, &stack, &root.join("projected"), &uplift::project::ProjectOptions { width: 512, height: 512, material: 0 }).unwrap();
+    let s = uplift::project::project(&exported, &asset, &stack, &root.join("projected"), &uplift::project::ProjectOptions { width: 512, height: 512, material: 0, fill: None }).unwrap();
     let secs = start.elapsed().as_secs_f64();
     println!("projection of {frames} frames into 512²       {:>8.0} k texels/s ({:.2} s; {} of {} chart texels seen)", s.texels as f64 / secs / 1e3, secs, s.projected, s.in_charts);
     if full {

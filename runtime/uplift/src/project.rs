@@ -12,7 +12,8 @@
 //! average the views. Then, within each UV chart (the rasterised texels), the projected region is
 //! eroded by [`ERODE`] texels (its border is where views disagree) and every texel without a
 //! value is filled by inpainting (repeated averaging of its filled 8-neighbours: convex
-//! combinations of projected latents, so the fill creates no energy the projected texels lack),
+//! combinations of projected latents, so the fill creates no energy the projected texels lack)
+//! or, with `fill`, given the decoder's diffuse latent (the base colour is inpainted either way),
 //! and a gutter of [`GUTTER`] texels is dilated outside the charts (bilinear lookups at chart
 //! edges read no background).
 //!
@@ -51,6 +52,9 @@ pub struct ProjectOptions {
     pub height: usize,
     /// The glTF material whose texture space is filled.
     pub material: usize,
+    /// The latent given to chart texels no frame saw (the decoder's diffuse latent,
+    /// uplift_neural::diffuse_latent); None: they are inpainted like the base colour.
+    pub fill: Option<Vec<f32>>,
 }
 
 /// What a projection did.
@@ -252,7 +256,17 @@ pub fn project(generated: &Path, asset: &GltfAsset, stack: &Stack, out: &Path, o
         }
         s
     };
-    let values: Vec<[f32; 9]> = value.into_iter().map(|v| v.unwrap_or(mean)).collect();
+    let mut values: Vec<[f32; 9]> = value.into_iter().map(|v| v.unwrap_or(mean)).collect();
+    if let Some(z) = &o.fill {
+        if z.len() != 6 {
+            return Err(format!("the fill latent has {} values; the frames carry 6", z.len()));
+        }
+        for (v, s) in values.iter_mut().zip(&state) {
+            if *s != 1 {
+                v[..6].copy_from_slice(z);
+            }
+        }
+    }
 
     // The material folder.
     std::fs::create_dir_all(out.join("textures")).map_err(|e| format!("{}: {e}", out.display()))?;

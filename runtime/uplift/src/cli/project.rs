@@ -23,6 +23,13 @@ pub struct ProjectArgs {
     /// The glTF material whose texture space is filled.
     #[arg(long, default_value_t = 0)]
     pub gltf_material: usize,
+    /// Texels no frame saw: `inpaint` (from their neighbours) or `diffuse` (the decoder's
+    /// diffuse latent: no non-diffuse reflection, all light to the diffuse base).
+    #[arg(long, default_value = "inpaint")]
+    pub fill: String,
+    /// The decoder whose diffuse latent `--fill diffuse` uses.
+    #[arg(long, default_value = uplift_neural::weights::SHIPPED_DECODER)]
+    pub decoder: PathBuf,
     #[command(flatten)]
     pub stack: super::StackArgs,
 }
@@ -33,7 +40,17 @@ pub fn run(args: ProjectArgs) -> Result<(), String> {
     }
     let asset = gltf_input::load(&args.mesh)?;
     let stack = args.stack.load()?;
-    let o = ProjectOptions { width: args.resolution, height: args.resolution, material: args.gltf_material };
+    let fill = match args.fill.as_str() {
+        "inpaint" => None,
+        "diffuse" => {
+            let model = uplift_neural::weights::load_model(&args.decoder, &stack)?;
+            let d = uplift_neural::diffuse_latent::find_diffuse_latent(&model, 1);
+            eprintln!("diffuse latent of {}: {:?} (mean f·cos {:.4}, mean |T − 1| {:.4})", args.decoder.display(), d.latent, d.fcos, d.t_error);
+            Some(d.latent)
+        }
+        other => return Err(format!("--fill {other}: inpaint or diffuse")),
+    };
+    let o = ProjectOptions { width: args.resolution, height: args.resolution, material: args.gltf_material, fill };
     let s = project(&args.generated, &asset, &stack, &args.output, &o)?;
     eprintln!(
         "projected {} into {}: {} of {} texels in the UV charts seen by the frames, {} inpainted; {:.1} s ({:.0} k texels/s)",

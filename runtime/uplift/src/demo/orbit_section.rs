@@ -63,7 +63,7 @@ pub fn orbit_section(material: &Path, name: &str, work: &Path, img: &Path, stack
         strips.push((m.to_string(), file));
     }
     let projected = work.join("projected").join(name);
-    let s = crate::project::project(&exported, &asset, stack, &projected, &crate::project::ProjectOptions { width: texture, height: texture, material: 0 })?;
+    let s = crate::project::project(&exported, &asset, stack, &projected, &crate::project::ProjectOptions { width: texture, height: texture, material: 0, fill: None })?;
     // Base colour on the projected texels.
     let coverage = image::open(projected.join("coverage.png")).map_err(|e| e.to_string())?.to_rgb8().into_raw();
     let a = image::open(material.join("textures/base_color.png")).map_err(|e| e.to_string())?.to_rgb8();

@@ -234,7 +234,9 @@ fn the_remaining_subcommands_succeed_through_the_binary() {
     assert!(shards.join("shard-000000.tar").is_file() && shards.join("index.json").is_file(), "pack wrote no shard");
     // project: the export's own frames back into a material folder that render accepts.
     let projected = dir.join("projected");
-    ok(&["project", s(&exported), "--mesh", s(&sphere), "-o", s(&projected), "--resolution", "32"]);
+    ok(&["project", s(&exported), "--mesh", s(&sphere), "-o", s(&projected), "--resolution", "32", "--fill", "diffuse"]);
+    let (code, _, err) = uplift(&["project", s(&exported), "--mesh", s(&sphere), "-o", s(&dir.join("p3")), "--fill", "bogus"]);
+    assert!(code == 1 && err.contains("--fill"), "{err}");
     ok(&["render", s(&projected), "--neural", "--sampler", "--mesh", s(&sphere), "-o", s(&dir.join("projected.png")), "--size", "16", "--spp", "1", "--threads", "2"]);
     let (code, _, err) = uplift(&["project", s(&copper), "--mesh", s(&sphere), "-o", s(&dir.join("p2"))]);
     assert!(code == 1 && err.contains("cameras.json"), "{err}");

@@ -12,14 +12,7 @@
 //!   same bytes.
 
 use std::path::Path;
-use uplift_engines::cpu_engine::CpuEngine;
 use uplift_engines::stack::Stack;
-use uplift_enhance::pbr_input::{PbrChannel, PbrMaterial, Surface};
-use uplift_enhance::pipeline::{enhance, EnhanceOptions};
-use uplift_enhance::rules::EnhancementType;
-use uplift_material::MaterialFolder;
-use uplift_neural::datagen::{ClassMix, DataGenerator};
-use uplift_neural::fit::{fit_material, FitOptions};
 use uplift_render::agx_blender::{agx_blender, sigmoid};
 use uplift_render::orbit::OrbitOptions;
 
@@ -101,27 +94,7 @@ fn agx_matches_blender_and_an_independent_closed_form() {
 
 /// A fitted 16² material of Type 3 (dust over a clearcoat) in `dir`.
 fn fitted_material(dir: &Path) {
-    let stack = Stack::builtin();
-    let material = PbrMaterial {
-        name: "export".into(),
-        source: "test".into(),
-        base_color: PbrChannel::Constant(vec![0.6, 0.35, 0.2]),
-        roughness: PbrChannel::Constant(vec![0.4]),
-        metalness: PbrChannel::Constant(vec![0.0]),
-        normal_map: None,
-        surface: Surface::Plane,
-    };
-    let engine = CpuEngine::new().unwrap();
-    let options = EnhanceOptions { kind: Some(EnhancementType::new(3).unwrap()), rules: Vec::new(), seed: 3, resolution: Some((16, 16)), mask_size: 32, glints: false, stack: stack.clone(), rule_options: Vec::new() };
-    enhance(&material, &options, dir, &engine).unwrap();
-    let folder = MaterialFolder::open(dir).unwrap();
-    let p = folder.read_params(&stack).unwrap();
-    let model = uplift_neural::weights::load_model(Path::new(uplift_neural::weights::SHIPPED_DECODER), &stack).unwrap();
-    let g = DataGenerator::new(CpuEngine::new().unwrap(), &stack, ClassMix::All, 1).unwrap();
-    let o = FitOptions { steps: 5, threads: 2, ..Default::default() };
-    let r = fit_material(&model, &g, &p.params, p.diffuse.as_deref(), p.width, p.height, &o, false).unwrap();
-    folder.write_latents(&r.latent_image()).unwrap();
-    folder.write_fit(&r.record(Path::new(uplift_neural::weights::SHIPPED_DECODER), &o)).unwrap();
+    crate::project::textured_material(dir, 3, 16);
 }
 
 fn png16(path: &Path) -> (usize, usize, Vec<u16>) {

@@ -23,7 +23,7 @@ use uplift_render::surface::SurfaceTextures;
 use uplift_render::tonemap::to_display;
 
 /// A fitted `size`² material of the demo's procedural set (Type `kind`, textured base colour).
-fn textured_material(dir: &Path, kind: usize, size: usize) {
+pub(crate) fn textured_material(dir: &Path, kind: usize, size: usize) {
     let stack = Stack::builtin();
     let set = uplift::demo::pbr_set::procedural_set(1, size, 3);
     let m = set.iter().find(|m| m.kind.index() == kind).unwrap();
@@ -42,6 +42,11 @@ fn textured_material(dir: &Path, kind: usize, size: usize) {
 
 /// `size`: the texture size (the projection erodes 4 texels inside each chart: a mesh of small
 /// charts needs more texels).
+/// Bounds for the shipped decoder's diffuse latent (measured below them; docs/export.md).
+/// (Measured: f·cos 0.0015, |T − 1| 0.014.)
+const FCOS_BOUND: f32 = 0.005;
+const T_BOUND: f32 = 0.03;
+
 fn round_trip(name: &str, mesh_path: &Path, root: &Path, size: usize) {
     let stack = Stack::builtin();
     let material = root.join("material");
@@ -54,7 +59,7 @@ fn round_trip(name: &str, mesh_path: &Path, root: &Path, size: usize) {
     let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames: 12, width: 160, height: 160, seed: 4, ..Default::default() }, spp: 1, bounces: 0, exposure: 1.0, threads: 2, neural: None };
     uplift::export::export_asset(&material, &mesh, &Environment::studio(), &stack, &exported, &o, false).unwrap();
     let projected = root.join(format!("{name}_projected"));
-    let s = uplift::project::project(&exported, &asset, &stack, &projected, &uplift::project::ProjectOptions { width: size, height: size, material: 0 }).unwrap();
+    let s = uplift::project::project(&exported, &asset, &stack, &projected, &uplift::project::ProjectOptions { width: size, height: size, material: 0, fill: None }).unwrap();
 
     // Base colour on the texels the frames saw (coverage.png green).
     let coverage = image::open(projected.join("coverage.png")).unwrap().to_rgb8().into_raw();
@@ -99,6 +104,27 @@ fn round_trip(name: &str, mesh_path: &Path, root: &Path, size: usize) {
     assert!(furnace.passed, "{name}: the projected material fails the white furnace (worst {:.4})", furnace.worst);
     // The folder is an ordinary fitted material.
     assert!(MaterialFolder::open(&projected).unwrap().has_fit());
+
+    // Filled with the decoder's diffuse latent instead of inpainting: the projected texels are
+    // the same, and the fill creates no energy either.
+    let model = uplift_neural::weights::load_model(Path::new(uplift_neural::weights::SHIPPED_DECODER), &stack).unwrap();
+    let z = uplift_neural::diffuse_latent::find_diffuse_latent(&model, 1).latent;
+    let filled = root.join(format!("{name}_filled"));
+    let f = uplift::project::project(&exported, &asset, &stack, &filled, &uplift::project::ProjectOptions { width: size, height: size, material: 0, fill: Some(z) }).unwrap();
+    assert_eq!(f.projected, s.projected);
+    let furnace = white_furnace(&SurfaceTextures::load(&filled, &stack, true).unwrap(), &shading, &FurnaceOptions { directions: 256, max_texels: 48, ..Default::default() }).unwrap();
+    eprintln!("{name}, diffuse-latent fill: white furnace {} (worst {:.4})", if furnace.passed { "passed" } else { "FAILED" }, furnace.worst);
+    assert!(furnace.passed, "{name}: the diffuse-latent fill fails the white furnace (worst {:.4})", furnace.worst);
+}
+
+#[test]
+fn the_diffuse_latent_reflects_nothing_and_passes_light_on() {
+    let stack = Stack::builtin();
+    let model = uplift_neural::weights::load_model(Path::new(uplift_neural::weights::SHIPPED_DECODER), &stack).unwrap();
+    let d = uplift_neural::diffuse_latent::find_diffuse_latent(&model, 1);
+    eprintln!("diffuse latent {:?}: mean f·cos {:.5}, mean |T − 1| {:.5}", d.latent, d.fcos, d.t_error);
+    assert_eq!(uplift_neural::diffuse_latent::find_diffuse_latent(&model, 1), d, "the search is not deterministic");
+    assert!(d.fcos <= FCOS_BOUND && d.t_error <= T_BOUND, "the diffuse latent decodes to f·cos {:.4}, |T − 1| {:.4}", d.fcos, d.t_error);
 }
 
 #[test]
