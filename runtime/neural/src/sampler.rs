@@ -363,13 +363,18 @@ pub fn cosine_only(latent: usize) -> Mlp<f32> {
     Mlp::from_params(shape, params).expect("the sampler's shape")
 }
 
-/// The mixtures of rows of (latent, μv).
-pub fn mixtures(net: &Mlp<f32>, latents: &[f32], mu_v: &[f32]) -> Vec<Mixture> {
-    let latent = net.shape.inputs() - 1;
+/// The input rows of (latent, μv) for latents of `latent` values each.
+pub fn sampler_inputs(latents: &[f32], mu_v: &[f32], latent: usize) -> Vec<f32> {
     let mut input = Vec::with_capacity(mu_v.len() * (latent + 1));
     for (r, &mu) in mu_v.iter().enumerate() {
         sampler_input(&latents[r * latent..(r + 1) * latent], mu, &mut input);
     }
+    input
+}
+
+/// The mixtures of rows of (latent, μv).
+pub fn mixtures(net: &Mlp<f32>, latents: &[f32], mu_v: &[f32]) -> Vec<Mixture> {
+    let input = sampler_inputs(latents, mu_v, net.shape.inputs() - 1);
     let out = net.forward(&input, mu_v.len(), &mut Workspace::without_input_gradient()).to_vec();
     out.chunks(SAMPLER_OUTPUTS).map(Mixture::from_outputs).collect()
 }

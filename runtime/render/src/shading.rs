@@ -162,12 +162,7 @@ impl Shading {
         let latents: Vec<f32> = points.iter().flat_map(|p| p.latent().iter().copied()).collect();
         let mu: Vec<f32> = wv.iter().map(|w| w[2]).collect();
         if let (ShadingEngine::Wgpu(engine), Some(net)) = (&self.engine, &self.wgpu_sampler) {
-            let latent = sampler.shape.inputs() - 1;
-            let mut input = Vec::with_capacity(mu.len() * (latent + 1));
-            for (r, &m) in mu.iter().enumerate() {
-                uplift_neural::sampler::sampler_input(&latents[r * latent..(r + 1) * latent], m, &mut input);
-            }
-            let out = net.decode(engine, &input)?;
+            let out = net.decode(engine, &uplift_neural::sampler::sampler_inputs(&latents, &mu, sampler.shape.inputs() - 1))?;
             return Ok(out.chunks(uplift_neural::sampler::SAMPLER_OUTPUTS).map(uplift_neural::sampler::Mixture::from_outputs).collect());
         }
         Ok(uplift_neural::sampler::mixtures(sampler, &latents, &mu))

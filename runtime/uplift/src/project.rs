@@ -272,8 +272,8 @@ pub fn project(generated: &Path, asset: &GltfAsset, stack: &Stack, out: &Path, o
     std::fs::create_dir_all(out.join("textures")).map_err(|e| format!("{}: {e}", out.display()))?;
     let folder = MaterialFolder::create(out);
     let mut params = ExrImage::new(w, h);
-    for (k, p) in stack.parameters().iter().enumerate() {
-        params.push(&p.channel, vec![stack.defaults()[k]; n])?;
+    for (p, default) in stack.parameters().iter().zip(stack.defaults()) {
+        params.push(&p.channel, vec![default; n])?;
     }
     // The base colour frames hold the texture's values as the export stores them, which are
     // the diffuse colour's (uplift's textures are linear).

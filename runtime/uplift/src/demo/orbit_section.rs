@@ -68,29 +68,15 @@ pub fn orbit_section(material: &Path, name: &str, work: &Path, img: &Path, stack
     let coverage = image::open(projected.join("coverage.png")).map_err(|e| e.to_string())?.to_rgb8().into_raw();
     let a = image::open(material.join("textures/base_color.png")).map_err(|e| e.to_string())?.to_rgb8();
     let b = image::open(projected.join("textures/base_color.png")).map_err(|e| e.to_string())?.to_rgb8();
-    let psnr = if a.dimensions() == b.dimensions() {
-        let (a, b) = (a.into_raw(), b.into_raw());
-        let (mut se, mut n) = (0.0f64, 0usize);
-        for (t, c) in coverage.chunks(3).enumerate() {
-            if c == [40, 200, 60] {
-                for i in 0..3 {
-                    se += (a[t * 3 + i] as f64 - b[t * 3 + i] as f64).powi(2);
-                }
-                n += 3;
-            }
-        }
-        10.0 * (255.0f64.powi(2) / (se / n.max(1) as f64).max(1e-12)).log10()
-    } else {
-        f64::NAN
-    };
+    let seen: Vec<bool> = coverage.chunks(3).map(|c| c == [40, 200, 60]).collect();
+    let psnr = if a.dimensions() == b.dimensions() { uplift_render::metrics::psnr(&a.into_raw(), &b.into_raw(), Some(&seen)) } else { f64::NAN };
     let cam = uplift_render::scene::Camera::look_at([1.8, 1.4, 2.2], [0.0; 3], [0.0, 1.0, 0.0], 40.0);
     let ro = RenderOptions { width: size, height: size, spp: spp.max(16), bounces: 1, seed, camera: Some(cam), ..Default::default() };
     let x = render(&mesh, &env, &SurfaceTextures::load(material, stack, true)?, shading, &ro, None)?;
     let y = render(&mesh, &env, &SurfaceTextures::load(&projected, stack, true)?, shading, &ro, None)?;
     let (dx, dy) = (to_display(&x.radiance, 1.0), to_display(&y.radiance, 1.0));
     let map = flip_ldr(&dx, &dy, size, size, default_pixels_per_degree())?;
-    let on: Vec<f64> = map.error.iter().zip(x.object_mask()).filter(|(_, o)| *o).map(|(v, _)| *v as f64).collect();
-    let flip = on.iter().sum::<f64>() / on.len().max(1) as f64;
+    let flip = map.mean_over(&x.object_mask());
     let (oi, pi, ci) = (format!("orbit_{name}_original.png"), format!("orbit_{name}_projected.png"), format!("orbit_{name}_coverage.png"));
     write_png(&img.join(&oi), &dx, size, size)?;
     write_png(&img.join(&pi), &dy, size, size)?;

@@ -215,7 +215,7 @@ pub fn render_html(r: &Report) -> String {
         let _ = writeln!(
             s,
             "<h2>Data for generative models (paper §5.2)</h2>\n<p><code>uplift export</code>: {} on a UV sphere, an orbit of {} frames per modality (intrinsic buffers from one ray per pixel centre; the shaded frame path traced, Blender's AgX). <code>uplift project</code>: its own latent and base-colour frames back into texture space — {} of {} texels of the UV chart seen by the frames; base colour PSNR {} on them; neural renders (sampling decoder) of the original and the projected material from a new viewpoint differ by FLIP {:.4} over the object.</p>",
-            escape(&o.material), o.frames, o.projected_texels, o.chart_texels, if o.base_color_psnr.is_finite() { format!("{:.1} dB", o.base_color_psnr) } else { "n/a (the projection's texture size differs from the material's)".into() }, o.flip
+            escape(&o.material), o.frames, o.projected_texels, o.chart_texels, if !o.base_color_psnr.is_nan() { format!("{:.1} dB", o.base_color_psnr) } else { "n/a (the projection's texture size differs from the material's)".into() }, o.flip
         );
         s += "<table class=\"grid\">\n";
         for (m, file) in &o.strips {

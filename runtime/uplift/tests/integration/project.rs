@@ -16,7 +16,7 @@ use uplift_neural::fit::{fit_material, FitOptions};
 use uplift_render::environment::Environment;
 use uplift_render::furnace::{white_furnace, FurnaceOptions};
 use uplift_render::integrator::{render, RenderOptions};
-use uplift_render::metrics::{default_pixels_per_degree, flip_ldr};
+use uplift_render::metrics::{default_pixels_per_degree, flip_ldr, psnr};
 use uplift_render::orbit::OrbitOptions;
 use uplift_render::shading::{Model, Shading};
 use uplift_render::surface::SurfaceTextures;
@@ -66,16 +66,7 @@ fn round_trip(name: &str, mesh_path: &Path, root: &Path, size: usize) {
     let seen: Vec<bool> = coverage.chunks(3).map(|c| c == [40, 200, 60]).collect();
     let a = image::open(material.join("textures/base_color.png")).unwrap().to_rgb8().into_raw();
     let b = image::open(projected.join("textures/base_color.png")).unwrap().to_rgb8().into_raw();
-    let (mut se, mut count) = (0.0f64, 0usize);
-    for (t, &v) in seen.iter().enumerate() {
-        if v {
-            for c in 0..3 {
-                se += (a[t * 3 + c] as f64 - b[t * 3 + c] as f64).powi(2);
-            }
-            count += 3;
-        }
-    }
-    let psnr = 10.0 * (255.0f64.powi(2) / (se / count as f64).max(1e-12)).log10();
+    let psnr = psnr(&a, &b, Some(&seen));
 
     // Neural renders of both materials from a new viewpoint, FLIP over the object.
     let model = uplift_neural::weights::load_model(Path::new(uplift_neural::weights::SHIPPED_DECODER), &stack).unwrap();
@@ -90,9 +81,7 @@ fn round_trip(name: &str, mesh_path: &Path, root: &Path, size: usize) {
     let x = render(&mesh, &env, &orig, &shading, &ro, None).unwrap();
     let y = render(&mesh, &env, &proj, &shading, &ro, None).unwrap();
     let map = flip_ldr(&to_display(&x.radiance, 1.0), &to_display(&y.radiance, 1.0), 96, 96, default_pixels_per_degree()).unwrap();
-    let object = x.object_mask();
-    let values: Vec<f32> = map.error.iter().zip(&object).filter(|(_, &o)| o).map(|(v, _)| *v).collect();
-    let flip = values.iter().map(|&v| v as f64).sum::<f64>() / values.len().max(1) as f64;
+    let flip = map.mean_over(&x.object_mask());
     let furnace = white_furnace(&proj, &shading, &FurnaceOptions { directions: 256, max_texels: 48, ..Default::default() }).unwrap();
     eprintln!(
         "{name}: {} of {} chart texels projected, {} inpainted; base colour PSNR {psnr:.1} dB on the projected texels; FLIP over the object {flip:.4}; white furnace {} (worst {:.4})",
