@@ -453,31 +453,53 @@ fn meta(material: &PbrMaterial, kind: EnhancementType, seed: u64, scalars: &[(St
     }
 }
 
-/// Enhances every material into `out/<name>/` (names made unique), one seed per material
-/// derived from `options.seed` and its name; finished outputs (a `meta.json` present) are
-/// skipped. Shows a progress bar. Returns (enhanced, skipped) counts.
-pub fn enhance_batch(materials: &[PbrMaterial], options: &EnhanceOptions, out: &Path, engine: &dyn PatternEngine) -> Result<(usize, usize), String> {
-    let bar = indicatif::ProgressBar::new(materials.len() as u64);
+/// The output folder names of a batch, in its order: each material's name, made unique by a
+/// suffix (`name_2`, `name_3`, …) where an earlier one took it. The names are the batch's
+/// asset ids: seeds and shard assignment derive from them.
+pub fn batch_names(materials: &[PbrMaterial]) -> Vec<String> {
+    let mut used: std::collections::HashSet<String> = std::collections::HashSet::new();
+    materials
+        .iter()
+        .map(|m| {
+            let mut name = m.name.clone();
+            let mut k = 2;
+            while used.contains(&name) {
+                name = format!("{}_{k}", m.name);
+                k += 1;
+            }
+            used.insert(name.clone());
+            name
+        })
+        .collect()
+}
+
+/// Enhances each `(name, material)` into `out/<name>/`, one seed per material derived from
+/// `options.seed` and its name (so a material's output does not depend on the rest of the
+/// batch, or on how it is split); finished outputs (a `meta.json` present) are skipped.
+/// `finished(name, skipped)` runs after each. Shows a progress bar. Returns (enhanced,
+/// skipped) counts.
+pub fn enhance_batch(
+    batch: &[(String, &PbrMaterial)],
+    options: &EnhanceOptions,
+    out: &Path,
+    engine: &dyn PatternEngine,
+    finished: &mut dyn FnMut(&str, bool) -> Result<(), String>,
+) -> Result<(usize, usize), String> {
+    let bar = indicatif::ProgressBar::new(batch.len() as u64);
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}").map_err(|e| e.to_string())?);
-    let mut used: Vec<String> = Vec::new();
     let (mut done, mut skipped) = (0, 0);
-    for m in materials {
-        let mut name = m.name.clone();
-        let mut k = 2;
-        while used.contains(&name) {
-            name = format!("{}_{k}", m.name);
-            k += 1;
-        }
-        used.push(name.clone());
-        let dir = out.join(&name);
+    for (name, m) in batch {
+        let dir = out.join(name);
         bar.set_message(name.clone());
-        if MaterialFolder::is_finished(&dir) {
+        let skip = MaterialFolder::is_finished(&dir);
+        if skip {
             skipped += 1;
         } else {
-            let o = EnhanceOptions { seed: mix64(options.seed ^ hash_str(&name)), ..options.clone() };
+            let o = EnhanceOptions { seed: mix64(options.seed ^ hash_str(name)), ..options.clone() };
             enhance(m, &o, &dir, engine).map_err(|e| format!("{name}: {e}"))?;
             done += 1;
         }
+        finished(name, skip)?;
         bar.inc(1);
     }
     bar.finish_and_clear();

@@ -2,7 +2,7 @@
 //! output over CSV rows); `enhance` and `masks` (uplift rules);
 //! `datagen`, `train`, `fit` and `emit-decoder` (neural materials); `render`, `eval-fit`, `furnace` and `flip` (evaluation); `demo` (the main job); `export`, `pack`
 //! and `project` (intrinsic videos for generative models, their WebDataset shards, and
-//! generated views back into a material).
+//! generated views back into a material); `shards` and `slurm` (sharded batch runs).
 
 mod cli;
 
@@ -58,6 +58,10 @@ enum Command {
     Project(cli::project::ProjectArgs),
     /// LDR-FLIP (and PSNR) of two images.
     Flip(cli::flip::FlipArgs),
+    /// What the shards of sharded batch runs (`--shard i/N`) did: finished, missing, duplicated.
+    Shards(cli::shards::ShardsArgs),
+    /// Slurm job arrays of the batch stages (`--shard` per task), and their status.
+    Slurm(cli::slurm::SlurmArgs),
 }
 
 fn main() -> ExitCode {
@@ -83,6 +87,8 @@ fn main() -> ExitCode {
         Command::Export(a) => cli::export::run(a),
         Command::Pack(a) => cli::pack::run(a),
         Command::Project(a) => cli::project::run(a),
+        Command::Shards(a) => cli::shards::run(a),
+        Command::Slurm(a) => cli::slurm::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -10,7 +10,8 @@ use uplift_engines::batch::PatternEngine;
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_engines::wgpu_engine::WgpuEngine;
 use uplift_enhance::pbr_input::{self, PbrMaterial};
-use uplift_enhance::pipeline::{enhance, enhance_batch, EnhanceOptions};
+use uplift_enhance::pipeline::{batch_names, enhance, enhance_batch, EnhanceOptions};
+use uplift::shard::{Shard, ShardRun};
 use uplift_enhance::rules::{self, EnhancementType};
 use clap::Args;
 use std::path::PathBuf;
@@ -69,6 +70,10 @@ pub struct EnhanceArgs {
     /// Output folder.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Enhance only this shard of a batch: `i/N`, or `auto` in a Slurm job array or a
+    /// Kubernetes indexed job (docs/scale.md).
+    #[arg(long)]
+    pub shard: Option<String>,
     #[command(flatten)]
     pub stack: super::StackArgs,
 }
@@ -180,12 +185,20 @@ pub fn run(args: EnhanceArgs) -> Result<(), String> {
         super::eval::Engine::Cpu => Box::new(CpuEngine::new()?),
         super::eval::Engine::Wgpu => Box::new(WgpuEngine::new()?),
     };
-    if materials.len() == 1 {
+    if args.shard.is_some() && args.input.is_none() {
+        return Err("--shard splits a batch: give INPUT (a folder of materials, or a document of several)".into());
+    }
+    if materials.len() == 1 && args.shard.is_none() {
         let e = enhance(&materials[0], &options, &args.output, engine.as_ref())?;
         eprintln!("wrote {} (Type {}, {})", e.out_dir.display(), e.kind.index(), e.rule);
     } else {
-        let (done, skipped) = enhance_batch(&materials, &options, &args.output, engine.as_ref())?;
-        eprintln!("enhanced {done} material(s) into {}; {skipped} already finished", args.output.display());
+        let shard = Shard::from_arg(args.shard.as_deref())?;
+        let batch: Vec<(String, &PbrMaterial)> = batch_names(&materials).into_iter().zip(&materials).filter(|(name, _)| shard.is_none_or(|s| s.owns(name))).collect();
+        let mut run = ShardRun::begin(&args.output, "enhance", shard, batch.iter().map(|(n, _)| n.clone()).collect())?;
+        let (done, skipped) = enhance_batch(&batch, &options, &args.output, engine.as_ref(), &mut |name, skipped| run.finished(name, skipped))?;
+        run.end()?;
+        let of = shard.map_or(String::new(), |s| format!(" (shard {s}: {} of {} materials)", batch.len(), materials.len()));
+        eprintln!("enhanced {done} material(s) into {}; {skipped} already finished{of}", args.output.display());
     }
     Ok(())
 }

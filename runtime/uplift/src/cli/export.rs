@@ -1,10 +1,12 @@
 //! `uplift export MATERIAL_DIR --mesh FILE.gltf|.glb -o OUT/`: a fitted material on a mesh as a
 //! multi-view intrinsic video (uplift::export). A folder of material folders exports each one
-//! into `OUT/<name>/` (the batch form).
+//! into `OUT/<name>/` (the batch form), or only those of `--shard i/N` (docs/scale.md);
+//! finished frames are skipped on a rerun.
 
 use clap::Args;
 use std::path::PathBuf;
 use uplift::export::{export_asset, ExportOptions, NATIVE_SIZE};
+use uplift::shard::{Shard, ShardRun};
 use uplift_enhance::gltf_input;
 use uplift_material::MaterialFolder;
 use uplift_neural::weights::SHIPPED_DECODER;
@@ -52,6 +54,10 @@ pub struct ExportArgs {
     pub decoder: PathBuf,
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Export only this shard of a folder of materials: `i/N`, or `auto` in a Slurm job array
+    /// or a Kubernetes indexed job (docs/scale.md).
+    #[arg(long)]
+    pub shard: Option<String>,
     #[command(flatten)]
     pub stack: super::StackArgs,
 }
@@ -71,8 +77,12 @@ pub fn run(args: ExportArgs) -> Result<(), String> {
     let env = super::render::environment(&args.env)?;
     let stack = args.stack.load()?;
     let o = ExportOptions { orbit, spp: args.spp, bounces: args.bounces, exposure: args.exposure, threads, neural: args.neural.then(|| args.decoder.clone()) };
-    // One material, or a folder of them.
+    // One material, or a folder of them (the shard's own, by folder name).
+    let shard = Shard::from_arg(args.shard.as_deref())?;
     let assets: Vec<(PathBuf, PathBuf)> = if MaterialFolder::open(&args.material).is_ok() {
+        if shard.is_some() {
+            return Err(format!("{}: --shard splits a folder of materials; this is one material", args.material.display()));
+        }
         vec![(args.material.clone(), args.output.clone())]
     } else {
         let entries = std::fs::read_dir(&args.material).map_err(|e| format!("{}: {e}", args.material.display()))?;
@@ -81,8 +91,9 @@ pub fn run(args: ExportArgs) -> Result<(), String> {
         if dirs.is_empty() {
             return Err(format!("{}: neither an enhanced material (no params.exr) nor a folder of them", args.material.display()));
         }
-        dirs.into_iter().map(|d| (d.clone(), args.output.join(d.file_name().unwrap_or_default()))).collect()
+        dirs.into_iter().map(|d| (d.clone(), args.output.join(d.file_name().unwrap_or_default()))).filter(|(_, out)| shard.is_none_or(|s| s.owns(&asset_name(out)))).collect()
     };
+    let mut run = ShardRun::begin(&args.output, "export", shard, assets.iter().map(|(_, out)| asset_name(out)).collect())?;
     for (dir, out) in &assets {
         let start = std::time::Instant::now();
         let s = export_asset(dir, &mesh, &env, &stack, out, &o, true)?;
@@ -99,6 +110,11 @@ pub fn run(args: ExportArgs) -> Result<(), String> {
             (s.frames - s.skipped) as f64 / s.seconds_shaded.max(1e-9),
             start.elapsed().as_secs_f64()
         );
+        run.finished(&asset_name(out), s.skipped == s.frames)?;
     }
-    Ok(())
+    run.end()
+}
+
+fn asset_name(out: &std::path::Path) -> String {
+    out.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default()
 }

@@ -4,18 +4,22 @@
 //! runtime/weights/decoder.safetensors), initialised from its encoder. Writes OUT/latent.exr
 //! (channels latent0.R/G/B, latent1.R/G/B, …, float), OUT/latent0.png, latent1.png, … (the same
 //! quantised to 8 bits) and OUT/fit.json (Eq. 3 per term before and after, groups, time).
+//! Given a folder of enhanced materials (as a batch `uplift enhance` writes), fits each one
+//! without a finished fit, in name order, or only those of `--shard i/N` (docs/scale.md).
 
 use clap::Args;
 use std::path::PathBuf;
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_neural::datagen::{ClassMix, DataGenerator};
 use uplift_neural::fit::{fit_material, FitOptions};
+use uplift::shard::{Shard, ShardRun};
+use uplift_material::folder::find_material_folders;
 use uplift_material::{MaterialFolder, ParamsImage};
 use uplift_neural::weights::{load_model, SHIPPED_DECODER};
 
 #[derive(Args)]
 pub struct FitArgs {
-    /// An enhanced material's folder (with params.exr).
+    /// An enhanced material's folder (with params.exr), or a folder of them.
     pub material: PathBuf,
     /// Encoder and decoder weights (safetensors from `uplift train`).
     #[arg(long, default_value = SHIPPED_DECODER)]
@@ -37,6 +41,10 @@ pub struct FitArgs {
     pub seed: u64,
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Fit only this shard of a folder of materials: `i/N`, or `auto` in a Slurm job array or
+    /// a Kubernetes indexed job (docs/scale.md).
+    #[arg(long)]
+    pub shard: Option<String>,
     #[command(flatten)]
     pub stack: super::StackArgs,
 }
@@ -48,16 +56,62 @@ pub fn run(args: FitArgs) -> Result<(), String> {
     }
     let stack = args.stack.load()?;
     let model = load_model(&args.decoder, &stack)?;
-    let folder = MaterialFolder::open(&args.material)?;
-    let ParamsImage { width: w, height: h, params, diffuse, .. } = folder.read_params(&stack)?;
     let generator = DataGenerator::new(CpuEngine::with_threads(threads)?, &stack, ClassMix::All, args.seed)?;
     let mut o = FitOptions { steps: args.steps, directions: args.directions, levels: args.levels, seed: args.seed, threads, ..Default::default() };
     if args.no_energy_bound {
         o.energy = None;
     }
-    let r = fit_material(&model, &generator, &params, diffuse.as_deref(), w, h, &o, true)?;
+    let shard = Shard::from_arg(args.shard.as_deref())?;
+    if args.material.join("params.exr").is_file() {
+        if shard.is_some() {
+            return Err(format!("{}: --shard splits a folder of materials; this is one material", args.material.display()));
+        }
+        return fit_one(&MaterialFolder::open(&args.material)?, &args, &stack, &model, &generator, &o, true);
+    }
+    // A batch: every material folder under MATERIAL, the shard's own, by folder name.
+    let folders = find_material_folders(std::slice::from_ref(&args.material))?;
+    let name = |f: &std::path::Path| f.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+    let mine: Vec<PathBuf> = folders.iter().filter(|f| shard.is_none_or(|s| s.owns(&name(f)))).cloned().collect();
+    let mut run = ShardRun::begin(&args.material, "fit", shard, mine.iter().map(|f| name(f)).collect())?;
+    let bar = indicatif::ProgressBar::new(mine.len() as u64);
+    bar.set_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}").map_err(|e| e.to_string())?);
+    let mut skipped = 0;
+    for f in &mine {
+        bar.set_message(name(f));
+        let folder = MaterialFolder::open(f)?;
+        let skip = folder.has_fit();
+        if skip {
+            skipped += 1;
+        } else {
+            bar.suspend(|| fit_one(&folder, &args, &stack, &model, &generator, &o, false)).map_err(|e| format!("{}: {e}", f.display()))?;
+        }
+        run.finished(&name(f), skip)?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    run.end()?;
+    let of = shard.map_or(String::new(), |s| format!(" (shard {s}: {} of {} materials)", mine.len(), folders.len()));
+    eprintln!("fitted {} material(s) under {}; {skipped} already fitted{of}", mine.len() - skipped, args.material.display());
+    Ok(())
+}
+
+/// Fits one material folder; `verbose` prints its Eq. 3 and energy-bound figures.
+fn fit_one(
+    folder: &MaterialFolder,
+    args: &FitArgs,
+    stack: &uplift_engines::stack::Stack,
+    model: &uplift_neural::model::NeuralModel<f32>,
+    generator: &DataGenerator,
+    o: &FitOptions,
+    verbose: bool,
+) -> Result<(), String> {
+    let ParamsImage { width: w, height: h, params, diffuse, .. } = folder.read_params(stack)?;
+    let r = fit_material(model, generator, &params, diffuse.as_deref(), w, h, o, verbose)?;
     folder.write_latents(&r.latent_image())?;
-    folder.write_fit(&r.record(&args.decoder, &o))?;
+    folder.write_fit(&r.record(&args.decoder, o))?;
+    if !verbose {
+        return Ok(());
+    }
     eprintln!(
         "fitted {w}×{h} texels ({} groups) in {:.1} s; Eq. 3 at {} check texels: encoder only {:.5} (f {:.5}, T {:.5}, R {:.5}) → fitted {:.5} (f {:.5}, T {:.5}, R {:.5})",
         r.groups, r.seconds, o.check_texels.min(w * h), r.before.total, r.before.f, r.before.t, r.before.r, r.after.total, r.after.f, r.after.t, r.after.r

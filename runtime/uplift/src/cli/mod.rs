@@ -19,6 +19,8 @@ pub mod masks;
 pub mod pack;
 pub mod project;
 pub mod render;
+pub mod shards;
+pub mod slurm;
 pub mod tables;
 pub mod train;
 pub mod train_sampler;

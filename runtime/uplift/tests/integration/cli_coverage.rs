@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use crate::common::cli::{s, uplift};
 
-const SUBCOMMANDS: [&str; 20] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "train-sampler", "fit", "emit-decoder", "render", "gallery", "furnace", "eval-fit", "demo", "flip", "export", "pack", "project"];
+const SUBCOMMANDS: [&str; 22] = ["check", "compile", "eval", "tables", "enhance", "masks", "datagen", "train", "train-sampler", "fit", "emit-decoder", "render", "gallery", "furnace", "eval-fit", "demo", "flip", "export", "pack", "project", "shards", "slurm"];
 
 #[test]
 fn every_subcommand_has_help_and_rejects_unknown_flags() {
@@ -79,6 +79,8 @@ fn every_subcommand_reports_missing_and_foreign_inputs_with_exit_1() {
         (vec!["eval-fit", s(&foreign)], "not_a_material"),
         (vec!["demo", "-o", s(&unwritable), "--per-type", "1"], "a_file"),
         (vec!["flip", s(&missing_png), s(&missing_png)], "missing.png"),
+        (vec!["shards", s(&missing_dir)], "missing_material"),
+        (vec!["slurm", "status", s(&missing_dir)], "missing_material"),
     ];
     let mut covered: Vec<&str> = Vec::new();
     for (args, fragment) in &cases {

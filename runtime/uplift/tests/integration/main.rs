@@ -40,6 +40,7 @@ mod numeric_texture;
 mod random_graphs;
 mod render;
 mod sampler;
+mod shard;
 mod specialisation;
 mod stack_extension;
 mod uplift_stack;
