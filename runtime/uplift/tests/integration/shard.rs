@@ -198,6 +198,111 @@ mod runs {
         std::fs::remove_dir_all(&root).unwrap();
     }
 
+    /// Slurm's client commands, pointed at the test's cluster.
+    fn slurm(dir: &Path, args: &[&str]) -> std::process::Output {
+        std::process::Command::new(args[0]).args(&args[1..]).env("SLURM_CONF", dir.join("slurm.conf")).output().unwrap()
+    }
+
+    /// Waits until Slurm has no pending or running task of `job`.
+    fn wait_for(cluster: &Path, job: &str) {
+        let start = Instant::now();
+        loop {
+            let q = slurm(cluster, &["squeue", "-h", "-r", "-j", job, "-o", "%i %T"]);
+            let text = String::from_utf8_lossy(&q.stdout).to_string();
+            if q.status.success() && text.trim().is_empty() {
+                return;
+            }
+            assert!(start.elapsed() < Duration::from_secs(300), "job {job} still queued after 300 s: {text}");
+            std::thread::sleep(Duration::from_millis(200));
+        }
+    }
+
+    /// A real single-host Slurm (munged, slurmctld, slurmd: tests/slurm/cluster.sh) runs
+    /// `uplift slurm submit`'s job arrays: enhance 12 materials in 4 tasks, then fit them in 4
+    /// tasks, one task cancelled mid-way (scancel) and only its index resubmitted; every
+    /// material once, the files equal to a single process's.
+    #[test]
+    fn a_slurm_job_array_enhances_and_fits_and_a_cancelled_task_is_resubmitted() {
+        let installed = ["munged", "slurmctld", "slurmd", "sbatch"].iter().all(|t| std::process::Command::new("sh").arg("-c").arg(format!("command -v {t}")).output().is_ok_and(|o| o.status.success()));
+        if !installed {
+            return uplift_base::test_env::skip("slurm_cluster", "Slurm is not installed (Debian: apt install munge slurmctld slurmd slurm-client; .ci/run does)");
+        }
+        let root = temp_dir(SCOPE, "cluster");
+        let cluster = root.join("cluster");
+        let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/slurm/cluster.sh");
+        let st = std::process::Command::new("bash").arg(&script).arg("start").arg(&cluster).status().unwrap();
+        assert!(st.success(), "cluster.sh start: {st}");
+        struct Stop<'a>(&'a Path, &'a Path);
+        impl Drop for Stop<'_> {
+            fn drop(&mut self) {
+                let _ = std::process::Command::new("bash").arg(self.0).arg("stop").arg(self.1).status();
+            }
+        }
+        let _stop = Stop(&script, &cluster);
+        let input = input(&root);
+        let (single, out) = (root.join("single"), root.join("out"));
+        ok(&enhance_args(&input, &single));
+        ok(&[&["fit", s(&single)][..], &FIT].concat());
+        let conf = cluster.join("slurm.conf");
+        let env = [("SLURM_CONF", s(&conf))];
+        let submit = |extra: &[&str], command: &[&str]| -> String {
+            let args: Vec<&str> = [&["slurm", "submit", "--tasks", "4", "--dir", s(&out), "--cpus-per-task", "1"][..], extra, &["--"], command].concat();
+            let (code, stdout, stderr) = uplift_with(&args, &env);
+            assert_eq!(code, 0, "{args:?}: {stderr}");
+            stdout.trim().to_string()
+        };
+        let job = submit(&[], &enhance_args(&input, &out));
+        wait_for(&cluster, &job);
+        let logs: Vec<PathBuf> = std::fs::read_dir(out.join(".uplift-shards/slurm/logs")).unwrap().flatten().map(|e| e.path()).collect();
+        assert_eq!(logs.len(), 4, "one log per task: {logs:?}");
+        for l in &logs {
+            let text = std::fs::read_to_string(l).unwrap();
+            assert!(text.contains(&format!("of job {job} on ")) && text.contains("enhanced "), "{}: {text}", l.display());
+        }
+        let (code, status, err) = uplift_with(&["slurm", "status", s(&out)], &env);
+        assert_eq!(code, 0, "{status}{err}");
+        assert!(status.contains("enhance: 4/4 shards complete (4 started); 12 finished, 0 missing, 0 duplicated"), "{status}");
+        // Fit, 4 tasks; the task with the most materials is cancelled once it recorded one.
+        let names: Vec<String> = outputs(&single).keys().filter_map(|k| k.strip_suffix("/meta.json").map(String::from)).collect();
+        let sizes: Vec<usize> = (0..4).map(|i| names.iter().filter(|n| uplift::shard::Shard { index: i, count: 4 }.owns(n)).count()).collect();
+        let victim = (0..4).max_by_key(|&i| sizes[i]).unwrap();
+        assert!(sizes[victim] >= 2, "{sizes:?}");
+        let slow_fit: Vec<&str> = [&["fit", s(&out)][..], &FIT].concat();
+        let job = submit(&[], &slow_fit);
+        let manifest = out.join(uplift::shard::MANIFEST_DIR).join(format!("fit.{victim}-of-4.json"));
+        let start = Instant::now();
+        loop {
+            let m: Option<uplift::shard::Manifest> = std::fs::read_to_string(&manifest).ok().and_then(|t| serde_json::from_str(&t).ok());
+            if m.is_some_and(|m| !m.finished.is_empty()) {
+                break;
+            }
+            assert!(start.elapsed() < Duration::from_secs(300), "task {victim} recorded no fit in 300 s");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let c = slurm(&cluster, &["scancel", &format!("{job}_{victim}")]);
+        assert!(c.status.success(), "scancel: {}", String::from_utf8_lossy(&c.stderr));
+        wait_for(&cluster, &job);
+        let (code, status, _) = uplift_with(&["slurm", "status", s(&out)], &env);
+        if code == 0 {
+            // The task finished between the manifest's write and the cancel: nothing to resubmit.
+            eprintln!("task {victim} finished before scancel reached it");
+        } else {
+            assert!(status.contains("fit: 3/4 shards complete (4 started)") && status.contains("missing: "), "{status}");
+            let again = submit(&["--only", &victim.to_string()], &slow_fit);
+            wait_for(&cluster, &again);
+        }
+        let (code, status, err) = uplift_with(&["slurm", "status", s(&out)], &env);
+        assert_eq!(code, 0, "{status}{err}");
+        assert!(status.contains("fit: 4/4 shards complete (4 started); 12 finished, 0 missing, 0 duplicated"), "{status}");
+        let (a, b) = (outputs(&single), outputs(&out));
+        assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+        for (k, v) in &a {
+            assert!(b[k] == *v, "{k}: the job array's file differs from the single process's");
+        }
+        drop(_stop);
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
     /// The job array's script, run as Slurm runs it (bash, one process per array task with
     /// SLURM_ARRAY_TASK_ID set), enhances every material once; a missing Slurm is a clear error.
     #[test]
