@@ -14,6 +14,54 @@ pub enum Engine<'a> {
     Wgpu(&'a WgpuEngine),
 }
 
+impl<'a> From<&'a CpuEngine> for Engine<'a> {
+    fn from(e: &'a CpuEngine) -> Self {
+        Engine::Cpu(e)
+    }
+}
+
+impl<'a> From<&'a WgpuEngine> for Engine<'a> {
+    fn from(e: &'a WgpuEngine) -> Self {
+        Engine::Wgpu(e)
+    }
+}
+
+/// An engine owned by what runs kernels on it (the training-data generator, the renderer's
+/// shading): the CPU engine or the wgpu engine.
+pub enum AnyEngine {
+    Cpu(CpuEngine),
+    Wgpu(WgpuEngine),
+}
+
+impl AnyEngine {
+    pub fn engine(&self) -> Engine<'_> {
+        match self {
+            AnyEngine::Cpu(e) => Engine::Cpu(e),
+            AnyEngine::Wgpu(e) => Engine::Wgpu(e),
+        }
+    }
+
+    /// `cpu` or `wgpu`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            AnyEngine::Cpu(_) => "cpu",
+            AnyEngine::Wgpu(_) => "wgpu",
+        }
+    }
+}
+
+impl From<CpuEngine> for AnyEngine {
+    fn from(e: CpuEngine) -> Self {
+        AnyEngine::Cpu(e)
+    }
+}
+
+impl From<WgpuEngine> for AnyEngine {
+    fn from(e: WgpuEngine) -> Self {
+        AnyEngine::Wgpu(e)
+    }
+}
+
 enum Prepared {
     Cpu(CpuKernel),
     Wgpu(WgpuPipeline),

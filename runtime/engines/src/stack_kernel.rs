@@ -77,15 +77,15 @@ impl StackKernel {
 
     /// Runs the kernel on `rows` (indices into `params`, rows × the stack's parameters) with per-row directions
     /// (`wv`, `wl` or `u`, indexed like `params`).
-    pub fn run(&self, engine: &CpuEngine, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])]) -> Result<Columns, String> {
-        self.run_on(Engine::Cpu(engine), params, rows, directions)
+    pub fn run<'e>(&self, engine: impl Into<Engine<'e>>, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])]) -> Result<Columns, String> {
+        self.run_on(engine.into(), params, rows, directions)
     }
 
     /// [`run`](Self::run) on a grouped batch (`PatternBatch::points_per_group`): runs of
     /// `per_group` consecutive entries of `rows` share their parameters and `wv` (the caller's
     /// promise), so the CPU engine runs the kernel's dependence-split form where it ships one.
-    pub fn run_grouped(&self, engine: &CpuEngine, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])], per_group: usize) -> Result<Columns, String> {
-        self.run_layout(Engine::Cpu(engine), params, rows, directions, per_group)
+    pub fn run_grouped<'e>(&self, engine: impl Into<Engine<'e>>, params: &[f32], rows: &[usize], directions: &[(&str, &[[f32; 3]])], per_group: usize) -> Result<Columns, String> {
+        self.run_layout(engine.into(), params, rows, directions, per_group)
     }
 
     /// [`run`](Self::run) on the engine the kernel was prepared on (`engine` must be it).

@@ -16,7 +16,6 @@ use uplift_base::random_scalar::RandomScalar;
 use uplift_base::rng::{hash_str, mix64};
 use uplift_compiler::{OutputSelection, PatternKernel};
 use uplift_engines::batch::{Columns, Geometry, PatternBatch};
-use uplift_engines::cpu_engine::CpuEngine;
 use uplift_engines::prepared_kernel::{Engine, PreparedKernel};
 use uplift_engines::stack::Stack;
 
@@ -87,7 +86,8 @@ pub struct TrainingClasses {
 
 impl TrainingClasses {
     /// The builtin classes and the class documents of `stack`'s folders, prepared on `engine`.
-    pub fn load(stack: &Arc<Stack>, engine: &CpuEngine) -> Result<TrainingClasses, String> {
+    pub fn load<'e>(stack: &Arc<Stack>, engine: impl Into<Engine<'e>>) -> Result<TrainingClasses, String> {
+        let engine: Engine<'e> = engine.into();
         let mut docs: Vec<(String, String, String)> = BUILTIN.iter().map(|(n, s, t)| (n.to_string(), s.to_string(), t.to_string())).collect();
         for dir in stack.library() {
             for file in mtlx::library::files_under(dir).into_iter().filter(|f| f.extension().is_some_and(|e| e == "mtlx")) {
@@ -123,7 +123,7 @@ impl TrainingClasses {
             })
             .collect();
         let tables = stack.compiler().library.albedo_table_data.clone();
-        let mut prepared = PreparedKernel::all(Engine::Cpu(engine), kernels, tables.as_deref())?.into_iter();
+        let mut prepared = PreparedKernel::all(engine, kernels, tables.as_deref())?.into_iter();
         let classes = read
             .into_iter()
             .map(|(name, source, share, wiring)| {
@@ -182,8 +182,9 @@ impl TrainingClasses {
 
     /// The parameter rows (`tiles.len()` × the stack's parameters) of class `class` at the
     /// given (tile, cell) pairs, for generator seed `seed`.
-    pub fn parameters(&self, engine: &CpuEngine, class: usize, seed: u64, tiles: &[u64], cells: &[u64]) -> Result<Vec<f32>, String> {
+    pub fn parameters<'e>(&self, engine: impl Into<Engine<'e>>, class: usize, seed: u64, tiles: &[u64], cells: &[u64]) -> Result<Vec<f32>, String> {
         assert_eq!(tiles.len(), cells.len());
+        let engine: Engine<'e> = engine.into();
         let c = &self.classes[class];
         let np = self.stack.len();
         let n = tiles.len();
@@ -212,7 +213,7 @@ impl TrainingClasses {
                     }
                 }
                 let batch = PatternBatch { geometry: Geometry::default().repeated(n), inputs, textures: vec![], points_per_group: 1 };
-                let out = kernel.run(Engine::Cpu(engine), &batch)?;
+                let out = kernel.run(engine, &batch)?;
                 let mut rows = self.stack.defaults().repeat(n);
                 for (k, o) in outputs.iter().enumerate() {
                     if let Some(at) = o {
@@ -317,6 +318,7 @@ impl TrainingClass {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use uplift_engines::cpu_engine::CpuEngine;
 
     #[test]
     fn every_class_stays_in_range_and_is_deterministic() {

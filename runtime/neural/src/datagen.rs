@@ -12,7 +12,7 @@ use crate::features::{cosine_view, direction_features, uniform_cosine_view, unif
 use crate::loss::OUTPUTS;
 use uplift_engines::stack::Stack;
 use std::sync::Arc;
-use uplift_engines::cpu_engine::CpuEngine;
+use uplift_engines::prepared_kernel::AnyEngine;
 use uplift_engines::stack_kernel::{usable_sample, Engine, StackKernel};
 use uplift_base::rng::{mix64, unit_from_key as unit};
 use rayon::prelude::*;
@@ -87,7 +87,7 @@ pub struct TrainingBatch {
 
 /// Generates training batches.
 pub struct DataGenerator {
-    engine: CpuEngine,
+    engine: AnyEngine,
     stack: Arc<Stack>,
     classes: TrainingClasses,
     eval: StackKernel,
@@ -132,16 +132,18 @@ impl ViewDistribution {
 }
 
 impl DataGenerator {
-    /// A generator of `stack`'s training data on `engine`.
-    pub fn new(engine: CpuEngine, stack: &Arc<Stack>, mix: ClassMix, seed: u64) -> Result<DataGenerator, String> {
-        let mut k = StackKernel::contexts(Engine::Cpu(&engine), stack, &[ClosureContext::Eval, ClosureContext::Albedo, ClosureContext::Sample, ClosureContext::Pdf])?.into_iter();
+    /// A generator of `stack`'s training data on `engine` (the CPU engine, or the wgpu engine:
+    /// the same kernels as WGSL).
+    pub fn new(engine: impl Into<AnyEngine>, stack: &Arc<Stack>, mix: ClassMix, seed: u64) -> Result<DataGenerator, String> {
+        let engine: AnyEngine = engine.into();
+        let mut k = StackKernel::contexts(engine.engine(), stack, &[ClosureContext::Eval, ClosureContext::Albedo, ClosureContext::Sample, ClosureContext::Pdf])?.into_iter();
         let mut next = || k.next().expect("four contexts");
         Ok(DataGenerator {
             eval: next(),
             albedo: next(),
             sample: next(),
             pdf: next(),
-            classes: TrainingClasses::load(stack, &engine)?,
+            classes: TrainingClasses::load(stack, engine.engine())?,
             engine,
             stack: stack.clone(),
             mix,
@@ -162,8 +164,8 @@ impl DataGenerator {
     }
 
     /// The engine the reference kernels run on.
-    pub fn engine(&self) -> &CpuEngine {
-        &self.engine
+    pub fn engine(&self) -> Engine<'_> {
+        self.engine.engine()
     }
 
     /// The stack's `sample` kernel (wv, u → wl, pdf, response, throughput).
@@ -230,7 +232,7 @@ impl DataGenerator {
             }
             let tiles: Vec<u64> = members.iter().map(|&g| picks[g].1).collect();
             let cells: Vec<u64> = members.iter().map(|&g| picks[g].2).collect();
-            let p = self.classes.parameters(&self.engine, c, self.seed, &tiles, &cells)?;
+            let p = self.classes.parameters(self.engine.engine(), c, self.seed, &tiles, &cells)?;
             for (m, &g) in members.iter().enumerate() {
                 for r in g * k..(g + 1) * k {
                     params[r * np..(r + 1) * np].copy_from_slice(&p[m * np..(m + 1) * np]);
@@ -284,7 +286,7 @@ impl DataGenerator {
         // Lights from the stack's sampler; rows whose sample fails fall back to uniform.
         if !sampled.is_empty() {
             // With groups, the last k − k/2 rows of each group: contiguous in `sampled`.
-            let out = self.sample.run_grouped(&self.engine, &b.params, &sampled, &[("wv", &b.wv), ("u", &u3)], if k == 1 { 1 } else { k - k / 2 })?;
+            let out = self.sample.run_grouped(self.engine.engine(), &b.params, &sampled, &[("wv", &b.wv), ("u", &u3)], if k == 1 { 1 } else { k - k / 2 })?;
             let (wl_at, pdf_at, resp_at) = (self.sample.output_offset("wl"), self.sample.output_offset("pdf"), self.sample.output_offset("response"));
             for (k, &r) in sampled.iter().enumerate() {
                 let wl = [0, 1, 2].map(|c| out.column(wl_at + c)[k]);
@@ -304,7 +306,7 @@ impl DataGenerator {
             if part.is_empty() {
                 continue;
             }
-            let out = self.eval.run_grouped(&self.engine, &b.params, part, &[("wv", &b.wv), ("wl", &b.wl)], per_group)?;
+            let out = self.eval.run_grouped(self.engine.engine(), &b.params, part, &[("wv", &b.wv), ("wl", &b.wl)], per_group)?;
             for (j, &r) in part.iter().enumerate() {
                 for c in 0..3 {
                     b.target[r * OUTPUTS + c] = out.column(resp_at + c)[j];
@@ -313,7 +315,7 @@ impl DataGenerator {
         }
         // The albedo depends on the parameters and the view only: once per group.
         let leaders: Vec<usize> = (0..rows).step_by(k).collect();
-        let out = self.albedo.run(&self.engine, &b.params, &leaders, &[("wv", &b.wv)])?;
+        let out = self.albedo.run(self.engine.engine(), &b.params, &leaders, &[("wv", &b.wv)])?;
         let (alb_at, thr_at) = (self.albedo.output_offset("albedo"), self.albedo.output_offset("throughput"));
         for r in 0..rows {
             let g = r / k;

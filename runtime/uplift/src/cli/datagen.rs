@@ -4,9 +4,13 @@
 //! parameter names in the metadata), `encoded` (the encoder's inputs), `wv`, `wl` (local frame,
 //! normal +z), `features` (the decoder's 9 direction features), `target` (f·μl RGB, T RGB, R)
 //! and `class`. Shards already written are skipped (and counted on stderr), so an interrupted
-//! run resumes.
+//! run resumes. `--engine wgpu` runs the stack's kernels as WGSL (the same rows within 1e-4);
+//! `--shard i/N` writes only the files of that shard (docs/scale.md).
 
+use uplift::shard::{Shard, ShardRun};
 use uplift_engines::cpu_engine::CpuEngine;
+use uplift_engines::prepared_kernel::AnyEngine;
+use uplift_engines::wgpu_engine::WgpuEngine;
 use uplift_neural::datagen::{ClassMix, DataGenerator};
 use uplift_neural::weights::TensorFile;
 use clap::Args;
@@ -37,6 +41,13 @@ pub struct DatagenArgs {
     /// of 16384.
     #[arg(long, default_value_t = 1)]
     pub directions_per_view: usize,
+    /// The engine the stack's kernels run on: the CPU (generated Rust) or wgpu (generated WGSL).
+    #[arg(long, value_enum, default_value_t = super::eval::Engine::Cpu)]
+    pub engine: super::eval::Engine,
+    /// Write only this shard's files: `i/N`, or `auto` in a Slurm job array or a Kubernetes
+    /// indexed job (docs/scale.md).
+    #[arg(long)]
+    pub shard: Option<String>,
     #[command(flatten)]
     pub stack: super::StackArgs,
 }
@@ -54,7 +65,12 @@ pub fn run(args: DatagenArgs) -> Result<(), String> {
     }
     std::fs::create_dir_all(&args.output).map_err(|e| format!("{}: {e}", args.output.display()))?;
     let stack = args.stack.load()?;
-    let mut generator = DataGenerator::new(CpuEngine::new()?, &stack, mix.clone(), args.seed)?;
+    let engine: AnyEngine = match args.engine {
+        super::eval::Engine::Cpu => CpuEngine::new()?.into(),
+        super::eval::Engine::Wgpu => WgpuEngine::new()?.into(),
+    };
+    let mut generator = DataGenerator::new(engine, &stack, mix.clone(), args.seed)?;
+    let shard_spec = Shard::from_arg(args.shard.as_deref())?;
     let named: Vec<&str> = match &mix {
         ClassMix::All => vec![],
         ClassMix::Only(name) => vec![name.as_str()],
@@ -65,16 +81,20 @@ pub fn run(args: DatagenArgs) -> Result<(), String> {
     }
     generator.directions_per_view = args.directions_per_view;
     let shards = args.count.div_ceil(args.shard_rows);
-    let bar = indicatif::ProgressBar::new(args.count as u64);
+    let file_name = |shard: usize| format!("{}-{shard:05}.safetensors", mix.name());
+    let mine: Vec<usize> = (0..shards).filter(|&k| shard_spec.is_none_or(|s| s.owns(&file_name(k)))).collect();
+    let mut run = ShardRun::begin(&args.output, "datagen", shard_spec, mine.iter().map(|&k| file_name(k)).collect())?;
+    let bar = indicatif::ProgressBar::new(mine.iter().map(|&k| args.shard_rows.min(args.count - k * args.shard_rows) as u64).sum());
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} rows, eta {eta}").unwrap());
     let names = stack.parameters().iter().map(|p| p.channel.as_str()).collect::<Vec<_>>().join(",");
     let mut skipped = 0;
-    for shard in 0..shards {
+    for &shard in &mine {
         let rows = args.shard_rows.min(args.count - shard * args.shard_rows);
-        let path = args.output.join(format!("{}-{shard:05}.safetensors", mix.name()));
+        let path = args.output.join(file_name(shard));
         if path.exists() {
             skipped += 1;
             bar.inc(rows as u64);
+            run.finished(&file_name(shard), true)?;
             continue;
         }
         let mut file = TensorFile::default();
@@ -103,8 +123,10 @@ pub fn run(args: DatagenArgs) -> Result<(), String> {
         m.insert("class".into(), generator.classes().names().iter().enumerate().map(|(k, n)| format!("{k} {n}")).collect::<Vec<_>>().join(", "));
         m.insert("generator".into(), format!("uplift datagen --class {} --seed {} (shard {shard}, first batch {first_chunk} of {CHUNK} rows)", mix.name(), args.seed));
         file.write(&path)?;
+        run.finished(&file_name(shard), false)?;
     }
     bar.finish();
-    eprintln!("wrote {} shard(s) to {}; {skipped} already written", shards - skipped, args.output.display());
+    run.end()?;
+    eprintln!("wrote {} shard(s) to {}; {skipped} already written", mine.len() - skipped, args.output.display());
     Ok(())
 }

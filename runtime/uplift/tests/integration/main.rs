@@ -15,6 +15,7 @@ mod cli_coverage;
 mod cli_eval;
 mod closures;
 mod cpu_engine;
+mod datagen_engines;
 mod demo_report;
 mod enhance;
 mod export;
