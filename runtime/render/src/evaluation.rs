@@ -24,7 +24,7 @@ pub const PAPER_TABLE1: [(usize, f64, f64, f64); 6] = [
 ];
 
 /// One material's evaluation.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct MaterialEval {
     pub name: String,
     pub kind: usize,

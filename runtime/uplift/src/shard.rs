@@ -94,6 +94,35 @@ impl Shard {
     }
 }
 
+/// The name of an asset's folder: its id.
+pub fn asset_id(dir: &Path) -> String {
+    dir.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default()
+}
+
+/// The material folders a batch command works on (`uplift_material::folder::find_material_folders`
+/// over its arguments), and those of `shard`. A sharded batch is one folder of materials,
+/// whose manifests it holds (`root`).
+pub struct MaterialBatch {
+    pub root: Option<PathBuf>,
+    pub all: usize,
+    pub mine: Vec<PathBuf>,
+}
+
+impl MaterialBatch {
+    pub fn find(args: &[PathBuf], shard: Option<Shard>) -> Result<MaterialBatch, String> {
+        let folders = uplift_material::folder::find_material_folders(args)?;
+        let Some(shard) = shard else { return Ok(MaterialBatch { root: None, all: folders.len(), mine: folders }) };
+        match args {
+            [root] if !root.join("params.exr").is_file() => {
+                let all = folders.len();
+                let mine = folders.into_iter().filter(|f| shard.owns(&asset_id(f))).collect();
+                Ok(MaterialBatch { root: Some(root.clone()), all, mine })
+            }
+            _ => Err("--shard splits one folder of materials: give that folder alone".into()),
+        }
+    }
+}
+
 /// What one shard did: its assets and, for each finished one, how.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Manifest {
@@ -150,8 +179,18 @@ impl ShardRun {
 
     /// Records a finished asset (`skipped`: its output was already there).
     pub fn finished(&mut self, asset: &str, skipped: bool) -> Result<(), String> {
-        self.manifest.finished.insert(asset.to_string(), if skipped { "skipped" } else { "done" }.into());
+        self.record(asset, if skipped { "skipped" } else { "done" })
+    }
+
+    /// Records a finished asset with its result (a check's verdict: `pass`, `fail`).
+    pub fn record(&mut self, asset: &str, result: &str) -> Result<(), String> {
+        self.manifest.finished.insert(asset.to_string(), result.into());
         self.write()
+    }
+
+    /// What an earlier run of this shard recorded for `asset` (a resumed shard skips it).
+    pub fn previous(&self, asset: &str) -> Option<&str> {
+        self.manifest.finished.get(asset).map(String::as_str)
     }
 
     /// Marks the shard complete.

@@ -3,7 +3,7 @@
 //! folders. Prints each material's worst total albedo and verdict, and the pass rate; with
 //! `--filter DIR`, failing material folders are moved into DIR (paper §4.3 discards them).
 
-use uplift_material::folder::find_material_folders as material_folders;
+use uplift::shard::{asset_id, MaterialBatch, Shard, ShardRun};
 use uplift_neural::weights::{load_model, SHIPPED_DECODER};
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_render::furnace::{white_furnace, FurnaceOptions};
@@ -27,6 +27,11 @@ pub struct FurnaceArgs {
     /// Move failing material folders into this folder.
     #[arg(long)]
     pub filter: Option<PathBuf>,
+    /// Check only this shard of a folder of materials (`i/N`, or `auto` in a job array); its
+    /// verdicts go to the folder's shard manifest, and a rerun skips those already there
+    /// (docs/scale.md).
+    #[arg(long)]
+    pub shard: Option<String>,
     /// View cosines per texel.
     #[arg(long, default_value_t = 16)]
     pub views: usize,
@@ -61,7 +66,11 @@ pub fn run(args: FurnaceArgs) -> Result<(), String> {
     if args.views == 0 || args.directions == 0 || args.max_texels == 0 {
         return Err("--views, --directions and --max-texels must be at least 1".into());
     }
-    let folders = material_folders(&args.materials)?;
+    let shard = Shard::from_arg(args.shard.as_deref())?;
+    let batch = MaterialBatch::find(&args.materials, shard)?;
+    let folders = &batch.mine;
+    let stage = if args.neural { "furnace-neural" } else { "furnace" };
+    let mut run = ShardRun::begin(batch.root.as_deref().unwrap_or(Path::new(".")), stage, shard, folders.iter().map(|f| asset_id(f)).collect())?;
     let stack = args.stack.load()?;
     let model = if args.neural { Model::Neural(load_model(&args.decoder, &stack)?.decoder) } else { Model::Reference };
     let shading = Shading::new(CpuEngine::with_threads(threads)?, &stack, model)?;
@@ -69,8 +78,14 @@ pub fn run(args: FurnaceArgs) -> Result<(), String> {
     let bar = ProgressBar::new(folders.len() as u64).with_style(ProgressStyle::with_template("furnace [{bar:30}] {pos}/{len} {msg}").map_err(|e| e.to_string())?.progress_chars("=> "));
     let mut passed = 0;
     let mut failed = Vec::new();
-    for dir in &folders {
+    for dir in folders {
         bar.set_message(dir.display().to_string());
+        if let Some(verdict) = run.previous(&asset_id(dir)) {
+            // Checked by an earlier run of this shard.
+            if verdict == "pass" { passed += 1 } else { failed.push(dir.clone()) }
+            bar.inc(1);
+            continue;
+        }
         let surface = SurfaceTextures::load(dir, &stack, args.neural)?;
         let r = white_furnace(&surface, &shading, &o)?;
         let line = format!(
@@ -88,9 +103,11 @@ pub fn run(args: FurnaceArgs) -> Result<(), String> {
         );
         bar.suspend(|| println!("{line}"));
         if r.passed { passed += 1 } else { failed.push(dir.clone()) }
+        run.record(&asset_id(dir), if r.passed { "pass" } else { "fail" })?;
         bar.inc(1);
     }
     bar.finish_and_clear();
+    run.end()?;
     println!("white furnace ({}): {passed} of {} materials pass ({:.1} %)", if args.neural { "neural" } else { "reference" }, folders.len(), 100.0 * passed as f64 / folders.len() as f64);
     if let Some(into) = &args.filter {
         for dir in &failed {

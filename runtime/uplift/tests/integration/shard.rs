@@ -188,6 +188,23 @@ mod runs {
         for (k, v) in &a {
             assert!(b[k] == *v, "{k}: the sharded run's file differs from the single process's");
         }
+        // The checks split the same way: furnace verdicts in the manifests; eval-fit's table
+        // from every shard's figures equals one process's.
+        let furnace = ["--max-texels", "8", "--directions", "64", "--views", "4", "--threads", "1"];
+        for i in 0..2 {
+            let log = ok(&[&["furnace", s(&sharded)][..], &furnace, &["--shard", &format!("{i}/2")]].concat());
+            assert!(log.contains("materials pass (100.0 %)"), "{log}");
+        }
+        let furnace_status = ok(&["shards", s(&sharded)]);
+        assert!(furnace_status.contains("furnace: 2/2 shards complete (2 started); 12 finished, 0 missing, 0 duplicated"), "{furnace_status}");
+        let render = ["--size", "16", "--spp", "1", "--threads", "1"];
+        ok(&[&["eval-fit", s(&single), "-o", s(&root.join("eval1"))][..], &render].concat());
+        for i in 0..2 {
+            ok(&[&["eval-fit", s(&sharded), "-o", s(&root.join("eval2"))][..], &render, &["--shard", &format!("{i}/2")]].concat());
+        }
+        let table = |d: &str| std::fs::read_to_string(root.join(d).join("table.md")).unwrap();
+        assert_eq!(table("eval1"), table("eval2"), "eval-fit's table over 2 shards differs from one process's");
+        assert_eq!(std::fs::read_dir(root.join("eval2/evals")).unwrap().count(), 12);
         // Bad use: a shard out of range; another split of the same stage into the same folder.
         let (code, _, err) = uplift(&[&["fit", s(&sharded)][..], &["--shard", "3/3"]].concat());
         assert!(code == 1 && err.contains("--shard 3/3: shard 3 is out of range"), "{err}");
