@@ -12,7 +12,7 @@ use uplift_base::atomic_write::write_atomically;
 use crate::shard::MANIFEST_DIR;
 
 /// The stages a job array can run: the batch commands that take `--shard`.
-pub const STAGES: [&str; 3] = ["enhance", "fit", "export"];
+pub const STAGES: [&str; 6] = ["enhance", "fit", "export", "datagen", "furnace", "eval-fit"];
 
 /// One job array to submit.
 #[derive(Clone, Debug)]

@@ -15,7 +15,8 @@ pub struct SlurmArgs {
 
 #[derive(Subcommand)]
 pub enum SlurmCommand {
-    /// Write and submit a job array running a stage (enhance, fit, export) sharded N ways.
+    /// Write and submit a job array running a batch stage (enhance, fit, export, datagen,
+    /// furnace, eval-fit) sharded N ways.
     Submit(SubmitArgs),
     /// The submitted jobs' tasks and the shards' manifests under OUT.
     Status(StatusArgs),

@@ -345,8 +345,8 @@ mod runs {
         // No sbatch on PATH (PATH is an empty folder here).
         let (code, _, err) = submit(&[]);
         assert!(code == 1 && err.contains("`sbatch` is not on PATH") && err.contains("slurm"), "{err}");
-        let (code, _, err) = uplift(&["slurm", "submit", "--tasks", "2", "--dir", s(&out), "--", "furnace", s(&out)]);
-        assert!(code == 1 && err.contains("`furnace` takes no --shard"), "{err}");
+        let (code, _, err) = uplift(&["slurm", "submit", "--tasks", "2", "--dir", s(&out), "--", "render", s(&out)]);
+        assert!(code == 1 && err.contains("`render` takes no --shard"), "{err}");
         let (code, _, err) = uplift(&["slurm", "status", s(&root)]);
         assert!(code == 1 && err.contains("no jobs submitted here"), "{err}");
         std::fs::remove_dir_all(&root).unwrap();
