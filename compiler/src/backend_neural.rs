@@ -3,7 +3,9 @@
 //! weights as a `static` array, one function per row, fixed-size loops LLVM vectorises) and
 //! WGSL (`templates/neural_decoder.wgsl`: weights in a storage buffer, one invocation per row).
 //! Both evaluate exactly the trainer's forward pass: per layer y = W·x + b, then the activation.
-//! The WGSL is parsed and validated by naga before it is returned.
+//! The WGSL is parsed and validated by naga before it is returned. For latent fitting on a GPU,
+//! `templates/neural_fit.wgsl` adds the paper's Eq. 3 and the backward pass to the decoder's
+//! input (`write_wgsl_fitter`).
 
 use askama::Template;
 
@@ -33,6 +35,17 @@ impl NeuralActivation {
             NeuralActivation::LeakyRelu { slope } => format!("select({x} * {}, {x}, {x} > 0.0)", wgsl_float(slope as f32)),
             NeuralActivation::Sigmoid => format!("1.0 / (1.0 + exp(-{x}))"),
             NeuralActivation::ExpHead { shift, clamp } => format!("exp(min({x}, {}) - {})", wgsl_float(clamp as f32), wgsl_float(shift as f32)),
+        }
+    }
+
+    /// d activation / dx from the activation's output `a`, as the trainer computes it
+    /// (`Activation::derivative_from_output`).
+    fn wgsl_derivative(self, a: &str) -> String {
+        match self {
+            NeuralActivation::Identity => "1.0".into(),
+            NeuralActivation::LeakyRelu { slope } => format!("select({}, 1.0, {a} > 0.0)", wgsl_float(slope as f32)),
+            NeuralActivation::Sigmoid => format!("({a} * (1.0 - {a}))"),
+            NeuralActivation::ExpHead { shift, clamp } => format!("select(0.0, {a}, {a} < {})", wgsl_float((clamp - shift).exp() as f32)),
         }
     }
 }
@@ -88,6 +101,65 @@ struct WgslDecoder<'a> {
     outputs: usize,
     max_width: usize,
     layers: Vec<Layer>,
+}
+
+/// One layer of the fitter's backward pass.
+struct BackLayer {
+    index: usize,
+    inputs: usize,
+    outputs: usize,
+    weights: usize,
+    /// The inputs whose gradient is needed: all of them, but the latent ones of layer 0.
+    needed_inputs: usize,
+    wgsl_dact: String,
+}
+
+#[derive(Template)]
+#[template(path = "neural_fit.wgsl", escape = "none")]
+struct WgslFitter<'a> {
+    source: &'a str,
+    inputs: usize,
+    latent: usize,
+    max_width: usize,
+    layer_count: usize,
+    outputs_per_row: usize,
+    layers: Vec<Layer>,
+    backward: Vec<BackLayer>,
+}
+
+/// Entry point and workgroup size of the emitted fitting shader.
+pub const FITTER_ENTRY_POINT: &str = "nf_main";
+pub const FITTER_WORKGROUP_SIZE: u32 = 64;
+
+/// Latent fitting against the decoder as a WGSL compute shader (`templates/neural_fit.wgsl`),
+/// validated by naga: per row the forward pass, Eq. 3 and ∂loss/∂latent for the first `latent`
+/// inputs. Bindings: 0 weights, 1 input rows, 2 targets (rows × 8: f·μl RGB, T RGB, R, μl), 3
+/// output rows (3 loss sums, then `latent` gradients), 4 uniform (rows, then λf/(3·batch),
+/// λt/(3·batch), λr/batch as f32 bits). The decoder has 7 outputs (f RGB, T RGB, R).
+pub fn write_wgsl_fitter(spec: &DecoderSpec, latent: usize) -> Result<String, String> {
+    let layers = layers(spec)?;
+    if *spec.widths.last().unwrap() != 7 {
+        return Err(format!("a decoder for Eq. 3 has 7 outputs (f RGB, T RGB, R), not {}", spec.widths.last().unwrap()));
+    }
+    if latent == 0 || latent > spec.widths[0] {
+        return Err(format!("a latent of {latent} in a decoder of {} inputs", spec.widths[0]));
+    }
+    let n = spec.widths.len() - 1;
+    let backward = layers
+        .iter()
+        .rev()
+        .map(|l| {
+            let act = if l.index + 1 == n { spec.output } else { spec.hidden };
+            BackLayer { index: l.index, inputs: l.inputs, outputs: l.outputs, weights: l.weights, needed_inputs: if l.index == 0 { latent } else { l.inputs }, wgsl_dact: act.wgsl_derivative("a") }
+        })
+        .collect();
+    let t = WgslFitter { source: &spec.source, inputs: spec.widths[0], latent, max_width: *spec.widths.iter().max().unwrap(), layer_count: n, outputs_per_row: 3 + latent, layers, backward };
+    let text = t.render().map_err(|e| e.to_string())?;
+    let module = naga::front::wgsl::parse_str(&text).map_err(|e| format!("generated fitting WGSL does not parse: {}", e.emit_to_string(&text)))?;
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+        .validate(&module)
+        .map_err(|e| format!("generated fitting WGSL does not validate: {}", e.emit_to_string(&text)))?;
+    Ok(text)
 }
 
 /// Entry point, bindings and workgroup size of the emitted WGSL compute shader.

@@ -21,7 +21,9 @@ use crate::energy_bound::{enforce_energy_bound, EnergyOptions, EnergyReport};
 use crate::evaluate::{decode, encode};
 use crate::loss::{eq3_loss, LossParts, LossWeights, OUTPUTS};
 use crate::mlp::Mlp;
-use crate::model::{latent_slice, latent_width, ModelWorkspace, NeuralModel, Slice};
+use crate::model::{fill_decoder_input, latent_slice, latent_width, ModelWorkspace, NeuralModel, Slice};
+use crate::wgpu_fit::WgpuLatentGradients;
+use uplift_engines::stack_kernel::Engine;
 use crate::trainer::jitter;
 use uplift_base::rng::mix64;
 use std::collections::HashMap;
@@ -213,13 +215,26 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps, eta {eta} · {msg}").unwrap());
     let (mut first_step, mut last_step) = (LossParts::default(), LossParts::default());
     let mut row_latents = vec![0.0f32; rows * latent];
+    // A generator on the wgpu engine fits there too: the decoder's forward and backward passes
+    // and Eq. 3 as emitted WGSL (wgpu_fit.rs); Adam on the groups' few latents stays here.
+    let on_wgpu = match generator.engine() {
+        Engine::Wgpu(e) => Some((e, WgpuLatentGradients::new(e, &model.decoder, latent, "the fitted decoder")?)),
+        Engine::Cpu(_) => None,
+    };
+    let mut dec_in = Vec::new();
     for step in 0..o.steps {
         let data: TrainingBatch = generator.evaluate(rows_params.clone(), mix64(o.seed ^ 0x6669_74) ^ mix64(step))?;
         for r in 0..rows {
             row_latents[r * latent..(r + 1) * latent].copy_from_slice(&z[(r / d) * latent..(r / d + 1) * latent]);
         }
         jitter(o.seed, step, rows * latent, o.jitter, &mut jit);
-        let (loss, g) = latent_gradients(&model.decoder, &row_latents, &jit, &data.features, &data.target, &data.mu_l, o.threads, &mut ws);
+        let (loss, g) = match &on_wgpu {
+            Some((e, k)) => {
+                fill_decoder_input(&row_latents, &jit, &data.features, rows, latent, &mut dec_in);
+                k.run(e, &dec_in, &data.target, &data.mu_l, LossWeights::PAPER)?
+            }
+            None => latent_gradients(&model.decoder, &row_latents, &jit, &data.features, &data.target, &data.mu_l, o.threads, &mut ws),
+        };
         if step == 0 {
             first_step = loss;
         }

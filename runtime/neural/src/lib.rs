@@ -25,3 +25,4 @@ pub mod shipped_decoder;
 pub mod shipped_sampler;
 pub mod trainer;
 pub mod weights;
+pub mod wgpu_fit;

@@ -41,6 +41,10 @@ pub struct FitArgs {
     pub seed: u64,
     #[arg(long)]
     pub threads: Option<usize>,
+    /// The engine: the CPU, or wgpu — the reference data by the stack's WGSL kernels, the
+    /// decoder's forward and backward passes and Eq. 3 by the emitted WGSL (docs/scale.md).
+    #[arg(long, value_enum, default_value_t = super::eval::Engine::Cpu)]
+    pub engine: super::eval::Engine,
     /// Fit only this shard of a folder of materials: `i/N`, or `auto` in a Slurm job array or
     /// a Kubernetes indexed job (docs/scale.md).
     #[arg(long)]
@@ -56,7 +60,11 @@ pub fn run(args: FitArgs) -> Result<(), String> {
     }
     let stack = args.stack.load()?;
     let model = load_model(&args.decoder, &stack)?;
-    let generator = DataGenerator::new(CpuEngine::with_threads(threads)?, &stack, ClassMix::All, args.seed)?;
+    let engine: uplift_engines::prepared_kernel::AnyEngine = match args.engine {
+        super::eval::Engine::Cpu => CpuEngine::with_threads(threads)?.into(),
+        super::eval::Engine::Wgpu => uplift_engines::wgpu_engine::WgpuEngine::new()?.into(),
+    };
+    let generator = DataGenerator::new(engine, &stack, ClassMix::All, args.seed)?;
     let mut o = FitOptions { steps: args.steps, directions: args.directions, levels: args.levels, seed: args.seed, threads, ..Default::default() };
     if args.no_energy_bound {
         o.energy = None;

@@ -26,6 +26,7 @@ mod kill_resume;
 mod layering;
 mod materials;
 mod neural_decoder;
+mod neural_fit_wgpu;
 mod neural_gradients;
 mod neural_inference;
 mod neural_training;
