@@ -5,7 +5,9 @@
 //! Both evaluate exactly the trainer's forward pass: per layer y = W·x + b, then the activation.
 //! The WGSL is parsed and validated by naga before it is returned. For latent fitting on a GPU,
 //! `templates/neural_fit.wgsl` adds the paper's Eq. 3 and the backward pass to the decoder's
-//! input (`write_wgsl_fitter`).
+//! input (`write_wgsl_fitter`); for training, `templates/neural_train.wgsl` runs the encoder and
+//! decoder forward and backward, sums the weight gradients and steps Adam, all on the device
+//! (`write_wgsl_trainer`).
 
 use askama::Template;
 
@@ -159,6 +161,135 @@ pub fn write_wgsl_fitter(spec: &DecoderSpec, latent: usize) -> Result<String, St
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
         .validate(&module)
         .map_err(|e| format!("generated fitting WGSL does not validate: {}", e.emit_to_string(&text)))?;
+    Ok(text)
+}
+
+/// One layer of the training shader, with where its input, output and ∂loss/∂s live in a
+/// row's activations and deltas.
+struct TrainLayer {
+    net: &'static str,
+    index: usize,
+    inputs: usize,
+    outputs: usize,
+    /// Offsets in the weight buffer (the encoder's parameters, then the decoder's).
+    weights: usize,
+    biases: usize,
+    act_in: usize,
+    act_out: usize,
+    delta: usize,
+    /// The decoder's first layer: its input is assembled from the latent, the jitter and the
+    /// features.
+    decoder_input: bool,
+    needed_inputs: usize,
+    wgsl_act: String,
+    wgsl_dact: String,
+}
+
+#[derive(Template)]
+#[template(path = "neural_train.wgsl", escape = "none")]
+struct WgslTrainer<'a> {
+    source: &'a str,
+    parameters: usize,
+    latent: usize,
+    row_stride: usize,
+    acts: usize,
+    deltas: usize,
+    max_width: usize,
+    latent_at: usize,
+    output_at: usize,
+    encoder_params: usize,
+    decoder_params: usize,
+    total_params: usize,
+    forward: Vec<TrainLayer>,
+    backward: Vec<TrainLayer>,
+}
+
+/// Entry points and workgroup size of the emitted training shader.
+pub const TRAINER_ROWS_ENTRY_POINT: &str = "nt_rows";
+pub const TRAINER_GRADS_ENTRY_POINT: &str = "nt_grads";
+pub const TRAINER_ADAM_ENTRY_POINT: &str = "nt_adam";
+pub const TRAINER_WORKGROUP_SIZE: u32 = 64;
+
+/// The training step of `encoder` (parameters → latent) and `decoder` (latent + 9 direction
+/// features → 7 outputs) as a WGSL shader of three entry points (`templates/neural_train.wgsl`;
+/// its header documents the bindings), validated by naga. Row layout of the input buffer:
+/// the encoder's inputs, the latent's jitter, the 9 features, f·μl RGB, T RGB, R and μl.
+pub fn write_wgsl_trainer(encoder: &DecoderSpec, decoder: &DecoderSpec, source: &str) -> Result<String, String> {
+    let (enc, dec) = (layers(encoder)?, layers(decoder)?);
+    let latent = *encoder.widths.last().unwrap();
+    let parameters = encoder.widths[0];
+    if decoder.widths[0] != latent + 9 || *decoder.widths.last().unwrap() != 7 {
+        return Err(format!("an encoder of widths {:?} and a decoder of widths {:?} do not make the paper's model (latent + 9 features → 7)", encoder.widths, decoder.widths));
+    }
+    let ne = encoder.params.len();
+    let (mut acts, mut deltas) = (parameters, 0);
+    let mut forward = Vec::new();
+    let (ne_layers, nd_layers) = (enc.len(), dec.len());
+    for (net, list, base, spec, count) in [("encoder", &enc, 0, encoder, ne_layers), ("decoder", &dec, ne, decoder, nd_layers)] {
+        for l in list.iter() {
+            let act = if l.index + 1 == count { spec.output } else { spec.hidden };
+            let decoder_input = net == "decoder" && l.index == 0;
+            let act_in = if decoder_input {
+                acts += l.inputs;
+                acts - l.inputs
+            } else if l.index == 0 {
+                0
+            } else {
+                acts - l.inputs
+            };
+            let layer = TrainLayer {
+                net,
+                index: l.index,
+                inputs: l.inputs,
+                outputs: l.outputs,
+                weights: base + l.weights,
+                biases: base + l.biases,
+                act_in,
+                act_out: acts,
+                delta: deltas,
+                decoder_input,
+                needed_inputs: match (net, l.index) {
+                    ("encoder", 0) => 0,
+                    ("decoder", 0) => latent,
+                    _ => l.inputs,
+                },
+                wgsl_act: act.wgsl("s"),
+                wgsl_dact: act.wgsl_derivative("a"),
+            };
+            acts += l.outputs;
+            deltas += l.outputs;
+            forward.push(layer);
+        }
+    }
+    let latent_at = forward[ne_layers - 1].act_out;
+    let output_at = forward.last().unwrap().act_out;
+    let backward = forward
+        .iter()
+        .rev()
+        .map(|l| TrainLayer { net: l.net, index: l.index, inputs: l.inputs, outputs: l.outputs, weights: l.weights, biases: l.biases, act_in: l.act_in, act_out: l.act_out, delta: l.delta, decoder_input: l.decoder_input, needed_inputs: l.needed_inputs, wgsl_act: l.wgsl_act.clone(), wgsl_dact: l.wgsl_dact.clone() })
+        .collect();
+    let max_width = encoder.widths.iter().chain(&decoder.widths).copied().max().unwrap();
+    let t = WgslTrainer {
+        source,
+        parameters,
+        latent,
+        row_stride: parameters + latent + 9 + 8,
+        acts,
+        deltas,
+        max_width,
+        latent_at,
+        output_at,
+        encoder_params: ne,
+        decoder_params: decoder.params.len(),
+        total_params: ne + decoder.params.len(),
+        forward,
+        backward,
+    };
+    let text = t.render().map_err(|e| e.to_string())?;
+    let module = naga::front::wgsl::parse_str(&text).map_err(|e| format!("generated training WGSL does not parse: {}", e.emit_to_string(&text)))?;
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+        .validate(&module)
+        .map_err(|e| format!("generated training WGSL does not validate: {}", e.emit_to_string(&text)))?;
     Ok(text)
 }
 

@@ -26,3 +26,4 @@ pub mod shipped_sampler;
 pub mod trainer;
 pub mod weights;
 pub mod wgpu_fit;
+pub mod wgpu_train;

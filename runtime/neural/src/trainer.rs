@@ -350,10 +350,27 @@ pub fn train_checkpointed(generator: &DataGenerator, opts: &TrainOptions, out: &
         eprintln!("resuming from {} at step {} of {}", ckpt.display(), state.step, opts.steps);
     }
     let mut clock = std::time::Instant::now();
+    // A generator on the wgpu engine trains there too: the networks and Adam's moments live on
+    // the device (wgpu_train.rs) and come back for each checkpoint.
+    let mut device = match generator.engine() {
+        uplift_engines::stack_kernel::Engine::Wgpu(e) => Some((e, crate::wgpu_train::WgpuTrainer::new(e, &state)?)),
+        uplift_engines::stack_kernel::Engine::Cpu(_) => None,
+    };
+    let mut jit = Vec::new();
     while state.step < opts.steps {
         let batch = generator.batch(state.step, opts.batch)?;
         let lr = cosine_lr(state.step, opts.steps, opts.lr_start, opts.lr_end);
-        let loss = train_step(&mut state, &batch, opts, &mut buf);
+        let loss = match &mut device {
+            Some((e, t)) => {
+                jitter(opts.seed, state.step, batch.rows * state.model.latent(), opts.jitter, &mut jit);
+                state.adam_enc.t += 1;
+                state.adam_dec.t += 1;
+                let l = t.step(e, &batch.encoded, &jit, &batch.features, &batch.target, &batch.mu_l, lr, state.adam_dec.t, LossWeights::PAPER)?;
+                state.step += 1;
+                l
+            }
+            None => train_step(&mut state, &batch, opts, &mut buf),
+        };
         if !loss.total.is_finite() {
             return Err(format!("the loss became {} at step {}", loss.total, state.step));
         }
@@ -372,6 +389,9 @@ pub fn train_checkpointed(generator: &DataGenerator, opts: &TrainOptions, out: &
         bar.set_position(state.step);
         let stop = opts.stop_after == Some(state.step) && state.step < opts.steps;
         if state.step % opts.checkpoint_every.max(1) == 0 || state.step == opts.steps || stop {
+            if let Some((e, t)) = &device {
+                t.download(e, &mut state)?;
+            }
             write_checkpoint(&ckpt, &state, generator.stack(), opts)?;
         }
         if stop {

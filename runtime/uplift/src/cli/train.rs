@@ -63,6 +63,11 @@ pub struct TrainArgs {
     /// textures); wider than the --init file's widens it (the new inputs start unused).
     #[arg(long)]
     pub latent: Option<usize>,
+    /// The engine: the CPU, or wgpu — training data by the stack's WGSL kernels, and both
+    /// networks' forward and backward passes, Eq. 3 and Adam as emitted WGSL, the weights kept
+    /// on the device between checkpoints (docs/scale.md).
+    #[arg(long, value_enum, default_value_t = super::eval::Engine::Cpu)]
+    pub engine: super::eval::Engine,
     #[command(flatten)]
     pub stack: super::StackArgs,
 }
@@ -82,7 +87,11 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
         std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
     }
     let stack = args.stack.load()?;
-    let mut generator = DataGenerator::new(CpuEngine::with_threads(threads)?, &stack, mix.clone(), args.seed)?;
+    let engine: uplift_engines::prepared_kernel::AnyEngine = match args.engine {
+        super::eval::Engine::Cpu => CpuEngine::with_threads(threads)?.into(),
+        super::eval::Engine::Wgpu => uplift_engines::wgpu_engine::WgpuEngine::new()?.into(),
+    };
+    let mut generator = DataGenerator::new(engine, &stack, mix.clone(), args.seed)?;
     let named: Vec<&str> = match &mix {
         ClassMix::All => vec![],
         ClassMix::Only(name) => vec![name.as_str()],

@@ -27,6 +27,7 @@ mod layering;
 mod materials;
 mod neural_decoder;
 mod neural_fit_wgpu;
+mod neural_train_wgpu;
 mod neural_gradients;
 mod neural_inference;
 mod neural_training;
