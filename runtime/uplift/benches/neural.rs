@@ -6,7 +6,11 @@
 //!   gradients), plus the latents' Adam update;
 //! - inference: the decoder's forward pass;
 //! - data generation: rows per second of the training-data generator (three closure kernels),
-//!   with one light direction per (parameter set, view) and with 32 (`directions_per_view`).
+//!   with one light direction per (parameter set, view) and with 32 (`directions_per_view`);
+//! - the wgpu engine (`--only wgpu`, not in the default run): a training step
+//!   (`wgpu_train::WgpuTrainer`), a fitting step's forward, Eq. 3 and backward
+//!   (`wgpu_fit::WgpuLatentGradients`) and data generation, on whatever adapter wgpu opens
+//!   (lavapipe without a GPU), its name printed.
 //!
 //! **Anchor.** PyTorch (CPU, the same threads) runs the same networks, batch and work per sample
 //! in the same run (`benches/torch/setup.sh` installs it from PyPI into `target/torch-venv`,
@@ -200,6 +204,9 @@ fn main() {
     };
 
     let wants = |what: &str| o.only.as_deref().is_none_or(|w| w == what);
+    if o.only.as_deref() == Some("wgpu") {
+        return wgpu_rates(&o, &batch);
+    }
     let opts = TrainOptions { threads: o.threads, batch: o.rows, steps: 1 << 40, ..Default::default() };
     let mut state = TrainState::new(np, LATENT, 1);
     let mut buf = StepBuffers::default();
@@ -249,4 +256,39 @@ fn main() {
         k += 1;
     });
     println!("{:<28} {:>10.0} rows/s [{:.0}–{:.0}] ({:.2}× one direction per view)", "data generation, 32 per view", g.median, g.low, g.high, g.median / r.median);
+}
+
+/// `--only wgpu`: training, fitting and data generation on the wgpu engine.
+fn wgpu_rates(o: &Options, batch: &uplift_neural::datagen::TrainingBatch) {
+    let engine = match uplift_engines::wgpu_engine::WgpuEngine::new() {
+        Ok(e) => e,
+        Err(e) => return println!("wgpu: no adapter ({e})"),
+    };
+    println!("wgpu adapter: {} ({:?}, {:?})", engine.adapter_info.name, engine.adapter_info.device_type, engine.adapter_info.backend);
+    let np = uplift_engines::stack::Stack::builtin().len();
+    let state = TrainState::new(np, LATENT, 1);
+    let mut trainer = uplift_neural::wgpu_train::WgpuTrainer::new(&engine, &state).unwrap();
+    let mut jit = Vec::new();
+    uplift_neural::trainer::jitter(1, 0, o.rows * LATENT, 0.005, &mut jit);
+    let mut t = 0u64;
+    let r = rate(o.rows, o.seconds, || {
+        t += 1;
+        trainer.step(&engine, &batch.encoded, &jit, &batch.features, &batch.target, &batch.mu_l, 1e-4, t, uplift_neural::loss::LossWeights::PAPER).unwrap();
+    });
+    println!("{:<28} {:>10.0} samples/s [{:.0}–{:.0}] (batch {}, weights and moments on the device)", "wgpu training step", r.median, r.low, r.high, o.rows);
+    let fit = uplift_neural::wgpu_fit::WgpuLatentGradients::new(&engine, &state.model.decoder, LATENT, "bench").unwrap();
+    let latents = vec![0.5f32; o.rows * LATENT];
+    let mut dec_in = Vec::new();
+    uplift_neural::model::fill_decoder_input(&latents, &jit, &batch.features, o.rows, LATENT, &mut dec_in);
+    let r = rate(o.rows, o.seconds, || {
+        fit.run(&engine, &dec_in, &batch.target, &batch.mu_l, uplift_neural::loss::LossWeights::PAPER).unwrap();
+    });
+    println!("{:<28} {:>10.0} samples/s [{:.0}–{:.0}] (forward, Eq. 3, backward to the latents; rows uploaded per step)", "wgpu latent fitting", r.median, r.low, r.high);
+    let generator = DataGenerator::new(engine, &uplift_engines::stack::Stack::builtin(), ClassMix::All, 1).unwrap();
+    let mut k = 1u64;
+    let r = rate(o.rows, o.seconds, || {
+        generator.batch(k, o.rows).unwrap();
+        k += 1;
+    });
+    println!("{:<28} {:>10.0} rows/s [{:.0}–{:.0}]", "wgpu data generation", r.median, r.low, r.high);
 }
