@@ -166,14 +166,13 @@ fn renders_sampled_by_it_have_less_error_and_converge() {
         let high = render(&Sphere::preview(), &env, &surface, &by_sampler, &o(4096, 3), None).unwrap();
         let flip_to = |img: &uplift_render::integrator::Rendering| flip_ldr(&to_display(&converged.radiance, 1.0), &to_display(&img.radiance, 1.0), 24, 24, default_pixels_per_degree()).unwrap().mean();
         let flip = flip_to(&high);
-        // The noise floor: the stack sampler's own render at another seed.
-        let floor = flip_to(&render(&Sphere::preview(), &env, &surface, &by_stack, &o(4096, 3), None).unwrap());
-        eprintln!("{name}: noise floor (the stack sampler at another seed) FLIP {floor:.4}");
         eprintln!("{name}: 16 spp squared error, sampling decoder {e_sampler:.3e}, cosine {e_cosine:.3e} (ratio {:.2}); at 4096 spp FLIP to the stack sampler's image {flip:.4}", e_cosine / e_sampler);
         assert!(e_sampler < e_cosine, "{name}: the sampling decoder's error {e_sampler:.3e} is not below the cosine lobe's {e_cosine:.3e}");
-        // At 24² under the studio's small bright lights, two 4,096-spp renders by one sampler
-        // differ by FLIP ≈ 0.010 (measured): the sampling decoder's converges to the same image
-        // when it is as close as that floor allows.
-        assert!(flip <= 0.01_f64.max(1.25 * floor) && flip <= 0.015, "{name}: at 4096 spp the sampling decoder's render is FLIP {flip:.4} from the stack sampler's (noise floor {floor:.4})");
+        // At 24² under the studio's small bright lights, two 4,096-spp renders by the stack's
+        // own sampler at two seeds differ by FLIP 0.0113–0.0114 (measured on both materials): the
+        // noise floor. The sampling decoder's render converges to the same image when it lies
+        // within 1.3× that floor (measured 0.0107 and 0.0112; a render that converged elsewhere lies
+        // far beyond).
+        assert!(flip <= 0.015, "{name}: at 4096 spp the sampling decoder's render is FLIP {flip:.4} from the stack sampler's (noise floor 0.0113)");
     }
 }
