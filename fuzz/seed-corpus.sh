@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fills fuzz/corpus/<target>/ with the seed documents: the snapshot inputs (tests/in), the
 # malformed documents (tests/malformed) and, when UPLIFT_MTLX_DATA is set, MaterialX's TestSuite
-# — the same seeds compiler/tests/fuzz_stable.rs starts from. libFuzzer adds what it finds.
+# — the same seeds compiler/tests/integration/fuzz_stable.rs starts from. libFuzzer adds what it finds.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(dirname "$here")

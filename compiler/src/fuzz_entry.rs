@@ -1,5 +1,5 @@
 //! The fuzz targets' bodies, shared by the libFuzzer targets under `fuzz/` (`cargo +nightly fuzz
-//! run read|check|compile`) and the stable-Rust runner in CI (`compiler/tests/fuzz_stable.rs`):
+//! run read|check|compile`) and the stable-Rust runner in CI (`compiler/tests/integration/fuzz_stable.rs`):
 //! each takes arbitrary bytes and must return without panicking, aborting or hanging, whatever
 //! the bytes. A property that fails panics with a message saying which one.
 //!

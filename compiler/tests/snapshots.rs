@@ -244,7 +244,7 @@ fn wgsl_semantics_snapshots() {
             Err(e) => failures.push(format!("tests/wgsl/{stem}.wgsl: the Rust writer failed: {e}")),
         }
         // `packet_*` modules are also the packet writer's (tests/out/packet/, compared with the
-        // scalar writer's by tests/rs_compile/tests/packet_vs_scalar.rs).
+        // scalar writer's by tests/rs_compile/tests/integration/packet_vs_scalar.rs).
         if stem.starts_with("packet_") {
             match uplift_compiler::backend_packet::write_packet(&module) {
                 Ok(rs) => {

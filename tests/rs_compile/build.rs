@@ -5,7 +5,7 @@
 //! `wgsl_<stem>` per `tests/out/rs_wgsl/<stem>.rs` (Rust written from plain WGSL modules that
 //! pin down WGSL semantics). A new snapshot is picked up by the next build.
 //!
-//! It also writes `$OUT_DIR/oracle.rs` for `tests/oracle_naga_rust_back.rs`: for each document of
+//! It also writes `$OUT_DIR/oracle.rs` for `tests/integration/oracle_naga_rust_back.rs`: for each document of
 //! [`ORACLE_DOCUMENTS`], the Rust that `naga-rust-back` (an independent naga → Rust writer) writes
 //! from the same naga Module as our writer, and a row function around its `mx_pattern`.
 

@@ -1,6 +1,6 @@
 // Varying `if`s for the packet writer (both sides under masks, stores blended): written as packet
 // Rust (tests/out/packet/) and by the scalar writer (the oracle), compared lane by lane in
-// tests/rs_compile/tests/packet_vs_scalar.rs on inputs where lanes take different sides.
+// tests/rs_compile/tests/integration/packet_vs_scalar.rs on inputs where lanes take different sides.
 fn branches(a: f32, b: f32) -> f32 {
     var r = b;
     if (a > 0.0) {

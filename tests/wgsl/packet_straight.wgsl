@@ -1,6 +1,6 @@
 // Straight-line functions for the packet writer (compiler/src/backend_packet.rs): written twice,
 // as packet Rust (tests/out/packet/) and by the scalar writer (tests/out/rs_wgsl/, the oracle),
-// and compared lane by lane on every SIMD level in tests/rs_compile/tests/packet_vs_scalar.rs.
+// and compared lane by lane on every SIMD level in tests/rs_compile/tests/integration/packet_vs_scalar.rs.
 fn poly(x: f32) -> f32 { return ((x * 0.5 + 1.0) * x - 2.0) / (x * x + 1.0); }
 fn shade(n: vec3<f32>, l: vec3<f32>, albedo: vec3<f32>) -> vec3<f32> {
     let nl = max(dot(normalize(n), normalize(l)), 0.0);

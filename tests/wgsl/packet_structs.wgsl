@@ -1,6 +1,6 @@
 // Structs in the packet writer (packet structs of packets, blended member-wise under masks):
 // written as packet Rust (tests/out/packet/) and by the scalar writer (the oracle), compared lane
-// by lane in tests/rs_compile/tests/packet_vs_scalar.rs.
+// by lane in tests/rs_compile/tests/integration/packet_vs_scalar.rs.
 struct Ray {
     origin: vec3<f32>,
     dir: vec3<f32>,

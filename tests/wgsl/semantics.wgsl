@@ -1,6 +1,6 @@
 // WGSL semantics the Rust writer must keep (compiler/src/backend_rust.rs), written to
 // tests/out/rs_wgsl/semantics.rs by compiler/tests/snapshots.rs and run by
-// tests/rs_compile/tests/semantics.rs. Functions only: no entry point.
+// tests/rs_compile/tests/integration/semantics.rs. Functions only: no entry point.
 
 struct Pair {
     a: f32,

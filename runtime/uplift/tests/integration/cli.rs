@@ -107,7 +107,7 @@ fn a_library_folder_adds_a_node() {
 /// Documents 20,000 elements deep (nested nodegraphs; a chain of `add` nodes), generated here,
 /// through the binary: `check`, `compile --target wgsl` and `--target rust` give a result or a
 /// positioned error, never a crash (no recursion on the input's depth; see
-/// compiler/tests/malformed.rs). `eval` runs on the nested one; on the chain it gives the exact
+/// compiler/tests/integration/malformed.rs). `eval` runs on the nested one; on the chain it gives the exact
 /// sum too (measured: 10,000 for 0.5 + 19,999 × 0.5), but lavapipe takes ≈ 150 s to compile a
 /// 20,000-node shader, too long for the suite.
 #[test]

@@ -166,7 +166,7 @@ fn shipped_kernels_run_in_process_and_agree_with_wgpu() {
 /// points leaves a partial last packet. On an AVX-512 machine the test runs itself again with
 /// `UPLIFT_SIMD=avx2`; there the shipped kernel is the scalar one (AVX2 machines keep it:
 /// `packet_batch_fn!`), and the packet writer's AVX2 code is checked by
-/// tests/rs_compile/tests/packet_vs_scalar.rs and the grouped test below. A machine without
+/// tests/rs_compile/tests/integration/packet_vs_scalar.rs and the grouped test below. A machine without
 /// either runs the scalar kernel for both and says so.
 #[test]
 fn packet_kernels_agree_with_the_scalar_kernels() {

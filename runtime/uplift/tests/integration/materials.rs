@@ -686,7 +686,7 @@ fn examples_materials_compile_run_and_conserve_energy() {
 }
 
 /// Replaces (or appends) the "## Materials" section of docs/conformance.md, which
-/// compiler/tests/conformance.rs writes the rest of.
+/// compiler/tests/integration/conformance.rs writes the rest of.
 fn write_materials_section(path: &Path, section: &str) {
     let text = std::fs::read_to_string(path).unwrap_or_default();
     let head = match text.find("\n## Materials\n") {

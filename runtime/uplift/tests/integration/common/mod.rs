@@ -12,7 +12,7 @@ use uplift_engines::wgpu_engine::WgpuEngine;
 use uplift_compiler::{Compiler, OutputSelection, PatternKernel};
 
 /// The builtin library; documents may name files anywhere (the numeric tests write their images
-/// to a temporary folder; the path rules are tested in compiler/tests/malformed.rs).
+/// to a temporary folder; the path rules are tested in compiler/tests/integration/malformed.rs).
 pub fn compiler() -> &'static Compiler {
     static C: OnceLock<Compiler> = OnceLock::new();
     C.get_or_init(|| Compiler::builtin().allow_any_path())

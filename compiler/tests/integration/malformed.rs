@@ -65,6 +65,9 @@ fn parse_expectation(rel: &str, text: &str) -> Result<Expectation, String> {
     Ok(Expectation { file, line: line.parse().map_err(|_| bad())?, column: column.parse().map_err(|_| bad())?, fragments })
 }
 
+/// The child test's name as libtest knows it in this binary (tests/integration/main.rs).
+const CHILD_TEST: &str = "malformed::child_checks_one_document";
+
 /// Environment variable that makes `child_checks_one_document` check one document.
 const CHILD_ENV: &str = "UPLIFT_MALFORMED_CHILD";
 
@@ -74,7 +77,7 @@ const CHILD_ENV: &str = "UPLIFT_MALFORMED_CHILD";
 fn check_in_child(rel: &str) -> Result<Vec<Diag>, String> {
     let exe = std::env::current_exe().unwrap();
     let out = std::process::Command::new(exe)
-        .args(["child_checks_one_document", "--exact", "--nocapture", "--test-threads=1"])
+        .args([CHILD_TEST, "--exact", "--nocapture", "--test-threads=1"])
         .env(CHILD_ENV, rel)
         .output()
         .map_err(|e| format!("cannot start the child test process: {e}"))?;
@@ -207,7 +210,7 @@ fn malformed_documents_report_positioned_errors() {
         match (ok, known) {
             (true, None) => {}
             (true, Some(_)) => failures.push(format!(
-                "{rel}: the compiler now reports the expected diagnostic: remove `{stem}` from KNOWN_GAPS in compiler/tests/malformed.rs"
+                "{rel}: the compiler now reports the expected diagnostic: remove `{stem}` from KNOWN_GAPS in compiler/tests/integration/malformed.rs"
             )),
             (false, Some((_, why))) => gaps.push(format!("{rel} (known gap: {why})\n      expected {wanted}\n      got      {got}")),
             (false, None) => failures.push(format!("{rel}:\n      expected {wanted}\n      got      {got}")),
