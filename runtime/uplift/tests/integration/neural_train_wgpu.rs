@@ -12,18 +12,19 @@ use uplift_neural::loss::LossWeights;
 use uplift_neural::trainer::{jitter, train_step, StepBuffers, TrainOptions, TrainState};
 use uplift_neural::wgpu_train::WgpuTrainer;
 
-/// From one fresh initialisation, 200 steps of batches of 512 rows (every class) on each
+/// From one fresh initialisation, 200 steps of batches of 256 rows (every class) on each
 /// engine, the same batches and jitter: for the first 20 steps the losses agree within 1e-5
 /// relative (measured ≤ 6e-7: the same model, loss, gradients and Adam). After that the runs
 /// part ways as any two runs whose sums over rows differ in order do — Adam turns the last bits
 /// of near-zero gradients into whole steps: the CPU trainer on one and on two threads differ by
 /// 1.5 % at step 200 with batches of 1,024 (measured) — so the loss at step 200 is held within
-/// 2.5 % (measured +1.07 %; the issue asks 1 %, inside that spread; docs/scale.md).
+/// 2.5 % (measured +0.19 % at this batch, +1.07 % at 512; the issue asks 1 %, inside that
+/// spread; docs/scale.md).
 #[test]
 fn wgpu_training_follows_the_cpu_trainer() {
     let stack = Stack::builtin();
     let g = DataGenerator::new(CpuEngine::new().unwrap(), &Arc::clone(&stack), ClassMix::All, 5).unwrap();
-    let opts = TrainOptions { steps: 200, batch: 512, seed: 9, threads: 1, ..Default::default() };
+    let opts = TrainOptions { steps: 200, batch: 256, seed: 9, threads: 1, ..Default::default() };
     let two = TrainOptions { threads: 2, ..opts.clone() };
     let mut cpu = TrainState::new(stack.len(), 6, opts.seed);
     let (mut cpu2, mut gpu_state) = (cpu.clone(), cpu.clone());
