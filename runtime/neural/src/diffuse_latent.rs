@@ -6,13 +6,22 @@
 //! Found by a seeded search over [0, 1]^L on a fixed direction set (views cosine-weighted,
 //! lights uniform on the hemisphere): the best of [`CANDIDATES`] random latents, then
 //! coordinate refinement with halving steps. The objective is the mean luminance of f·μl plus
-//! the mean |T − 1| over the directions and channels. Deterministic for a decoder; it takes about
-//! a second, so it is computed when needed rather than stored.
+//! the mean |T − 1| over the directions and channels. Deterministic for a decoder (about a
+//! second): `uplift train` stores it in the decoder file's metadata ([`METADATA_KEY`], with the
+//! latents' storage affine, `weights::LATENT_SCALE_KEY`), and [`diffuse_latent_of`] reads it back,
+//! finding it anew only for files written before it was stored.
 
 use crate::evaluate::decode;
 use crate::features::{cosine_hemisphere, direction_features, FEATURES};
 use crate::model::NeuralModel;
+use crate::weights::TensorFile;
 use uplift_base::rng::{mix64, unit_from_key as unit};
+
+/// The decoder file's metadata entry that holds its diffuse latent (JSON: `latent`, `fcos`,
+/// `t_error`, `seed`).
+pub const METADATA_KEY: &str = "diffuse_latent";
+/// The seed the stored diffuse latent is found with.
+pub const SEED: u64 = 1;
 
 /// Random latents tried before refinement.
 pub const CANDIDATES: usize = 2048;
@@ -27,6 +36,34 @@ pub struct DiffuseLatent {
     pub fcos: f32,
     /// Mean |T − 1| over the directions and channels.
     pub t_error: f32,
+}
+
+impl DiffuseLatent {
+    /// The metadata entry's text.
+    pub fn to_metadata(&self) -> String {
+        serde_json::json!({"latent": self.latent, "fcos": self.fcos, "t_error": self.t_error, "seed": SEED}).to_string()
+    }
+
+    /// Reads a metadata entry for a decoder whose latent has `width` values.
+    pub fn from_metadata(text: &str, width: usize) -> Result<DiffuseLatent, String> {
+        let bad = |why: String| format!("metadata `{METADATA_KEY}`: {why}");
+        let v: serde_json::Value = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+        let num = |x: &serde_json::Value, what: &str| x.as_f64().map(|f| f as f32).ok_or_else(|| bad(format!("`{what}` is not a number")));
+        let latent = v["latent"].as_array().ok_or_else(|| bad("no `latent` array".into()))?.iter().map(|x| num(x, "latent")).collect::<Result<Vec<f32>, String>>()?;
+        if latent.len() != width || latent.iter().any(|x| !(0.0..=1.0).contains(x)) {
+            return Err(bad(format!("a latent of {} values in [0, 1] expected, found {:?}", width, latent)));
+        }
+        Ok(DiffuseLatent { latent, fcos: num(&v["fcos"], "fcos")?, t_error: num(&v["t_error"], "t_error")? })
+    }
+}
+
+/// The diffuse latent of the decoder in `file` (`model`, loaded from it): the stored one, or,
+/// for a file written before it was stored, found now. The flag says whether it was stored.
+pub fn diffuse_latent_of(file: &TensorFile, model: &NeuralModel<f32>) -> Result<(DiffuseLatent, bool), String> {
+    match file.metadata.get(METADATA_KEY) {
+        Some(text) => Ok((DiffuseLatent::from_metadata(text, model.latent())?, true)),
+        None => Ok((find_diffuse_latent(model, SEED), false)),
+    }
 }
 
 /// The fixed direction set: features and light cosines.

@@ -13,6 +13,13 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use uplift_engines::stack::Stack;
 
+/// Metadata entries of a decoder file: the affine from a latent's stored value v ∈ [0, 1] (a
+/// PNG16 texel, a video frame) to the latent, latent = offset + scale · (2v − 1), per latent
+/// channel (JSON arrays). The encoder's sigmoid and the fitter's clamp keep latents in [0, 1],
+/// so today's decoders record scale ½ and offset ½; export's `meta.json` copies them.
+pub const LATENT_SCALE_KEY: &str = "latent.scale";
+pub const LATENT_OFFSET_KEY: &str = "latent.offset";
+
 /// Named f32 tensors and string metadata, read from or written to one file.
 #[derive(Clone, Debug, Default)]
 pub struct TensorFile {
@@ -301,6 +308,32 @@ mod tests {
         assert_eq!(shipped.meta(STACK_KEY).unwrap(), stack.signature());
     }
 
+    /// The shipped decoder file records its latent space: the storage affine and the diffuse
+    /// latent, equal to the one the search finds for it now. `UPLIFT_BLESS=1` writes them into
+    /// the file (metadata only: the weights, and so the generated decoder, are unchanged).
+    #[test]
+    fn the_shipped_decoder_records_its_latent_space() {
+        let stack = Stack::builtin();
+        let path = Path::new(SHIPPED_DECODER);
+        let model = crate::weights::load_model(path, &stack).unwrap();
+        let mut file = TensorFile::read(path).unwrap();
+        if std::env::var_os("UPLIFT_BLESS").is_some_and(|v| !v.is_empty() && v != "0") {
+            record_latent_space(&mut file, &model);
+            file.write(path).unwrap();
+        }
+        let (d, stored) = crate::diffuse_latent::diffuse_latent_of(&file, &model).unwrap();
+        assert!(stored, "{SHIPPED_DECODER} stores no diffuse latent (UPLIFT_BLESS=1 writes it)");
+        assert_eq!(d, crate::diffuse_latent::find_diffuse_latent(&model, crate::diffuse_latent::SEED), "the stored diffuse latent is not the decoder's");
+        assert!(d.fcos < 0.01 && d.t_error < 0.05, "{d:?}");
+        assert_eq!(latent_affine(&file, model.latent()).unwrap(), (vec![0.5; model.latent()], vec![0.5; model.latent()]));
+        // Bad entries are errors naming the entry.
+        let mut bad = file.clone();
+        bad.metadata.insert(LATENT_SCALE_KEY.into(), "[0.5, 0.5]".into());
+        assert!(latent_affine(&bad, 6).unwrap_err().contains("`latent.scale`: 6 finite values"));
+        bad.metadata.insert(crate::diffuse_latent::METADATA_KEY.into(), r#"{"latent":[2,0,0,0,0,0],"fcos":0,"t_error":0}"#.into());
+        assert!(crate::diffuse_latent::diffuse_latent_of(&bad, &model).unwrap_err().contains("in [0, 1]"));
+    }
+
     /// A latent widened from 6 to 8 decodes exactly as before (the decoder's new inputs are
     /// unused) and keeps the encoder's first 6 outputs, while its 2 new outputs differ from each
     /// other (so training can tell them apart).
@@ -351,4 +384,33 @@ mod tests {
         let empty = TensorFile::from_bytes(&TensorFile::default().to_bytes().unwrap()).unwrap();
         assert!(empty.tensors.is_empty() && empty.metadata.is_empty());
     }
+}
+
+/// Records in a decoder file what a generator trained on its latents needs: the latents'
+/// storage affine and the decoder's diffuse latent (found now: about a second).
+pub fn record_latent_space(file: &mut TensorFile, model: &crate::model::NeuralModel<f32>) {
+    let l = model.latent();
+    let array = |x: f32| serde_json::to_string(&vec![x; l]).expect("floats serialise");
+    file.metadata.insert(LATENT_SCALE_KEY.into(), array(0.5));
+    file.metadata.insert(LATENT_OFFSET_KEY.into(), array(0.5));
+    let d = crate::diffuse_latent::find_diffuse_latent(model, crate::diffuse_latent::SEED);
+    file.metadata.insert(crate::diffuse_latent::METADATA_KEY.into(), d.to_metadata());
+}
+
+/// The latents' storage affine (scale, offset per channel) a decoder file records; ½ and ½
+/// for files written before it was recorded (the range their latents were fitted in).
+pub fn latent_affine(file: &TensorFile, latent: usize) -> Result<(Vec<f32>, Vec<f32>), String> {
+    let read = |key: &str| -> Result<Vec<f32>, String> {
+        match file.metadata.get(key) {
+            None => Ok(vec![0.5; latent]),
+            Some(text) => {
+                let v: Vec<f32> = serde_json::from_str(text).map_err(|e| format!("metadata `{key}`: {e}"))?;
+                if v.len() != latent || v.iter().any(|x| !x.is_finite()) {
+                    return Err(format!("metadata `{key}`: {latent} finite values expected, found {text}"));
+                }
+                Ok(v)
+            }
+        }
+    };
+    Ok((read(LATENT_SCALE_KEY)?, read(LATENT_OFFSET_KEY)?))
 }

@@ -8,8 +8,8 @@
 //! Encodings (`meta.json` records them): an encoded channel stores v ∈ [0, 1] in a 16-bit PNG,
 //! and the tokenizer convention 2v − 1 gives u ∈ [−1, 1]; the physical value is
 //! `offset + scale·u` per channel: normals (scale 1, offset 0), positions (the bounding box:
-//! scale (hi − lo)/2, offset (hi + lo)/2), latents (the decoder's range [0, 1]: scale ½,
-//! offset ½). Base colour is the material's base colour texture as stored. Floats (depth,
+//! scale (hi − lo)/2, offset (hi + lo)/2), latents (the affine the decoder file records,
+//! `latent.scale`/`latent.offset`: ½ and ½ for latents in [0, 1]). Base colour is the material's base colour texture as stored. Floats (depth,
 //! positions, normals) are also written as EXR. Frames already written (their shaded PNG, the
 //! last file of a frame, exists) are skipped, so an interrupted export resumes.
 
@@ -46,6 +46,25 @@ pub struct ExportOptions {
     pub threads: usize,
     /// Shade with the neural decoder (these weights) instead of the reference stack.
     pub neural: Option<PathBuf>,
+    /// The latents' storage affine, per latent value (scale, offset): stored v = ½ + (latent −
+    /// offset) / (2 · scale). The decoder file records it (`weights::latent_affine`).
+    pub latent_affine: LatentAffine,
+}
+
+/// Scale and offset per latent value: latent = offset + scale · (2v − 1).
+pub type LatentAffine = ([f32; 6], [f32; 6]);
+
+/// The affine of latents in [0, 1] stored as they are.
+pub const UNIT_LATENT_AFFINE: LatentAffine = ([0.5; 6], [0.5; 6]);
+
+/// The affine a decoder file records, for the export's six latent values.
+pub fn latent_affine_of(decoder: &Path) -> Result<LatentAffine, String> {
+    let file = uplift_neural::weights::TensorFile::read(decoder)?;
+    let (scale, offset) = uplift_neural::weights::latent_affine(&file, 6).map_err(|e| format!("{}: {e}", decoder.display()))?;
+    if scale.iter().any(|s| *s <= 0.0) {
+        return Err(format!("{}: metadata `{}` must be positive", decoder.display(), uplift_neural::weights::LATENT_SCALE_KEY));
+    }
+    Ok((std::array::from_fn(|k| scale[k]), std::array::from_fn(|k| offset[k])))
 }
 
 /// The enhancement Types' caption keywords (the paper augments captions with them).
@@ -166,8 +185,8 @@ pub fn export_asset(dir: &Path, mesh: &Mesh, env: &Environment, stack: &Arc<Stac
             "normal_world": {"file": "png16", "space": "world (+Y up)", "scale": [1.0, 1.0, 1.0], "offset": [0.0, 0.0, 0.0], "float": "normal_world/NNNN.exr (X, Y, Z)"},
             "position": {"file": "png16", "space": "world, normalised to the bounding box", "scale": pos_scale, "offset": pos_offset, "float": "position/NNNN.exr (X, Y, Z)"},
             "base_color": {"file": "png16", "encoding": "the material's base colour texture (textures/base_color.png) as stored, v as is (linear for uplift's materials)"},
-            "latent0": {"file": "png16", "values": "latent values 0, 1, 2", "scale": [0.5, 0.5, 0.5], "offset": [0.5, 0.5, 0.5]},
-            "latent1": {"file": "png16", "values": "latent values 3, 4, 5", "scale": [0.5, 0.5, 0.5], "offset": [0.5, 0.5, 0.5]},
+            "latent0": {"file": "png16", "values": "latent values 0, 1, 2", "scale": o.latent_affine.0[..3], "offset": o.latent_affine.1[..3]},
+            "latent1": {"file": "png16", "values": "latent values 3, 4, 5", "scale": o.latent_affine.0[3..], "offset": o.latent_affine.1[3..]},
             "mask": {"file": "png8", "encoding": "255 where the object covers the pixel centre, else 0"},
             "depth": {"file": "exr", "encoding": "distance along the view axis (channel Z), 0 where uncovered"},
             "shaded": {"file": "png8", "encoding": "path traced, Blender's AgX (closed form) to sRGB", "spp": o.spp, "bounces": o.bounces, "exposure": o.exposure, "model": if o.neural.is_some() { "neural" } else { "reference" }},
@@ -199,7 +218,7 @@ pub fn export_asset(dir: &Path, mesh: &Mesh, env: &Environment, stack: &Arc<Stac
         }
         let start = std::time::Instant::now();
         let f = intrinsic_frame(mesh, &surface, &base, cam, w, h);
-        write_intrinsics(out, k, &f, bounds)?;
+        write_intrinsics(out, k, &f, bounds, &o.latent_affine)?;
         s.seconds_intrinsic += start.elapsed().as_secs_f64();
         let start = std::time::Instant::now();
         let ro = RenderOptions { width: w, height: h, spp: o.spp, bounces: o.bounces, seed: o.orbit.seed ^ uplift_base::rng::mix64(k as u64), camera: Some(*cam), ..Default::default() };
@@ -213,7 +232,7 @@ pub fn export_asset(dir: &Path, mesh: &Mesh, env: &Environment, stack: &Arc<Stac
 }
 
 /// Writes frame `k`'s intrinsic buffers.
-fn write_intrinsics(out: &Path, k: usize, f: &IntrinsicFrame, bounds: (Vec3, Vec3)) -> Result<(), String> {
+fn write_intrinsics(out: &Path, k: usize, f: &IntrinsicFrame, bounds: (Vec3, Vec3), affine: &LatentAffine) -> Result<(), String> {
     let (w, h) = (f.width, f.height);
     let unit = |n: &Vec3| n.map(|x| 0.5 * x + 0.5);
     write_png16(&frame_path(out, "normal_camera", k, "png"), &f.normal_camera.iter().zip(&f.mask).map(|(n, &m)| if m { unit(n) } else { [0.0; 3] }).collect::<Vec<_>>(), w, h)?;
@@ -222,7 +241,8 @@ fn write_intrinsics(out: &Path, k: usize, f: &IntrinsicFrame, bounds: (Vec3, Vec
     write_png16(&frame_path(out, "position", k, "png"), &pos, w, h)?;
     write_png16(&frame_path(out, "base_color", k, "png"), &f.base_color, w, h)?;
     for t in 0..2 {
-        let v: Vec<[f32; 3]> = (0..w * h).map(|p| [0, 1, 2].map(|c| if 3 * t + c < f.latents { f.latent[p * f.latents + 3 * t + c] } else { 0.0 })).collect();
+        let stored = |c: usize, x: f32| if affine == &UNIT_LATENT_AFFINE { x } else { 0.5 + (x - affine.1[c]) / (2.0 * affine.0[c]) };
+        let v: Vec<[f32; 3]> = (0..w * h).map(|p| [0, 1, 2].map(|c| if 3 * t + c < f.latents { stored(3 * t + c, f.latent[p * f.latents + 3 * t + c]) } else { 0.0 })).collect();
         write_png16(&frame_path(out, &format!("latent{t}"), k, "png"), &v, w, h)?;
     }
     write_mask(&frame_path(out, "mask", k, "png"), &f.mask, w, h)?;

@@ -76,7 +76,7 @@ pub fn run(args: ExportArgs) -> Result<(), String> {
     let mesh = Mesh::new(gltf_input::load(&args.mesh)?.world_triangles()).map_err(|e| format!("{}: {e}", args.mesh.display()))?;
     let env = super::render::environment(&args.env)?;
     let stack = args.stack.load()?;
-    let o = ExportOptions { orbit, spp: args.spp, bounces: args.bounces, exposure: args.exposure, threads, neural: args.neural.then(|| args.decoder.clone()) };
+    let o = ExportOptions { orbit, spp: args.spp, bounces: args.bounces, exposure: args.exposure, threads, neural: args.neural.then(|| args.decoder.clone()), latent_affine: uplift::export::latent_affine_of(&args.decoder)? };
     // One material, or a folder of them (the shard's own, by folder name).
     let shard = Shard::from_arg(args.shard.as_deref())?;
     let assets: Vec<(PathBuf, PathBuf)> = if MaterialFolder::open(&args.material).is_ok() {

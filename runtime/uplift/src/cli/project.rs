@@ -44,8 +44,10 @@ pub fn run(args: ProjectArgs) -> Result<(), String> {
         "inpaint" => None,
         "diffuse" => {
             let model = uplift_neural::weights::load_model(&args.decoder, &stack)?;
-            let d = uplift_neural::diffuse_latent::find_diffuse_latent(&model, 1);
-            eprintln!("diffuse latent of {}: {:?} (mean f·cos {:.4}, mean |T − 1| {:.4})", args.decoder.display(), d.latent, d.fcos, d.t_error);
+            let file = uplift_neural::weights::TensorFile::read(&args.decoder)?;
+            let (d, stored) = uplift_neural::diffuse_latent::diffuse_latent_of(&file, &model).map_err(|e| format!("{}: {e}", args.decoder.display()))?;
+            let whence = if stored { "stored in" } else { "found for (the file does not store one)" };
+            eprintln!("diffuse latent {whence} {}: {:?} (mean f·cos {:.4}, mean |T − 1| {:.4})", args.decoder.display(), d.latent, d.fcos, d.t_error);
             Some(d.latent)
         }
         other => return Err(format!("--fill {other}: inpaint or diffuse")),

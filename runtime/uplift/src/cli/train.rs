@@ -149,6 +149,7 @@ pub fn run(args: TrainArgs) -> Result<(), String> {
     // Store the held-out table beside the training record; then the checkpoint is done with.
     let mut file = weights_file(&state, &stack, &opts, &extra_refs);
     file.metadata.insert("holdout".into(), table);
+    uplift_neural::weights::record_latent_space(&mut file, &state.model);
     file.write(&args.output)?;
     finish(&args.output);
     eprintln!("wrote {}", args.output.display());

@@ -111,7 +111,7 @@ pub(crate) fn small_export(root: &Path, name: &str, frames: usize, seed: u64) ->
     }
     let mesh_path = crate::render::write_uv_sphere_gltf(&root.join("mesh"), 16, 8);
     let mesh = uplift_render::mesh::Mesh::new(uplift_enhance::gltf_input::load(&mesh_path).unwrap().world_triangles()).unwrap();
-    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames, width: 24, height: 24, seed, ..Default::default() }, spp: 1, bounces: 1, exposure: 1.0, threads: 2, neural: None };
+    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames, width: 24, height: 24, seed, ..Default::default() }, spp: 1, bounces: 1, exposure: 1.0, threads: 2, neural: None, latent_affine: uplift::export::UNIT_LATENT_AFFINE };
     let out = root.join(name);
     uplift::export::export_asset(&material, &mesh, &uplift_render::environment::Environment::studio(), &Stack::builtin(), &out, &o, false).unwrap();
     out
@@ -127,7 +127,7 @@ fn exported_frames_reproject_and_decode_to_their_floats() {
     let mesh = uplift_render::mesh::Mesh::new(uplift_enhance::gltf_input::load(&mesh_path).unwrap().world_triangles()).unwrap();
     let stack = std::sync::Arc::new(Stack::builtin());
     let (w, h) = (48, 40);
-    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames: 3, width: w, height: h, seed: 9, ..Default::default() }, spp: 2, bounces: 1, exposure: 1.0, threads: 2, neural: None };
+    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames: 3, width: w, height: h, seed: 9, ..Default::default() }, spp: 2, bounces: 1, exposure: 1.0, threads: 2, neural: None, latent_affine: uplift::export::UNIT_LATENT_AFFINE };
     let env = uplift_render::environment::Environment::studio();
     let out = root.join("out");
     let s = uplift::export::export_asset(&material, &mesh, &env, &stack, &out, &o, false).unwrap();
