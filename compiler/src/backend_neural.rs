@@ -7,7 +7,8 @@
 //! `templates/neural_fit.wgsl` adds the paper's Eq. 3 and the backward pass to the decoder's
 //! input (`write_wgsl_fitter`); for training, `templates/neural_train.wgsl` runs the encoder and
 //! decoder forward and backward, sums the weight gradients and steps Adam, all on the device
-//! (`write_wgsl_trainer`).
+//! (`write_wgsl_trainer`), fed by `templates/neural_batch.wgsl`'s kernels, which assemble a
+//! training batch from the compiled stack kernels' outputs on the device (`write_wgsl_batch`).
 
 use askama::Template;
 
@@ -290,6 +291,37 @@ pub fn write_wgsl_trainer(encoder: &DecoderSpec, decoder: &DecoderSpec, source: 
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
         .validate(&module)
         .map_err(|e| format!("generated training WGSL does not validate: {}", e.emit_to_string(&text)))?;
+    Ok(text)
+}
+
+#[derive(Template)]
+#[template(path = "neural_batch.wgsl", escape = "none")]
+struct WgslBatch {
+    parameters: usize,
+    dir_stride: usize,
+}
+
+/// Entry points, workgroup size and direction-slot stride of the batch-assembly shader.
+pub const BATCH_SCATTER_ENTRY_POINT: &str = "nb_scatter";
+pub const BATCH_GATHER_ENTRY_POINT: &str = "nb_gather";
+pub const BATCH_SELECT_ENTRY_POINT: &str = "nb_select";
+pub const BATCH_ASSEMBLE_ENTRY_POINT: &str = "nb_assemble";
+pub const BATCH_WORKGROUP_SIZE: u32 = 64;
+pub const BATCH_DIRECTION_STRIDE: usize = 16;
+
+/// The kernels that assemble a training batch of a stack of `parameters` parameters on a
+/// device from the compiled kernels' outputs (`templates/neural_batch.wgsl`; its header
+/// documents the layouts and bindings), validated by naga. Rows come out in
+/// [`write_wgsl_trainer`]'s input layout.
+pub fn write_wgsl_batch(parameters: usize) -> Result<String, String> {
+    if parameters == 0 {
+        return Err("a stack of no parameters".into());
+    }
+    let text = WgslBatch { parameters, dir_stride: BATCH_DIRECTION_STRIDE }.render().map_err(|e| e.to_string())?;
+    let module = naga::front::wgsl::parse_str(&text).map_err(|e| format!("generated batch WGSL does not parse: {}", e.emit_to_string(&text)))?;
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+        .validate(&module)
+        .map_err(|e| format!("generated batch WGSL does not validate: {}", e.emit_to_string(&text)))?;
     Ok(text)
 }
 

@@ -113,6 +113,14 @@ impl PreparedKernel {
         }
     }
 
+    /// The wgpu pipeline, when prepared on the wgpu engine.
+    pub fn wgpu_pipeline(&self) -> Option<&WgpuPipeline> {
+        match &self.prepared {
+            Prepared::Wgpu(p) => Some(p),
+            Prepared::Cpu(_) => None,
+        }
+    }
+
     /// The offset of the output named `name` in an output row.
     pub fn output_offset(&self, name: &str) -> Option<usize> {
         self.kernel.outputs.iter().find(|o| o.name == name).map(|o| o.offset)

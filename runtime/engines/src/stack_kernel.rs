@@ -66,7 +66,18 @@ impl StackKernel {
         self.prepared.describe()
     }
 
-    fn input_offset(&self, name: &str) -> usize {
+    /// The kernel as prepared (its pipeline on the wgpu engine; its input and output strides).
+    pub fn prepared(&self) -> &PreparedKernel {
+        &self.prepared
+    }
+
+    /// Each stack parameter's input column (`Stack::parameters` order).
+    pub fn parameter_columns(&self) -> &[usize] {
+        &self.columns
+    }
+
+    /// The first input column of direction input `name` (`wv`, `wl`, `u`).
+    pub fn input_offset(&self, name: &str) -> usize {
         self.prepared.kernel.inputs.iter().find(|i| i.input.name == name).unwrap_or_else(|| panic!("uplift_stack kernel has no input `{name}`")).offset
     }
 

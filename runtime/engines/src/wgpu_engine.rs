@@ -178,28 +178,78 @@ impl WgpuEngine {
         }
         let group = d.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &p.layout, entries: &group_entries });
         let mut encoder = d.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&p.pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            // The kernel numbers points id.x + id.y × (groups in x) × WORKGROUP_SIZE.
-            let groups = (n as u64).div_ceil(WORKGROUP_SIZE as u64);
-            let max = d.limits().max_compute_workgroups_per_dimension as u64;
-            let (x, y) = if groups <= max { (groups, 1) } else { (max, groups.div_ceil(max)) };
-            if y > max {
-                return Err(format!("{n} points exceed one dispatch ({max} × {max} workgroups); split the batch"));
-            }
-            pass.dispatch_workgroups(x as u32, y as u32, 1);
-        }
+        self.record(&mut encoder, &p.pipeline, &group, n, WORKGROUP_SIZE)?;
         let result = self.submit_and_read(encoder, &outputs, out_len)?;
         Columns::from_column_major(n, p.shape.output_columns, result)
     }
 
+    /// Records into `encoder` one dispatch of a prepared kernel that reads no textures over the
+    /// caller's device buffers (the layout of `uplift_compiler::kernel`, column-major for `n`
+    /// points): so that one kernel's outputs can feed the next without leaving the device.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_kernel(&self, encoder: &mut wgpu::CommandEncoder, p: &WgpuPipeline, n: usize, geometry: &wgpu::Buffer, inputs: &wgpu::Buffer, outputs: &wgpu::Buffer) -> Result<(), String> {
+        if p.shape.texture_count > 0 {
+            return Err(format!("a kernel reading {} textures cannot run on device buffers alone", p.shape.texture_count));
+        }
+        let need = |b: &wgpu::Buffer, columns: usize, what: &str| {
+            if b.size() < (n * columns.max(1) * 4) as u64 {
+                return Err(format!("the {what} buffer holds {} bytes, fewer than {n} points × {columns} columns", b.size()));
+            }
+            Ok(())
+        };
+        need(geometry, GEOMETRY_STRIDE, "geometry")?;
+        need(inputs, p.shape.input_columns, "inputs")?;
+        need(outputs, p.shape.output_columns, "outputs")?;
+        let d = &self.device;
+        let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents: bytemuck::cast_slice(&[n as u32, 0, 0, 0]), usage: wgpu::BufferUsages::UNIFORM });
+        let mut entries = vec![
+            wgpu::BindGroupEntry { binding: BINDING_GEOMETRY, resource: geometry.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: BINDING_OUTPUTS, resource: outputs.as_entire_binding() },
+            wgpu::BindGroupEntry { binding: BINDING_PARAMS, resource: params.as_entire_binding() },
+        ];
+        if p.shape.input_columns > 0 {
+            entries.push(wgpu::BindGroupEntry { binding: BINDING_INPUTS, resource: inputs.as_entire_binding() });
+        }
+        if let Some(t) = &p.albedo_tables {
+            entries.push(wgpu::BindGroupEntry { binding: BINDING_ALBEDO_TABLES, resource: t.as_entire_binding() });
+        }
+        let group = d.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &p.layout, entries: &entries });
+        self.record(encoder, &p.pipeline, &group, n, WORKGROUP_SIZE)
+    }
+
+    /// The workgroup grid for `n` invocations in workgroups of `size`: (groups, 1) while one
+    /// dimension holds them, else (max, ⌈groups / max⌉). Every uplift shader numbers its
+    /// invocations id.x + id.y × (workgroups in x) × size.
+    pub fn grid(&self, n: usize, size: u32) -> Result<(u32, u32), String> {
+        let groups = (n as u64).div_ceil(size as u64).max(1);
+        let max = self.device.limits().max_compute_workgroups_per_dimension as u64;
+        let (x, y) = if groups <= max { (groups, 1) } else { (max, groups.div_ceil(max)) };
+        if y > max {
+            return Err(format!("{n} invocations exceed one dispatch ({max} × {max} workgroups of {size}); split the batch"));
+        }
+        Ok((x as u32, y as u32))
+    }
+
+    /// Records a compute pass of `pipeline` with bind group 0 over [`grid`](Self::grid)`(n, size)`.
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder, pipeline: &wgpu::ComputePipeline, group: &wgpu::BindGroup, n: usize, size: u32) -> Result<(), String> {
+        let (x, y) = self.grid(n, size)?;
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, group, &[]);
+        pass.dispatch_workgroups(x, y, 1);
+        Ok(())
+    }
+
     /// Finishes `encoder` with a copy of `source`'s first `size` bytes into a mappable buffer,
     /// submits it, waits, and returns those bytes as floats.
-    pub fn submit_and_read(&self, mut encoder: wgpu::CommandEncoder, source: &wgpu::Buffer, size: u64) -> Result<Vec<f32>, String> {
+    pub fn submit_and_read(&self, encoder: wgpu::CommandEncoder, source: &wgpu::Buffer, size: u64) -> Result<Vec<f32>, String> {
+        self.submit_and_read_at(encoder, source, 0, size)
+    }
+
+    /// [`submit_and_read`](Self::submit_and_read) of the `size` bytes at `offset`.
+    pub fn submit_and_read_at(&self, mut encoder: wgpu::CommandEncoder, source: &wgpu::Buffer, offset: u64, size: u64) -> Result<Vec<f32>, String> {
         let readback = self.device.create_buffer(&wgpu::BufferDescriptor { label: None, size, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
-        encoder.copy_buffer_to_buffer(source, 0, &readback, 0, size);
+        encoder.copy_buffer_to_buffer(source, offset, &readback, 0, size);
         self.queue.submit([encoder.finish()]);
         let slice = readback.slice(..);
         let (tx, rx) = std::sync::mpsc::channel();

@@ -183,8 +183,31 @@ impl TrainingClasses {
     /// The parameter rows (`tiles.len()` × the stack's parameters) of class `class` at the
     /// given (tile, cell) pairs, for generator seed `seed`.
     pub fn parameters<'e>(&self, engine: impl Into<Engine<'e>>, class: usize, seed: u64, tiles: &[u64], cells: &[u64]) -> Result<Vec<f32>, String> {
+        let n = tiles.len();
+        let np = self.stack.len();
+        match self.draw(class, seed, tiles, cells) {
+            ClassDraw::Rows(rows) => Ok(rows),
+            ClassDraw::Kernel { kernel, inputs, outputs } => {
+                let batch = PatternBatch { geometry: Geometry::default().repeated(n), inputs, textures: vec![], points_per_group: 1 };
+                let out = kernel.run(engine.into(), &batch)?;
+                let mut rows = self.stack.defaults().repeat(n);
+                for (k, o) in outputs.iter().enumerate() {
+                    if let Some(at) = o {
+                        for (r, v) in out.column(*at).iter().enumerate() {
+                            rows[r * np + k] = *v;
+                        }
+                    }
+                }
+                Ok(rows)
+            }
+        }
+    }
+
+    /// The random draws of class `class` at the given (tile, cell) pairs: its parameter rows
+    /// themselves (a uniform class), or its graph kernel's input columns (the kernel then
+    /// computes them: [`parameters`](Self::parameters) on the host, `wgpu_batch` on a device).
+    pub fn draw(&self, class: usize, seed: u64, tiles: &[u64], cells: &[u64]) -> ClassDraw<'_> {
         assert_eq!(tiles.len(), cells.len());
-        let engine: Engine<'e> = engine.into();
         let c = &self.classes[class];
         let np = self.stack.len();
         let n = tiles.len();
@@ -198,7 +221,7 @@ impl TrainingClasses {
                     let key = cell_key(t, cell);
                     out.extend(self.stack.parameters().iter().enumerate().map(|(k, p)| p.decode(uplift_base::random_scalar::uniform(key, hash_str(&p.channel), k as u64) as f32)));
                 }
-                Ok(out)
+                ClassDraw::Rows(out)
             }
             Draw::Graph { kernel, scalars, outputs } => {
                 let mut inputs = Columns::zeros(n, kernel.kernel.input_stride);
@@ -212,20 +235,19 @@ impl TrainingClasses {
                         *x = s.scalar.draw(key) as f32;
                     }
                 }
-                let batch = PatternBatch { geometry: Geometry::default().repeated(n), inputs, textures: vec![], points_per_group: 1 };
-                let out = kernel.run(engine, &batch)?;
-                let mut rows = self.stack.defaults().repeat(n);
-                for (k, o) in outputs.iter().enumerate() {
-                    if let Some(at) = o {
-                        for (r, v) in out.column(*at).iter().enumerate() {
-                            rows[r * np + k] = *v;
-                        }
-                    }
-                }
-                Ok(rows)
+                ClassDraw::Kernel { kernel, inputs, outputs }
             }
         }
     }
+}
+
+/// A class's draws for some (tile, cell) pairs ([`TrainingClasses::draw`]).
+pub enum ClassDraw<'a> {
+    /// The parameter rows (pairs × the stack's parameters).
+    Rows(Vec<f32>),
+    /// The class graph's kernel and its input columns; `outputs[k]`: the output column of stack
+    /// parameter k, if the class sets it (the stack's default otherwise).
+    Kernel { kernel: &'a PreparedKernel, inputs: Columns, outputs: &'a [Option<usize>] },
 }
 
 /// Reads one class document (`None`: it defines no `uplift_class`, a stack folder's other

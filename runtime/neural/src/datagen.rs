@@ -85,6 +85,20 @@ pub struct TrainingBatch {
     pub target: Vec<f32>,
 }
 
+/// One group's draws ([`DataGenerator::picks`]): its class, tile and cell.
+pub(crate) type GroupPick = (usize, u64, u64);
+
+/// One row's direction draws ([`DataGenerator::draw_directions`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RowDirections {
+    pub wv: [f32; 3],
+    /// The light when it is not sampled (or the sample is unusable).
+    pub wl: [f32; 3],
+    /// The stack sampler's uniforms.
+    pub u: [f32; 3],
+    pub sample: bool,
+}
+
 /// Generates training batches.
 pub struct DataGenerator {
     engine: AnyEngine,
@@ -173,6 +187,11 @@ impl DataGenerator {
         &self.sample
     }
 
+    /// The stack's `eval` kernel (wv, wl → response, throughput).
+    pub fn eval_kernel(&self) -> &StackKernel {
+        &self.eval
+    }
+
     /// The stack's `pdf` kernel (wv, wl → pdf, response, throughput).
     pub fn pdf_kernel(&self) -> &StackKernel {
         &self.pdf
@@ -190,39 +209,9 @@ impl DataGenerator {
 
     /// Batch `index` of `rows` rows (a multiple of `directions_per_view`).
     pub fn batch(&self, index: u64, rows: usize) -> Result<TrainingBatch, String> {
-        let k = self.directions_per_view.max(1);
-        if rows % k != 0 {
-            return Err(format!("a batch of {rows} rows does not hold whole groups of {k} light directions per view (--directions-per-view)"));
-        }
-        let key = mix64(self.seed ^ 0x6461_7461) ^ mix64(index.wrapping_mul(uplift_base::rng::GOLDEN_GAMMA));
-        // Rows are independent (each draws from its own key): drawn in parallel, the same
-        // rows whatever the thread count. The kernels run on the engine's threads; this part,
-        // on one thread, was a sixth of data generation.
-        let np = self.stack.len();
-        let mut factors = vec![1.0; self.classes.len()];
-        let only = match &self.mix {
-            ClassMix::All => None,
-            ClassMix::Only(name) => Some(self.classes.index_of(name)?),
-            ClassMix::Weighted(w) => {
-                for (name, f) in w {
-                    factors[self.classes.index_of(name)?] = *f;
-                }
-                if factors.iter().all(|f| *f == 0.0) {
-                    return Err("the class factors are all 0".into());
-                }
-                None
-            }
-        };
-        // Each group of k rows draws its class, tile and cell from its own key; the classes'
-        // kernels then run once per class on all of its groups.
+        let (key, k, picks) = self.picks(index, rows)?;
         let groups = rows / k;
-        let picks: Vec<(usize, u64, u64)> = (0..groups)
-            .map(|g| {
-                let rk = mix64(key.wrapping_add(g as u64));
-                let class = only.unwrap_or_else(|| self.classes.pick_weighted(unit(rk ^ 1) as f64, &factors));
-                (class, mix64(rk ^ 2) % TILES_PER_CLASS, mix64(rk ^ 3) % (TILE * TILE))
-            })
-            .collect();
+        let np = self.stack.len();
         let mut params = vec![0.0; rows * np];
         let mut classes = vec![0u8; rows];
         for c in 0..self.classes.len() {
@@ -245,6 +234,61 @@ impl DataGenerator {
         Ok(b)
     }
 
+    /// Batch `index`'s key, the rows per group (`directions_per_view`), and per group its
+    /// class, tile and cell, each group drawn from its own key.
+    pub(crate) fn picks(&self, index: u64, rows: usize) -> Result<(u64, usize, Vec<GroupPick>), String> {
+        let k = self.directions_per_view.max(1);
+        if !rows.is_multiple_of(k) {
+            return Err(format!("a batch of {rows} rows does not hold whole groups of {k} light directions per view (--directions-per-view)"));
+        }
+        let key = mix64(self.seed ^ 0x6461_7461) ^ mix64(index.wrapping_mul(uplift_base::rng::GOLDEN_GAMMA));
+        let mut factors = vec![1.0; self.classes.len()];
+        let only = match &self.mix {
+            ClassMix::All => None,
+            ClassMix::Only(name) => Some(self.classes.index_of(name)?),
+            ClassMix::Weighted(w) => {
+                for (name, f) in w {
+                    factors[self.classes.index_of(name)?] = *f;
+                }
+                if factors.iter().all(|f| *f == 0.0) {
+                    return Err("the class factors are all 0".into());
+                }
+                None
+            }
+        };
+        // Each group of k rows draws its class, tile and cell from its own key; the classes'
+        // kernels then run once per class on all of its groups.
+        let groups = rows / k;
+        let picks: Vec<GroupPick> = (0..groups)
+            .map(|g| {
+                let rk = mix64(key.wrapping_add(g as u64));
+                let class = only.unwrap_or_else(|| self.classes.pick_weighted(unit(rk ^ 1) as f64, &factors));
+                (class, mix64(rk ^ 2) % TILES_PER_CLASS, mix64(rk ^ 3) % (TILE * TILE))
+            })
+            .collect();
+        Ok((key, k, picks))
+    }
+
+    /// Per row of a batch drawn from `key` in groups of `k`: the view, a uniform light, the
+    /// sampler's three uniforms, and whether the light comes from the sampler. Rows are
+    /// independent (each draws from its own key): drawn in parallel, the same rows whatever the
+    /// thread count (on one thread this was a sixth of data generation).
+    pub(crate) fn draw_directions(&self, key: u64, rows: usize, k: usize) -> Vec<RowDirections> {
+        let mixed = self.views == ViewDistribution::Mixed;
+        (0..rows)
+            .into_par_iter()
+            .map(|r| {
+                let rk = mix64(key.wrapping_add(r as u64)) ^ 0x5eed;
+                // The view from the group's first row's key.
+                let vk = mix64(key.wrapping_add((r - r % k) as u64)) ^ 0x5eed;
+                let grazing = mixed && unit(vk ^ 12) < 0.5;
+                let wv = if grazing { uniform_cosine_view(unit(vk ^ 4), unit(vk ^ 5)) } else { cosine_view(unit(vk ^ 4), unit(vk ^ 5)) };
+                let sample = if k == 1 { unit(rk ^ 11) < 0.5 } else { r % k >= k / 2 };
+                RowDirections { wv, wl: uniform_hemisphere(unit(rk ^ 6), unit(rk ^ 7)), u: [unit(rk ^ 8), unit(rk ^ 9), unit(rk ^ 10)], sample }
+            })
+            .collect()
+    }
+
     /// Directions and reference targets for given parameter rows (rows × the stack's
     /// parameters), drawn from `key`.
     pub fn evaluate(&self, params: Vec<f32>, key: u64) -> Result<TrainingBatch, String> {
@@ -259,25 +303,11 @@ impl DataGenerator {
         let mut sampled = Vec::new();
         let mut uniform = Vec::new();
         let mut u3 = vec![[0.0f32; 3]; rows];
-        // Directions per row from the row's own key, drawn in parallel (as the parameters).
-        let mixed = self.views == ViewDistribution::Mixed;
-        let drawn: Vec<([f32; 3], [f32; 3], [f32; 3], bool)> = (0..rows)
-            .into_par_iter()
-            .map(|r| {
-                let rk = mix64(key.wrapping_add(r as u64)) ^ 0x5eed;
-                // The view from the group's first row's key.
-                let vk = mix64(key.wrapping_add((r - r % k) as u64)) ^ 0x5eed;
-                let grazing = mixed && unit(vk ^ 12) < 0.5;
-                let wv = if grazing { uniform_cosine_view(unit(vk ^ 4), unit(vk ^ 5)) } else { cosine_view(unit(vk ^ 4), unit(vk ^ 5)) };
-                let sample = if k == 1 { unit(rk ^ 11) < 0.5 } else { r % k >= k / 2 };
-                (wv, uniform_hemisphere(unit(rk ^ 6), unit(rk ^ 7)), [unit(rk ^ 8), unit(rk ^ 9), unit(rk ^ 10)], sample)
-            })
-            .collect();
-        for (r, (wv, wl, u, sample)) in drawn.into_iter().enumerate() {
-            b.wv.push(wv);
-            b.wl.push(wl);
-            u3[r] = u;
-            if sample { sampled.push(r) } else { uniform.push(r) }
+        for (r, d) in self.draw_directions(key, rows, k).into_iter().enumerate() {
+            b.wv.push(d.wv);
+            b.wl.push(d.wl);
+            u3[r] = d.u;
+            if d.sample { sampled.push(r) } else { uniform.push(r) }
         }
         b.target = vec![0.0; rows * OUTPUTS];
         // Uniformly lit rows: with groups, the first k/2 of each group, contiguous in `uniform`

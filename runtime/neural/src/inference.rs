@@ -114,15 +114,7 @@ impl WgpuDecoder {
             ],
         });
         let mut encoder = d.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            let groups = (rows as u64).div_ceil(DECODER_WORKGROUP_SIZE as u64);
-            let max = d.limits().max_compute_workgroups_per_dimension as u64;
-            let (x, y) = if groups <= max { (groups, 1) } else { (max, groups.div_ceil(max)) };
-            pass.dispatch_workgroups(x as u32, y as u32, 1);
-        }
+        engine.record(&mut encoder, &self.pipeline, &group, rows, DECODER_WORKGROUP_SIZE)?;
         engine.submit_and_read(encoder, &out, size)
     }
 }

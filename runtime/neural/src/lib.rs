@@ -25,5 +25,6 @@ pub mod shipped_decoder;
 pub mod shipped_sampler;
 pub mod trainer;
 pub mod weights;
+pub mod wgpu_batch;
 pub mod wgpu_fit;
 pub mod wgpu_train;

@@ -351,25 +351,29 @@ pub fn train_checkpointed(generator: &DataGenerator, opts: &TrainOptions, out: &
     }
     let mut clock = std::time::Instant::now();
     // A generator on the wgpu engine trains there too: the networks and Adam's moments live on
-    // the device (wgpu_train.rs) and come back for each checkpoint.
+    // the device (wgpu_train.rs) and come back for each checkpoint; each batch is assembled
+    // there from the generator's kernels (wgpu_batch.rs), so no batch crosses to the host.
     let mut device = match generator.engine() {
-        uplift_engines::stack_kernel::Engine::Wgpu(e) => Some((e, crate::wgpu_train::WgpuTrainer::new(e, &state)?)),
+        uplift_engines::stack_kernel::Engine::Wgpu(e) => Some((e, crate::wgpu_train::WgpuTrainer::new(e, &state)?, crate::wgpu_batch::DeviceBatches::new(e, generator, state.model.latent())?)),
         uplift_engines::stack_kernel::Engine::Cpu(_) => None,
     };
     let mut jit = Vec::new();
     while state.step < opts.steps {
-        let batch = generator.batch(state.step, opts.batch)?;
         let lr = cosine_lr(state.step, opts.steps, opts.lr_start, opts.lr_end);
         let loss = match &mut device {
-            Some((e, t)) => {
-                jitter(opts.seed, state.step, batch.rows * state.model.latent(), opts.jitter, &mut jit);
+            Some((e, t, batches)) => {
+                jitter(opts.seed, state.step, opts.batch * state.model.latent(), opts.jitter, &mut jit);
                 state.adam_enc.t += 1;
                 state.adam_dec.t += 1;
-                let l = t.step(e, &batch.encoded, &jit, &batch.features, &batch.target, &batch.mu_l, lr, state.adam_dec.t, LossWeights::PAPER)?;
+                let index = state.step;
+                let l = t.step_on_device(e, opts.batch, lr, state.adam_dec.t, LossWeights::PAPER, |encoder, rows| batches.record(e, generator, index, opts.batch, &jit, encoder, rows))?;
                 state.step += 1;
                 l
             }
-            None => train_step(&mut state, &batch, opts, &mut buf),
+            None => {
+                let batch = generator.batch(state.step, opts.batch)?;
+                train_step(&mut state, &batch, opts, &mut buf)
+            }
         };
         if !loss.total.is_finite() {
             return Err(format!("the loss became {} at step {}", loss.total, state.step));
@@ -389,7 +393,7 @@ pub fn train_checkpointed(generator: &DataGenerator, opts: &TrainOptions, out: &
         bar.set_position(state.step);
         let stop = opts.stop_after == Some(state.step) && state.step < opts.steps;
         if state.step % opts.checkpoint_every.max(1) == 0 || state.step == opts.steps || stop {
-            if let Some((e, t)) = &device {
+            if let Some((e, t, _)) = &device {
                 t.download(e, &mut state)?;
             }
             write_checkpoint(&ckpt, &state, generator.stack(), opts)?;

@@ -89,15 +89,7 @@ impl WgpuLatentGradients {
             ],
         });
         let mut encoder = d.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &group, &[]);
-            let groups = (rows as u64).div_ceil(FITTER_WORKGROUP_SIZE as u64);
-            let max = d.limits().max_compute_workgroups_per_dimension as u64;
-            let (x, y) = if groups <= max { (groups, 1) } else { (max, groups.div_ceil(max)) };
-            pass.dispatch_workgroups(x as u32, y as u32, 1);
-        }
+        engine.record(&mut encoder, &self.pipeline, &group, rows, FITTER_WORKGROUP_SIZE)?;
         let result = engine.submit_and_read(encoder, &out, size)?;
         let mut parts = LossParts::default();
         let mut grad = Vec::with_capacity(rows * self.latent);

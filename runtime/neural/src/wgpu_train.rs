@@ -2,7 +2,9 @@
 //! weight gradients and Adam as the WGSL the compiler emits from `templates/neural_train.wgsl`
 //! (`uplift_compiler::backend_neural::write_wgsl_trainer`). The networks' weights and Adam's
 //! moments stay on the device between steps; a step uploads its batch's rows and reads back
-//! three loss sums. The CPU trainer (`trainer::train_step`) is the oracle: the same model,
+//! three loss sums — or, with [`WgpuTrainer::step_on_device`], reads a batch that the
+//! generator's kernels assembled on the device (`wgpu_batch`), so that nothing but the loss
+//! crosses to the host. The CPU trainer (`trainer::train_step`) is the oracle: the same model,
 //! loss, jitter and Adam; [`WgpuTrainer::download`] brings the state back for checkpoints and
 //! the weights file.
 
@@ -87,7 +89,7 @@ impl WgpuTrainer {
     fn buffers(&mut self, engine: &WgpuEngine, rows: usize) {
         if self.buffers.as_ref().is_none_or(|b| b.rows != rows) {
             let d = &engine.device;
-            let make = |floats: usize, label: &str| d.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size: (floats.max(1) * 4) as u64, usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
+            let make = |floats: usize, label: &str| d.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size: (floats.max(1) * 4) as u64, usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC, mapped_at_creation: false });
             let rows_in = make(rows * (self.parameters + self.latent + 9 + 8), "rows");
             let acts = make(rows * self.acts, "activations");
             let deltas = make(rows * self.deltas, "deltas");
@@ -117,6 +119,36 @@ impl WgpuTrainer {
             packed.extend_from_slice(&target[r * OUTPUTS..(r + 1) * OUTPUTS]);
             packed.push(mu_l[r]);
         }
+        self.buffers(engine, rows);
+        let b = self.buffers.as_ref().expect("made above");
+        engine.queue.write_buffer(&b.rows_in, 0, bytemuck::cast_slice(&packed));
+        let encoder = engine.device.create_command_encoder(&Default::default());
+        self.finish_step(engine, encoder, rows, lr, t, w)
+    }
+
+    /// One step on a batch assembled on the device: `assemble` records into the step's command
+    /// encoder the writing of `rows` rows into the trainer's rows buffer (given; the layout of
+    /// [`step`](Self::step)'s packed rows), as `wgpu_batch::DeviceBatches::record` does. The
+    /// batch never leaves the device; the three loss sums come back. Returns the batch's Eq. 3.
+    pub fn step_on_device(&mut self, engine: &WgpuEngine, rows: usize, lr: f32, t: u64, w: LossWeights, assemble: impl FnOnce(&mut wgpu::CommandEncoder, &wgpu::Buffer) -> Result<(), String>) -> Result<LossParts, String> {
+        if rows == 0 {
+            return Err("a training batch of 0 rows".into());
+        }
+        self.buffers(engine, rows);
+        let b = self.buffers.as_ref().expect("made above");
+        let mut encoder = engine.device.create_command_encoder(&Default::default());
+        assemble(&mut encoder, &b.rows_in)?;
+        self.finish_step(engine, encoder, rows, lr, t, w)
+    }
+
+    /// The rows of the last step, as the kernels read them (for tests).
+    pub fn download_rows(&self, engine: &WgpuEngine) -> Result<Vec<f32>, String> {
+        let b = self.buffers.as_ref().ok_or("no step yet")?;
+        engine.submit_and_read(engine.device.create_command_encoder(&Default::default()), &b.rows_in, (b.rows * (self.parameters + self.latent + 17) * 4) as u64)
+    }
+
+    /// Records the step's three kernels after `encoder`'s batch, submits, and reads the loss.
+    fn finish_step(&mut self, engine: &WgpuEngine, mut encoder: wgpu::CommandEncoder, rows: usize, lr: f32, t: u64, w: LossWeights) -> Result<LossParts, String> {
         let (nf, nr) = (3.0 * rows as f64, rows as f64);
         // Adam's bias corrections as the CPU's Adam computes them (f32).
         let (b1, b2) = (0.9f32, 0.999f32);
@@ -125,27 +157,11 @@ impl WgpuTrainer {
         let params: [u32; 8] = [rows as u32, ((w.f / nf) as f32).to_bits(), ((w.t / nf) as f32).to_bits(), ((w.r / nr) as f32).to_bits(), (lr / c1).to_bits(), c2.sqrt().to_bits(), self.total as u32, 0];
         engine.queue.write_buffer(&self.uniform, 0, bytemuck::cast_slice(&params));
         let total = self.total;
-        self.buffers(engine, rows);
-        let b = self.buffers.as_ref().expect("made above");
-        engine.queue.write_buffer(&b.rows_in, 0, bytemuck::cast_slice(&packed));
-        let d = &engine.device;
-        let mut encoder = d.create_command_encoder(&Default::default());
-        let max = d.limits().max_compute_workgroups_per_dimension as u64;
-        let dispatch = |n: usize| {
-            let groups = (n as u64).div_ceil(TRAINER_WORKGROUP_SIZE as u64);
-            let (x, y) = if groups <= max { (groups, 1) } else { (max, groups.div_ceil(max)) };
-            (x as u32, y as u32)
-        };
+        let b = self.buffers.as_ref().expect("made by the caller");
         for (pipeline, n) in self.pipelines.iter().zip([rows, total + 3, total]) {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &b.group, &[]);
-            let (x, y) = dispatch(n);
-            pass.dispatch_workgroups(x, y, 1);
+            engine.record(&mut encoder, pipeline, &b.group, n, TRAINER_WORKGROUP_SIZE)?;
         }
-        let readback = d.create_buffer(&wgpu::BufferDescriptor { label: None, size: 12, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
-        encoder.copy_buffer_to_buffer(&self.grad, (total * 4) as u64, &readback, 0, 12);
-        let sums = read(engine, encoder, &readback)?;
+        let sums = engine.submit_and_read_at(encoder, &self.grad, (total * 4) as u64, 12)?;
         let mut parts = LossParts { total: 0.0, f: sums[0] as f64 / nf, t: sums[1] as f64 / nf, r: sums[2] as f64 / nr };
         parts.total = w.f * parts.f + w.t * parts.t + w.r * parts.r;
         Ok(parts)
@@ -154,13 +170,7 @@ impl WgpuTrainer {
     /// Copies the device's weights and Adam moments into `state` (its Adam step counts are the
     /// caller's).
     pub fn download(&self, engine: &WgpuEngine, state: &mut TrainState) -> Result<(), String> {
-        let d = &engine.device;
-        let copy = |source: &wgpu::Buffer, floats: usize| -> Result<Vec<f32>, String> {
-            let readback = d.create_buffer(&wgpu::BufferDescriptor { label: None, size: (floats * 4) as u64, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
-            let mut encoder = d.create_command_encoder(&Default::default());
-            encoder.copy_buffer_to_buffer(source, 0, &readback, 0, (floats * 4) as u64);
-            read(engine, encoder, &readback)
-        };
+        let copy = |source: &wgpu::Buffer, floats: usize| engine.submit_and_read(engine.device.create_command_encoder(&Default::default()), source, (floats * 4) as u64);
         let (weights, moments) = (copy(&self.weights, self.total)?, copy(&self.moments, 2 * self.total)?);
         let ne = self.encoder_params;
         state.model.encoder.params.copy_from_slice(&weights[..ne]);
@@ -172,21 +182,4 @@ impl WgpuTrainer {
         state.adam_dec.v.copy_from_slice(&v[ne..]);
         Ok(())
     }
-}
-
-/// Submits `encoder` and reads `readback` (a MAP_READ buffer it copied into).
-fn read(engine: &WgpuEngine, encoder: wgpu::CommandEncoder, readback: &wgpu::Buffer) -> Result<Vec<f32>, String> {
-    engine.queue.submit([encoder.finish()]);
-    let slice = readback.slice(..);
-    let (tx, rx) = std::sync::mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    engine.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| format!("wgpu poll: {e}"))?;
-    rx.recv().map_err(|e| e.to_string())?.map_err(|e| format!("map readback: {e}"))?;
-    let data = slice.get_mapped_range().map_err(|e| format!("map readback: {e}"))?;
-    let out: Vec<f32> = bytemuck::cast_slice(&data).to_vec();
-    drop(data);
-    readback.unmap();
-    Ok(out)
 }

@@ -73,3 +73,79 @@ fn wgpu_training_follows_the_cpu_trainer() {
     // the runs' parting, not by a layout error (which would be of the weights' own size).
     assert!(worst < 0.2, "the downloaded weights differ from the CPU's by {worst}");
 }
+
+/// Packs a host batch as the trainer reads it: per row the encoded parameters, the jitter, the
+/// 9 features, the 7 targets and μl.
+fn packed(b: &uplift_neural::datagen::TrainingBatch, jit: &[f32], np: usize, latent: usize) -> Vec<f32> {
+    let mut out = Vec::new();
+    for r in 0..b.rows {
+        out.extend_from_slice(&b.encoded[r * np..(r + 1) * np]);
+        out.extend_from_slice(&jit[r * latent..(r + 1) * latent]);
+        out.extend_from_slice(&b.features[r * 9..(r + 1) * 9]);
+        out.extend_from_slice(&b.target[r * 7..(r + 1) * 7]);
+        out.push(b.mu_l[r]);
+    }
+    out
+}
+
+/// Batches assembled on the device (runtime/neural/src/wgpu_batch.rs: the classes' graph
+/// kernels, the stack's sample, eval and albedo kernels and templates/neural_batch.wgsl's joins,
+/// no kernel output read back) equal the host's batches from the same generator on the same
+/// engine, value for value (the same kernels on the same inputs; the joins' sums in their
+/// order): every class, one light per view and four, several batch indices. Then training on
+/// them: `train_checkpointed` on a wgpu generator (which assembles its batches on the device)
+/// records the losses that steps on the host's batches give.
+#[test]
+fn batches_assembled_on_the_device_equal_the_hosts() {
+    let stack = Stack::builtin();
+    let np = stack.len();
+    let engine = WgpuEngine::new().unwrap_or_else(|e| panic!("{e}"));
+    let mut g = DataGenerator::new(engine.clone(), &Arc::clone(&stack), ClassMix::All, 5).unwrap();
+    let latent = 6;
+    let mut batches = uplift_neural::wgpu_batch::DeviceBatches::new(&engine, &g, latent).unwrap();
+    let stride = batches.row_stride();
+    let (mut worst, mut compared) = (0.0f32, 0usize);
+    for (k, index, rows) in [(1, 0, 512), (1, 7, 384), (4, 3, 512)] {
+        g.directions_per_view = k;
+        let host = g.batch(index, rows).unwrap();
+        let mut jit = Vec::new();
+        jitter(11, index, rows * latent, 0.02, &mut jit);
+        let want = packed(&host, &jit, np, latent);
+        let out = engine.device.create_buffer(&wgpu::BufferDescriptor { label: None, size: (rows * stride * 4) as u64, usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC, mapped_at_creation: false });
+        let mut encoder = engine.device.create_command_encoder(&Default::default());
+        batches.record(&engine, &g, index, rows, &jit, &mut encoder, &out).unwrap();
+        let got = engine.submit_and_read(encoder, &out, (rows * stride * 4) as u64).unwrap();
+        assert_eq!(got.len(), want.len());
+        for r in 0..rows {
+            for c in 0..stride {
+                let (a, b) = (want[r * stride + c], got[r * stride + c]);
+                let d = (a - b).abs() / a.abs().max(1.0);
+                assert!(d <= 2e-5, "directions per view {k}, batch {index}, row {r}, value {c}: host {a}, device {b}");
+                worst = worst.max(d);
+                compared += 1;
+            }
+        }
+    }
+    eprintln!("{compared} values of device-assembled batches: largest relative difference from the host's {worst:.1e}");
+
+    // Training on device batches: train_checkpointed on this generator, against steps on the
+    // host's batches.
+    g.directions_per_view = 1;
+    let opts = TrainOptions { steps: 6, batch: 256, seed: 9, threads: 1, log_every: 1, checkpoint_every: 1000, ..Default::default() };
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("device_batches");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let trained = uplift_neural::trainer::train_checkpointed(&g, &opts, &dir.join("model.safetensors"), false).unwrap();
+    let state = TrainState::new(np, latent, opts.seed);
+    let mut host = WgpuTrainer::new(&engine, &state).unwrap();
+    let mut jit = Vec::new();
+    for step in 0..opts.steps {
+        let b = g.batch(step, opts.batch).unwrap();
+        jitter(opts.seed, step, b.rows * latent, opts.jitter, &mut jit);
+        let lr = cosine_lr(step, opts.steps, opts.lr_start, opts.lr_end);
+        let l = host.step(&engine, &b.encoded, &jit, &b.features, &b.target, &b.mu_l, lr, step + 1, LossWeights::PAPER).unwrap();
+        let recorded = trained.history[step as usize].loss.total;
+        assert!((l.total - recorded).abs() <= 1e-5 * l.total, "step {}: host batches {} vs device batches {}", step + 1, l.total, recorded);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
