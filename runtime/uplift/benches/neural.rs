@@ -7,10 +7,11 @@
 //! - inference: the decoder's forward pass;
 //! - data generation: rows per second of the training-data generator (three closure kernels),
 //!   with one light direction per (parameter set, view) and with 32 (`directions_per_view`);
-//! - the wgpu engine (`--only wgpu`, not in the default run): a training step
+//! - the wgpu engine (`--only wgpu`, not in the default run): a training step on a host batch
 //!   (`wgpu_train::WgpuTrainer`), a fitting step's forward, Eq. 3 and backward
-//!   (`wgpu_fit::WgpuLatentGradients`) and data generation, on whatever adapter wgpu opens
-//!   (lavapipe without a GPU), its name printed.
+//!   (`wgpu_fit::WgpuLatentGradients`), data generation read back to the host, and a whole
+//!   training step as `uplift train --engine wgpu` runs it (the batch assembled on the device,
+//!   `wgpu_batch`), on whatever adapter wgpu opens (lavapipe without a GPU), its name printed.
 //!
 //! **Anchor.** PyTorch (CPU, the same threads) runs the same networks, batch and work per sample
 //! in the same run (`benches/torch/setup.sh` installs it from PyPI into `target/torch-venv`,
@@ -290,5 +291,16 @@ fn wgpu_rates(o: &Options, batch: &uplift_neural::datagen::TrainingBatch) {
         generator.batch(k, o.rows).unwrap();
         k += 1;
     });
-    println!("{:<28} {:>10.0} rows/s [{:.0}–{:.0}]", "wgpu data generation", r.median, r.low, r.high);
+    println!("{:<28} {:>10.0} rows/s [{:.0}–{:.0}] (host batches: kernel outputs read back)", "wgpu data generation", r.median, r.low, r.high);
+    // A whole training step as `uplift train --engine wgpu` runs it: the batch assembled on the
+    // device (wgpu_batch.rs) and the step on it, only draws and jitter uploaded.
+    let uplift_engines::stack_kernel::Engine::Wgpu(engine) = generator.engine() else { unreachable!("made on the wgpu engine") };
+    let mut batches = uplift_neural::wgpu_batch::DeviceBatches::new(engine, &generator, LATENT).unwrap();
+    let mut t = 0u64;
+    let r = rate(o.rows, o.seconds, || {
+        t += 1;
+        let index = t;
+        trainer.step_on_device(engine, o.rows, 1e-4, t, uplift_neural::loss::LossWeights::PAPER, |encoder, rows| batches.record(engine, &generator, index, o.rows, &jit, encoder, rows)).unwrap();
+    });
+    println!("{:<28} {:>10.0} samples/s [{:.0}–{:.0}] (batch {}: data generation and the step, on the device)", "wgpu training, device data", r.median, r.low, r.high, o.rows);
 }
