@@ -229,7 +229,7 @@ fn shade_hits(
             let key = path_key(o.seed, path.pixel);
             let (d, pdf, l) = env.sample([rand(key, pass, depth, 0), rand(key, pass, depth, 1), rand(key, pass, depth, 2)]);
             let local = hit.to_local(d);
-            let visible = pdf > 0.0 && local[2] > 1e-5 && dot(d, hit.geometric_normal) > 0.0 && scene.intersect(hit.spawn(d), d).is_none();
+            let visible = pdf > 0.0 && local[2] > 1e-5 && dot(d, hit.geometric_normal) > 0.0 && !scene.occluded(hit.spawn(d), d);
             Some(Point { path: *path, hit: *hit, key, wv, nee: (if visible { local } else { [0.0, 0.0, 1.0] }, pdf, l, visible) })
         })
         .collect();

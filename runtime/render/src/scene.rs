@@ -80,6 +80,11 @@ pub trait Scene: Sync {
     /// The nearest hit along o + t·d, t > 0.
     fn intersect(&self, o: Vec3, d: Vec3) -> Option<Hit>;
 
+    /// Whether anything lies along o + t·d, t > 0 (a shadow ray: any hit will do).
+    fn occluded(&self, o: Vec3, d: Vec3) -> bool {
+        self.intersect(o, d).is_some()
+    }
+
     /// Whether the scene is a glTF mesh, whose materials' baked normals (`normal_space`
     /// "world", surface.rs) are world-space directions of this geometry.
     fn world_space_normals(&self) -> bool {
