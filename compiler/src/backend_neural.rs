@@ -8,7 +8,9 @@
 //! input (`write_wgsl_fitter`); for training, `templates/neural_train.wgsl` runs the encoder and
 //! decoder forward and backward, sums the weight gradients and steps Adam, all on the device
 //! (`write_wgsl_trainer`), fed by `templates/neural_batch.wgsl`'s kernels, which assemble a
-//! training batch from the compiled stack kernels' outputs on the device (`write_wgsl_batch`).
+//! training batch from the compiled stack kernels' outputs on the device (`write_wgsl_batch`);
+//! a fit's step keeps its data, latents and Adam's moments there with
+//! `templates/neural_fit_step.wgsl` (`write_wgsl_fit_step`).
 
 use askama::Template;
 
@@ -322,6 +324,36 @@ pub fn write_wgsl_batch(parameters: usize) -> Result<String, String> {
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
         .validate(&module)
         .map_err(|e| format!("generated batch WGSL does not validate: {}", e.emit_to_string(&text)))?;
+    Ok(text)
+}
+
+#[derive(Template)]
+#[template(path = "neural_fit_step.wgsl", escape = "none")]
+struct WgslFitStep {
+    parameters: usize,
+    latent: usize,
+    inputs: usize,
+    row_stride: usize,
+}
+
+/// Entry points and workgroup size of the fitting step's gather and Adam kernels.
+pub const FIT_STEP_GATHER_ENTRY_POINT: &str = "nfs_gather";
+pub const FIT_STEP_ADAM_ENTRY_POINT: &str = "nfs_adam";
+pub const FIT_STEP_WORKGROUP_SIZE: u32 = 64;
+
+/// The kernels around [`write_wgsl_fitter`]'s that keep a latent fit on the device
+/// (`templates/neural_fit_step.wgsl`: the fitting kernel's rows gathered from a batch that
+/// [`write_wgsl_batch`]'s kernels assembled for a stack of `parameters` parameters, and Adam on
+/// the groups' `latent`-wide latents), validated by naga.
+pub fn write_wgsl_fit_step(parameters: usize, latent: usize) -> Result<String, String> {
+    if parameters == 0 || latent == 0 {
+        return Err(format!("a fitting step for {parameters} parameters and a latent of {latent}"));
+    }
+    let text = WgslFitStep { parameters, latent, inputs: latent + 9, row_stride: parameters + latent + 17 }.render().map_err(|e| e.to_string())?;
+    let module = naga::front::wgsl::parse_str(&text).map_err(|e| format!("generated fitting-step WGSL does not parse: {}", e.emit_to_string(&text)))?;
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+        .validate(&module)
+        .map_err(|e| format!("generated fitting-step WGSL does not validate: {}", e.emit_to_string(&text)))?;
     Ok(text)
 }
 

@@ -21,8 +21,8 @@ use crate::energy_bound::{enforce_energy_bound, EnergyOptions, EnergyReport};
 use crate::evaluate::{decode, encode};
 use crate::loss::{eq3_loss, LossParts, LossWeights, OUTPUTS};
 use crate::mlp::Mlp;
-use crate::model::{fill_decoder_input, latent_slice, latent_width, ModelWorkspace, NeuralModel, Slice};
-use crate::wgpu_fit::WgpuLatentGradients;
+use crate::model::{latent_slice, latent_width, ModelWorkspace, NeuralModel, Slice};
+use crate::wgpu_fit::DeviceFit;
 use uplift_engines::stack_kernel::Engine;
 use crate::trainer::jitter;
 use uplift_base::rng::mix64;
@@ -215,39 +215,44 @@ pub fn fit_material(model: &NeuralModel<f32>, generator: &DataGenerator, params:
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} steps, eta {eta} · {msg}").unwrap());
     let (mut first_step, mut last_step) = (LossParts::default(), LossParts::default());
     let mut row_latents = vec![0.0f32; rows * latent];
-    // A generator on the wgpu engine fits there too: the decoder's forward and backward passes
-    // and Eq. 3 as emitted WGSL (wgpu_fit.rs); Adam on the groups' few latents stays here.
-    let on_wgpu = match generator.engine() {
-        Engine::Wgpu(e) => Some((e, WgpuLatentGradients::new(e, &model.decoder, latent, "the fitted decoder")?)),
+    // A generator on the wgpu engine fits there too (wgpu_fit.rs): each step's rows assembled
+    // on the device from the groups' parameters by the same kernels, Eq. 3 and its gradient,
+    // Adam on the groups' latents — only the draws go up and the loss comes down.
+    let mut on_wgpu = match generator.engine() {
+        Engine::Wgpu(e) => Some((e, DeviceFit::new(e, generator, &model.decoder, latent, &rows_params, d, &z)?)),
         Engine::Cpu(_) => None,
     };
-    let mut dec_in = Vec::new();
     for step in 0..o.steps {
-        let data: TrainingBatch = generator.evaluate(rows_params.clone(), mix64(o.seed ^ 0x6669_74) ^ mix64(step))?;
-        for r in 0..rows {
-            row_latents[r * latent..(r + 1) * latent].copy_from_slice(&z[(r / d) * latent..(r / d + 1) * latent]);
-        }
+        let key = mix64(o.seed ^ 0x6669_74) ^ mix64(step);
         jitter(o.seed, step, rows * latent, o.jitter, &mut jit);
-        let (loss, g) = match &on_wgpu {
-            Some((e, k)) => {
-                fill_decoder_input(&row_latents, &jit, &data.features, rows, latent, &mut dec_in);
-                k.run(e, &dec_in, &data.target, &data.mu_l, LossWeights::PAPER)?
+        let lr = cosine_lr(step, o.steps, o.lr_start, o.lr_end);
+        let loss = match &mut on_wgpu {
+            Some((e, fit)) => fit.step(e, generator, key, &jit, lr, LossWeights::PAPER)?,
+            None => {
+                let data: TrainingBatch = generator.evaluate(rows_params.clone(), key)?;
+                for r in 0..rows {
+                    row_latents[r * latent..(r + 1) * latent].copy_from_slice(&z[(r / d) * latent..(r / d + 1) * latent]);
+                }
+                let (loss, g) = latent_gradients(&model.decoder, &row_latents, &jit, &data.features, &data.target, &data.mu_l, o.threads, &mut ws);
+                let mut gz = vec![0.0f32; z.len()];
+                for r in 0..rows {
+                    for k in 0..latent {
+                        gz[(r / d) * latent + k] += g[r * latent + k];
+                    }
+                }
+                adam_clamped(&mut adam, &mut z, &gz, lr);
+                loss
             }
-            None => latent_gradients(&model.decoder, &row_latents, &jit, &data.features, &data.target, &data.mu_l, o.threads, &mut ws),
         };
         if step == 0 {
             first_step = loss;
         }
         last_step = loss;
-        let mut gz = vec![0.0f32; z.len()];
-        for r in 0..rows {
-            for k in 0..latent {
-                gz[(r / d) * latent + k] += g[r * latent + k];
-            }
-        }
-        adam_clamped(&mut adam, &mut z, &gz, cosine_lr(step, o.steps, o.lr_start, o.lr_end));
         bar.inc(1);
         bar.set_message(format!("loss {:.4}", loss.total));
+    }
+    if let Some((e, fit)) = &on_wgpu {
+        z = fit.latents(e)?;
     }
     bar.finish_and_clear();
     let z_unbounded = z.clone();

@@ -52,6 +52,8 @@ struct Buffers {
     table: wgpu::Buffer,
     /// Inputs and outputs of the sample, eval and albedo kernels.
     kernel_io: [(wgpu::Buffer, wgpu::Buffer); 3],
+    /// Whether `params` holds rows given to `set_parameters` (not a drawn batch's).
+    given: bool,
 }
 
 fn pipeline(engine: &WgpuEngine, module: &wgpu::ShaderModule, entry: &str) -> wgpu::ComputePipeline {
@@ -131,6 +133,7 @@ impl DeviceBatches {
             sel: make(rows * 4, "sampled responses"),
             table: make(self.table.len() + rows * self.latent, "encoding and jitter"),
             kernel_io,
+            given: false,
         });
     }
 
@@ -140,16 +143,58 @@ impl DeviceBatches {
     /// floats per row). The host's part: the draws, uploaded; nothing is read back.
     #[allow(clippy::too_many_arguments)]
     pub fn record(&mut self, engine: &WgpuEngine, generator: &DataGenerator, index: u64, rows: usize, jitter: &[f32], encoder: &mut wgpu::CommandEncoder, out: &wgpu::Buffer) -> Result<(), String> {
+        self.check(rows, jitter, out)?;
+        let (key, k, picks) = generator.picks(index, rows)?;
+        self.buffers(engine, generator, rows);
+        self.buffers.as_mut().expect("made above").given = false;
+        self.record_parameters(engine, generator, &picks, k, rows, encoder)?;
+        self.record_rows(engine, generator, key, k, rows, jitter, encoder, out)
+    }
+
+    /// Sets the parameter rows (rows × the stack's parameters) that [`record_evaluation`]
+    /// evaluates: uploaded once, kept on the device for every evaluation after (a fit's groups).
+    ///
+    /// [`record_evaluation`]: Self::record_evaluation
+    pub fn set_parameters(&mut self, engine: &WgpuEngine, generator: &DataGenerator, params: &[f32]) -> Result<(), String> {
+        let rows = params.len() / self.parameters;
+        if rows == 0 || params.len() != rows * self.parameters {
+            return Err(format!("{} parameter values are not whole rows of {}", params.len(), self.parameters));
+        }
+        self.buffers(engine, generator, rows);
+        let b = self.buffers.as_mut().expect("made above");
+        engine.queue.write_buffer(&b.params, 0, bytemuck::cast_slice(params));
+        b.given = true;
+        Ok(())
+    }
+
+    /// Records into `encoder` what `generator.evaluate(params, key)` computes for the parameter
+    /// rows of [`set_parameters`](Self::set_parameters) — directions drawn from `key`, one light
+    /// per view — written into `out` in the trainer's input layout with the jitter `jitter`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_evaluation(&mut self, engine: &WgpuEngine, generator: &DataGenerator, key: u64, rows: usize, jitter: &[f32], encoder: &mut wgpu::CommandEncoder, out: &wgpu::Buffer) -> Result<(), String> {
+        self.check(rows, jitter, out)?;
+        if self.buffers.as_ref().is_none_or(|b| b.rows != rows || !b.given) {
+            return Err(format!("no parameter rows set for an evaluation of {rows} rows"));
+        }
+        self.record_rows(engine, generator, key, 1, rows, jitter, encoder, out)
+    }
+
+    fn check(&self, rows: usize, jitter: &[f32], out: &wgpu::Buffer) -> Result<(), String> {
         if rows == 0 || jitter.len() != rows * self.latent {
             return Err(format!("a batch of {rows} rows with {} jitter values (a latent of {})", jitter.len(), self.latent));
         }
         if out.size() < (rows * self.row_stride() * 4) as u64 {
             return Err(format!("the rows buffer holds {} bytes, fewer than {rows} rows of {} floats", out.size(), self.row_stride()));
         }
-        let (key, k, picks) = generator.picks(index, rows)?;
+        Ok(())
+    }
+
+    /// The parameter rows of a batch whose groups of `k` rows drew `picks`: the stack's
+    /// defaults, a uniform class's rows as drawn, a graph class's inputs through its kernel and
+    /// nb_scatter.
+    fn record_parameters(&self, engine: &WgpuEngine, generator: &DataGenerator, picks: &[crate::datagen::GroupPick], k: usize, rows: usize, encoder: &mut wgpu::CommandEncoder) -> Result<(), String> {
         let np = self.parameters;
-        self.buffers(engine, generator, rows);
-        let b = self.buffers.as_ref().expect("made above");
+        let b = self.buffers.as_ref().expect("made by the caller");
         let (d, q) = (&engine.device, &engine.queue);
         let init = |contents: &[u8], usage: wgpu::BufferUsages| d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents, usage });
         let uniform = |v: &[u32]| init(bytemuck::cast_slice(v), wgpu::BufferUsages::UNIFORM);
@@ -201,6 +246,22 @@ impl DeviceBatches {
             let g = group(&self.scatter, &[(0, &class_out), (1, &entries_buf), (2, &map_buf), (3, &b.params), (4, &u)]);
             engine.record(encoder, &self.scatter, &g, entries.len() / 2, BATCH_WORKGROUP_SIZE)?;
         }
+        Ok(())
+    }
+
+    /// The rows from the parameter rows on the device: directions drawn from `key` in groups
+    /// of `k`, the stack's kernels, the joins.
+    #[allow(clippy::too_many_arguments)]
+    fn record_rows(&self, engine: &WgpuEngine, generator: &DataGenerator, key: u64, k: usize, rows: usize, jitter: &[f32], encoder: &mut wgpu::CommandEncoder, out: &wgpu::Buffer) -> Result<(), String> {
+        let b = self.buffers.as_ref().expect("made by the caller");
+        let (d, q) = (&engine.device, &engine.queue);
+        let init = |contents: &[u8], usage: wgpu::BufferUsages| d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents, usage });
+        let uniform = |v: &[u32]| init(bytemuck::cast_slice(v), wgpu::BufferUsages::UNIFORM);
+        let group = |p: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
+            let layout = p.get_bind_group_layout(0);
+            let entries: Vec<wgpu::BindGroupEntry> = buffers.iter().map(|(binding, b)| wgpu::BindGroupEntry { binding: *binding, resource: b.as_entire_binding() }).collect();
+            d.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &layout, entries: &entries })
+        };
 
         // The directions, the encoding table and the jitter.
         let mut dirs = vec![0.0f32; rows * BATCH_DIRECTION_STRIDE];

@@ -9,9 +9,10 @@
 //!   with one light direction per (parameter set, view) and with 32 (`directions_per_view`);
 //! - the wgpu engine (`--only wgpu`, not in the default run): a training step on a host batch
 //!   (`wgpu_train::WgpuTrainer`), a fitting step's forward, Eq. 3 and backward
-//!   (`wgpu_fit::WgpuLatentGradients`), data generation read back to the host, and a whole
-//!   training step as `uplift train --engine wgpu` runs it (the batch assembled on the device,
-//!   `wgpu_batch`), on whatever adapter wgpu opens (lavapipe without a GPU), its name printed.
+//!   (`wgpu_fit::WgpuLatentGradients`), a whole fitting step as `uplift fit --engine wgpu` runs
+//!   it (`wgpu_fit::DeviceFit`), data generation read back to the host, and a whole training step
+//!   as `uplift train --engine wgpu` runs it (the batch assembled on the device, `wgpu_batch`),
+//!   on whatever adapter wgpu opens (lavapipe without a GPU), its name printed.
 //!
 //! **Anchor.** PyTorch (CPU, the same threads) runs the same networks, batch and work per sample
 //! in the same run (`benches/torch/setup.sh` installs it from PyPI into `target/torch-venv`,
@@ -284,8 +285,25 @@ fn wgpu_rates(o: &Options, batch: &uplift_neural::datagen::TrainingBatch) {
     let r = rate(o.rows, o.seconds, || {
         fit.run(&engine, &dec_in, &batch.target, &batch.mu_l, uplift_neural::loss::LossWeights::PAPER).unwrap();
     });
-    println!("{:<28} {:>10.0} samples/s [{:.0}–{:.0}] (forward, Eq. 3, backward to the latents; rows uploaded per step)", "wgpu latent fitting", r.median, r.low, r.high);
+    println!("{:<28} {:>10.0} samples/s [{:.0}–{:.0}] (forward, Eq. 3, backward to the latents; rows uploaded per step)", "wgpu latent gradients", r.median, r.low, r.high);
     let generator = DataGenerator::new(engine, &uplift_engines::stack::Stack::builtin(), ClassMix::All, 1).unwrap();
+    {
+        // A whole fitting step as `uplift fit --engine wgpu` runs it (DeviceFit): the rows
+        // assembled on the device from the groups' parameters, Eq. 3 and its gradient, Adam.
+        let uplift_engines::stack_kernel::Engine::Wgpu(engine) = generator.engine() else { unreachable!("made on the wgpu engine") };
+        let per_group = 8;
+        let stack = generator.stack();
+        let params = stack.defaults().repeat(o.rows);
+        let z0 = vec![0.5f32; o.rows / per_group * LATENT];
+        let mut fit = uplift_neural::wgpu_fit::DeviceFit::new(engine, &generator, &state.model.decoder, LATENT, &params[..o.rows / per_group * per_group * stack.len()], per_group, &z0).unwrap();
+        let rows = o.rows / per_group * per_group;
+        let mut step = 0u64;
+        let r = rate(rows, o.seconds, || {
+            step += 1;
+            fit.step(engine, &generator, step, &jit[..rows * LATENT], 1e-3, uplift_neural::loss::LossWeights::PAPER).unwrap();
+        });
+        println!("{:<28} {:>10.0} samples/s [{:.0}–{:.0}] (batch {rows}: data, Eq. 3, gradient and Adam on the device)", "wgpu fitting step", r.median, r.low, r.high);
+    }
     let mut k = 1u64;
     let r = rate(o.rows, o.seconds, || {
         generator.batch(k, o.rows).unwrap();
