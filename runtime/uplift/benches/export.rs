@@ -56,7 +56,7 @@ fn main() {
     let material = root.join("material");
     fitted_material(&material, &stack);
     let exported = root.join("exported");
-    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames, width: size, height: size, ..Default::default() }, spp: 1, bounces: 0, exposure: 1.0, threads, neural: None, latent_affine: uplift::export::UNIT_LATENT_AFFINE };
+    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames, width: size, height: size, ..Default::default() }, spp: 1, bounces: 0, exposure: 1.0, threads, neural: None, latent_affine: uplift::export::UNIT_LATENT_AFFINE, mp4: false };
     uplift::export::export_asset(&material, &mesh, &env, &stack, &exported, &o, false).unwrap();
     let start = Instant::now();
     let s = uplift::project::project(&exported, &asset, &stack, &root.join("projected"), &uplift::project::ProjectOptions { width: 512, height: 512, material: 0, fill: None }).unwrap();

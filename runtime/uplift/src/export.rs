@@ -49,6 +49,8 @@ pub struct ExportOptions {
     /// The latents' storage affine, per latent value (scale, offset): stored v = ½ + (latent −
     /// offset) / (2 · scale). The decoder file records it (`weights::latent_affine`).
     pub latent_affine: LatentAffine,
+    /// Also encode each PNG modality as a lossless MP4 (`video.rs`; needs ffmpeg).
+    pub mp4: bool,
 }
 
 /// Scale and offset per latent value: latent = offset + scale · (2v − 1).
@@ -159,6 +161,9 @@ pub fn export_asset(dir: &Path, mesh: &Mesh, env: &Environment, stack: &Arc<Stac
         return Err(format!("{}: {} latent values per texel; the export writes two RGB latent videos (6 values)", folder.latent_path().display(), surface.latents));
     }
     let base = base_color_texture(dir, &surface)?;
+    if o.mp4 {
+        crate::video::check_ffmpeg()?;
+    }
     let cams = orbit(&o.orbit)?;
     let (w, h) = (o.orbit.width, o.orbit.height);
     let bounds = mesh.bounds();
@@ -193,6 +198,15 @@ pub fn export_asset(dir: &Path, mesh: &Mesh, env: &Environment, stack: &Arc<Stac
         },
         "intrinsic_sampling": "one ray through each pixel centre, no filtering",
     });
+    let mut meta_json = meta_json;
+    if o.mp4 {
+        meta_json["videos"] = serde_json::json!({
+            "files": crate::video::VIDEO_MODALITIES.map(|m| format!("{m}.mp4")),
+            "codec": "H.264 (libx264rgb), lossless (qp 0), RGB 8 bits per channel, no chroma subsampling",
+            "fps": crate::video::VIDEO_FPS,
+            "values": "8-bit modalities as their PNGs (the mask replicated into R, G, B); 16-bit ones rounded, v8 = round(v16 / 257): v = v8 / 255 decodes through the same affines",
+        });
+    }
     write_atomically(&out.join("meta.json"), json(&meta_json)?.as_bytes()).map_err(|e| format!("{}: {e}", out.join("meta.json").display()))?;
     let kind = (meta.kind as usize).min(5);
     let mut words: Vec<&str> = TYPE_KEYWORDS[kind].to_vec();
@@ -228,6 +242,13 @@ pub fn export_asset(dir: &Path, mesh: &Mesh, env: &Environment, stack: &Arc<Stac
         bar.inc(1);
     }
     bar.finish_and_clear();
+    if o.mp4 {
+        for name in crate::video::VIDEO_MODALITIES {
+            if !crate::video::video_path(out, name).is_file() {
+                crate::video::write_modality_video(out, name, cams.len())?;
+            }
+        }
+    }
     Ok(s)
 }
 

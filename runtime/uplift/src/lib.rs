@@ -15,3 +15,4 @@ pub mod pack;
 pub mod project;
 pub mod shard;
 pub mod slurm;
+pub mod video;

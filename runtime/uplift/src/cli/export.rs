@@ -54,6 +54,10 @@ pub struct ExportArgs {
     pub decoder: PathBuf,
     #[arg(long)]
     pub threads: Option<usize>,
+    /// Also write each PNG modality as a lossless 8-bit RGB MP4 (`<modality>.mp4`; needs
+    /// ffmpeg, Debian's package).
+    #[arg(long)]
+    pub mp4: bool,
     /// Export only this shard of a folder of materials: `i/N`, or `auto` in a Slurm job array
     /// or a Kubernetes indexed job (docs/scale.md).
     #[arg(long)]
@@ -76,7 +80,7 @@ pub fn run(args: ExportArgs) -> Result<(), String> {
     let mesh = Mesh::new(gltf_input::load(&args.mesh)?.world_triangles()).map_err(|e| format!("{}: {e}", args.mesh.display()))?;
     let env = super::render::environment(&args.env)?;
     let stack = args.stack.load()?;
-    let o = ExportOptions { orbit, spp: args.spp, bounces: args.bounces, exposure: args.exposure, threads, neural: args.neural.then(|| args.decoder.clone()), latent_affine: uplift::export::latent_affine_of(&args.decoder)? };
+    let o = ExportOptions { orbit, spp: args.spp, bounces: args.bounces, exposure: args.exposure, threads, neural: args.neural.then(|| args.decoder.clone()), latent_affine: uplift::export::latent_affine_of(&args.decoder)?, mp4: args.mp4 };
     // One material, or a folder of them (the shard's own, by folder name).
     let shard = Shard::from_arg(args.shard.as_deref())?;
     let assets: Vec<(PathBuf, PathBuf)> = if MaterialFolder::open(&args.material).is_ok() {

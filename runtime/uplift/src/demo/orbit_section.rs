@@ -45,7 +45,7 @@ pub fn orbit_section(material: &Path, name: &str, work: &Path, img: &Path, stack
     let env = Environment::studio();
     let frames = 8;
     let exported = work.join("export").join(name);
-    let o = crate::export::ExportOptions { orbit: OrbitOptions { frames, width: size, height: size, seed, ..Default::default() }, spp, bounces: 3, exposure: 1.0, threads, neural: None, latent_affine: crate::export::UNIT_LATENT_AFFINE };
+    let o = crate::export::ExportOptions { orbit: OrbitOptions { frames, width: size, height: size, seed, ..Default::default() }, spp, bounces: 3, exposure: 1.0, threads, neural: None, latent_affine: crate::export::UNIT_LATENT_AFFINE, mp4: false };
     crate::export::export_asset(material, &mesh, &env, stack, &exported, &o, false)?;
     let mut strips = Vec::new();
     for m in SHOWN {

@@ -111,7 +111,7 @@ pub(crate) fn small_export(root: &Path, name: &str, frames: usize, seed: u64) ->
     }
     let mesh_path = crate::render::write_uv_sphere_gltf(&root.join("mesh"), 16, 8);
     let mesh = uplift_render::mesh::Mesh::new(uplift_enhance::gltf_input::load(&mesh_path).unwrap().world_triangles()).unwrap();
-    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames, width: 24, height: 24, seed, ..Default::default() }, spp: 1, bounces: 1, exposure: 1.0, threads: 2, neural: None, latent_affine: uplift::export::UNIT_LATENT_AFFINE };
+    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames, width: 24, height: 24, seed, ..Default::default() }, spp: 1, bounces: 1, exposure: 1.0, threads: 2, neural: None, latent_affine: uplift::export::UNIT_LATENT_AFFINE, mp4: false };
     let out = root.join(name);
     uplift::export::export_asset(&material, &mesh, &uplift_render::environment::Environment::studio(), &Stack::builtin(), &out, &o, false).unwrap();
     out
@@ -127,7 +127,7 @@ fn exported_frames_reproject_and_decode_to_their_floats() {
     let mesh = uplift_render::mesh::Mesh::new(uplift_enhance::gltf_input::load(&mesh_path).unwrap().world_triangles()).unwrap();
     let stack = std::sync::Arc::new(Stack::builtin());
     let (w, h) = (48, 40);
-    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames: 3, width: w, height: h, seed: 9, ..Default::default() }, spp: 2, bounces: 1, exposure: 1.0, threads: 2, neural: None, latent_affine: uplift::export::UNIT_LATENT_AFFINE };
+    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames: 3, width: w, height: h, seed: 9, ..Default::default() }, spp: 2, bounces: 1, exposure: 1.0, threads: 2, neural: None, latent_affine: uplift::export::UNIT_LATENT_AFFINE, mp4: false };
     let env = uplift_render::environment::Environment::studio();
     let out = root.join("out");
     let s = uplift::export::export_asset(&material, &mesh, &env, &stack, &out, &o, false).unwrap();
@@ -198,4 +198,56 @@ fn exported_frames_reproject_and_decode_to_their_floats() {
         assert!(std::fs::read(p(&out)).unwrap() == std::fs::read(p(&again)).unwrap(), "{name}.{ext} differs between two exports");
     }
     let _ = std::fs::remove_dir_all(&root);
+}
+
+/// `--mp4`: every PNG modality's video decodes (ffmpeg, back to raw RGB) to its frames exactly
+/// — the 8-bit PNGs as they are, the 16-bit ones rounded to v16 / 257 (computed here from the
+/// PNGs, not with uplift's conversion) — `meta.json` names the videos, and a second export
+/// writes identical bytes. Needs ffmpeg (Debian's; .ci/run installs it).
+#[test]
+fn mp4_videos_decode_losslessly_to_the_frames() {
+    if !std::process::Command::new("sh").arg("-c").arg("command -v ffmpeg").output().is_ok_and(|o| o.status.success()) {
+        return uplift_base::test_env::skip("mp4_videos", "ffmpeg is not installed (Debian: apt install ffmpeg; .ci/run does)");
+    }
+    let root = Path::new(env!("CARGO_TARGET_TMPDIR")).join("export_mp4");
+    let _ = std::fs::remove_dir_all(&root);
+    let material = root.join("material");
+    fitted_material(&material);
+    let mesh_path = crate::render::write_uv_sphere_gltf(&root.join("mesh"), 16, 8);
+    let mesh = uplift_render::mesh::Mesh::new(uplift_enhance::gltf_input::load(&mesh_path).unwrap().world_triangles()).unwrap();
+    let (w, h, frames) = (30usize, 22usize, 3usize);
+    let export = |name: &str| {
+        let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames, width: w, height: h, seed: 2, ..Default::default() }, spp: 1, bounces: 1, exposure: 1.0, threads: 2, neural: None, latent_affine: uplift::export::UNIT_LATENT_AFFINE, mp4: true };
+        let out = root.join(name);
+        uplift::export::export_asset(&material, &mesh, &uplift_render::environment::Environment::studio(), &Stack::builtin(), &out, &o, false).unwrap();
+        out
+    };
+    let (a, b) = (export("a"), export("b"));
+    let meta: serde_json::Value = serde_json::from_slice(&std::fs::read(a.join("meta.json")).unwrap()).unwrap();
+    let listed: Vec<String> = meta["videos"]["files"].as_array().expect("meta.json lists the videos").iter().map(|v| v.as_str().unwrap().to_string()).collect();
+    assert_eq!(listed.len(), 8);
+    let mut covered = 0;
+    for file in &listed {
+        let modality = file.trim_end_matches(".mp4");
+        let video = a.join(file);
+        assert_eq!(std::fs::read(&video).unwrap(), std::fs::read(b.join(file)).unwrap(), "{file}: a second export differs");
+        let decoded = std::process::Command::new("ffmpeg").args(["-hide_banner", "-loglevel", "error", "-i"]).arg(&video).args(["-f", "rawvideo", "-pix_fmt", "rgb24", "pipe:1"]).output().unwrap();
+        assert!(decoded.status.success(), "{file}: {}", String::from_utf8_lossy(&decoded.stderr));
+        assert_eq!(decoded.stdout.len(), frames * w * h * 3, "{file}: {} bytes decoded", decoded.stdout.len());
+        for k in 0..frames {
+            let img = image::open(a.join(modality).join(format!("{k:04}.png"))).unwrap();
+            let want: Vec<u8> = match img.color() {
+                image::ColorType::Rgb16 => img.to_rgb16().into_raw().iter().map(|&v| (v as f64 / 257.0).round() as u8).collect(),
+                image::ColorType::L8 => img.to_luma8().into_raw().iter().flat_map(|&v| [v; 3]).collect(),
+                image::ColorType::Rgb8 => img.to_rgb8().into_raw(),
+                c => panic!("{modality}: a frame of colour type {c:?}"),
+            };
+            let got = &decoded.stdout[k * w * h * 3..(k + 1) * w * h * 3];
+            let differ = want.iter().zip(got).filter(|(x, y)| x != y).count();
+            assert_eq!(differ, 0, "{file} frame {k}: {differ} of {} values differ from the frame", want.len());
+            covered += want.iter().filter(|&&v| v > 0).count();
+        }
+    }
+    assert!(covered > 1000, "only {covered} non-zero values: the frames would prove little");
+    std::fs::remove_dir_all(&root).unwrap();
 }

@@ -56,7 +56,7 @@ fn round_trip(name: &str, mesh_path: &Path, root: &Path, size: usize) {
     let asset = uplift_enhance::gltf_input::load(mesh_path).unwrap();
     let mesh = uplift_render::mesh::Mesh::new(asset.world_triangles()).unwrap();
     let exported = root.join(format!("{name}_export"));
-    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames: 12, width: 160, height: 160, seed: 4, ..Default::default() }, spp: 1, bounces: 0, exposure: 1.0, threads: 2, neural: None, latent_affine: uplift::export::UNIT_LATENT_AFFINE };
+    let o = uplift::export::ExportOptions { orbit: OrbitOptions { frames: 12, width: 160, height: 160, seed: 4, ..Default::default() }, spp: 1, bounces: 0, exposure: 1.0, threads: 2, neural: None, latent_affine: uplift::export::UNIT_LATENT_AFFINE, mp4: false };
     uplift::export::export_asset(&material, &mesh, &Environment::studio(), &stack, &exported, &o, false).unwrap();
     let projected = root.join(format!("{name}_projected"));
     let s = uplift::project::project(&exported, &asset, &stack, &projected, &uplift::project::ProjectOptions { width: size, height: size, material: 0, fill: None }).unwrap();
