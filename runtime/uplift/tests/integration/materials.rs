@@ -603,7 +603,7 @@ fn cpu_agrees(materials: &[Material], prepared: &[CpuKernel]) {
                 ClosureContext::Sample => stratified_u(n, 8, &mut rng),
                 _ => (0..n)
                     .map(|_| {
-                        let (z, phi) = (rng.range(0.0, 1.0) as f64, rng.range(0.0, 6.283) as f64);
+                        let (z, phi) = (rng.range(0.0, 1.0) as f64, rng.range(0.0, std::f32::consts::TAU) as f64);
                         let r = (1.0 - z * z).sqrt();
                         [(r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32]
                     })
