@@ -13,6 +13,7 @@ pub mod demo;
 pub mod export;
 pub mod pack;
 pub mod project;
+pub mod seams;
 pub mod shard;
 pub mod slurm;
 pub mod video;

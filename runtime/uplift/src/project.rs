@@ -11,8 +11,9 @@
 //! the depth); sample the frames bilinearly, weight by cos^[`COS_POWER`] of the view angle and
 //! average the views. Then, within each UV chart (the rasterised texels), the projected region is
 //! eroded by [`ERODE`] texels (its border is where views disagree) and every texel without a
-//! value is filled by inpainting (repeated averaging of its filled 8-neighbours: convex
-//! combinations of projected latents, so the fill creates no energy the projected texels lack)
+//! value is filled by inpainting (repeated averaging of its filled 8-neighbours and, at a chart's
+//! border, of its partners across the UV seam, `seams.rs`: convex combinations of projected
+//! latents, so the fill creates no energy the projected texels lack)
 //! or, with `fill`, given the decoder's diffuse latent (the base colour is inpainted either way),
 //! and a gutter of [`GUTTER`] texels is dilated outside the charts (bilinear lookups at chart
 //! edges read no background).
@@ -64,6 +65,8 @@ pub struct ProjectSummary {
     pub in_charts: usize,
     pub projected: usize,
     pub filled: usize,
+    /// Chart-border texels linked across a UV seam (seams.rs).
+    pub seam_texels: usize,
     pub seconds: f64,
 }
 
@@ -212,7 +215,10 @@ pub fn project(generated: &Path, asset: &GltfAsset, stack: &Stack, out: &Path, o
     }
     // Inpaint the rest of each chart, then dilate a gutter outside the charts.
     let mut state: Vec<u8> = (0..n).map(|t| if value[t].is_some() { 1 } else { 0 }).collect(); // 1 projected, 2 filled, 3 gutter
-    let grow = |value: &mut Vec<Option<[f32; 9]>>, state: &mut Vec<u8>, allowed: &dyn Fn(usize) -> bool, mark: u8, passes: usize| {
+    // Inpainting crosses seams: the texels on a seam's two sides are neighbours (seams.rs).
+    let partners = crate::seams::seam_partners(&bake.covered, &bake.position, w, h);
+    let seam_links = partners.iter().filter(|p| !p.is_empty()).count();
+    let grow = |value: &mut Vec<Option<[f32; 9]>>, state: &mut Vec<u8>, allowed: &dyn Fn(usize) -> bool, mark: u8, passes: usize, seams: bool| {
         for _ in 0..passes {
             let snapshot = value.clone();
             let mut changed = false;
@@ -222,14 +228,14 @@ pub fn project(generated: &Path, asset: &GltfAsset, stack: &Stack, out: &Path, o
                 }
                 let (x, y) = ((t % w) as i64, (t / w) as i64);
                 let (mut s, mut c) = ([0.0f32; 9], 0.0f32);
-                for (dx, dy) in NB8 {
-                    if inside(x + dx, y + dy) {
-                        if let Some(v) = snapshot[((y + dy) as usize) * w + (x + dx) as usize] {
-                            for i in 0..9 {
-                                s[i] += v[i];
-                            }
-                            c += 1.0;
+                let grid = NB8.iter().filter(|(dx, dy)| inside(x + dx, y + dy)).map(|(dx, dy)| ((y + dy) as usize) * w + (x + dx) as usize);
+                let across: &[u32] = if seams { &partners[t] } else { &[] };
+                for u in grid.chain(across.iter().map(|&u| u as usize)) {
+                    if let Some(v) = snapshot[u] {
+                        for i in 0..9 {
+                            s[i] += v[i];
                         }
+                        c += 1.0;
                     }
                 }
                 if c > 0.0 {
@@ -243,9 +249,9 @@ pub fn project(generated: &Path, asset: &GltfAsset, stack: &Stack, out: &Path, o
             }
         }
     };
-    grow(&mut value, &mut state, &|t| bake.covered[t], 2, w + h);
+    grow(&mut value, &mut state, &|t| bake.covered[t], 2, w + h, true);
     let filled = state.iter().filter(|&&s| s == 2).count();
-    grow(&mut value, &mut state, &|t| !bake.covered[t], 3, GUTTER);
+    grow(&mut value, &mut state, &|t| !bake.covered[t], 3, GUTTER, false);
     // Texels still empty (another chart's gutter never reached them): the mean projected value.
     let mean = {
         let mut s = [0.0f32; 9];
@@ -306,12 +312,12 @@ pub fn project(generated: &Path, asset: &GltfAsset, stack: &Stack, out: &Path, o
     uplift_render::image_files::write_png(&out.join("textures").join("base_color.png"), &values.iter().flat_map(|v| [to8(v[6]), to8(v[7]), to8(v[8])]).collect::<Vec<_>>(), w, h)?;
     let colours = [[0u8, 0, 0], [40, 200, 60], [230, 160, 30], [60, 90, 220]];
     uplift_render::image_files::write_png(&out.join("coverage.png"), &state.iter().flat_map(|&s| colours[s as usize]).collect::<Vec<_>>(), w, h)?;
-    let summary = ProjectSummary { texels: n, in_charts: bake.covered.iter().filter(|&&c| c).count(), projected, filled, seconds: start.elapsed().as_secs_f64() };
+    let summary = ProjectSummary { texels: n, in_charts: bake.covered.iter().filter(|&&c| c).count(), projected, filled, seam_texels: seam_links, seconds: start.elapsed().as_secs_f64() };
     let record = serde_json::json!({
         "format": 1,
         "generated": generated.display().to_string(),
         "mesh": asset.path.display().to_string(),
-        "texels": summary.texels, "in_charts": summary.in_charts, "projected": summary.projected, "filled": summary.filled,
+        "texels": summary.texels, "in_charts": summary.in_charts, "projected": summary.projected, "filled": summary.filled, "seam_texels": summary.seam_texels,
         "frames": cams.len(),
         "settings": {"min_cos": MIN_COS, "cos_power": COS_POWER, "depth_edge": DEPTH_EDGE, "erode": ERODE, "gutter": GUTTER},
         "coverage_png": "green: projected, orange: inpainted inside a chart, blue: gutter, black: empty",
