@@ -160,11 +160,7 @@ pub fn write_wgsl_fitter(spec: &DecoderSpec, latent: usize) -> Result<String, St
         .collect();
     let t = WgslFitter { source: &spec.source, inputs: spec.widths[0], latent, max_width: *spec.widths.iter().max().unwrap(), layer_count: n, outputs_per_row: 3 + latent, layers, backward };
     let text = t.render().map_err(|e| e.to_string())?;
-    let module = naga::front::wgsl::parse_str(&text).map_err(|e| format!("generated fitting WGSL does not parse: {}", e.emit_to_string(&text)))?;
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
-        .validate(&module)
-        .map_err(|e| format!("generated fitting WGSL does not validate: {}", e.emit_to_string(&text)))?;
-    Ok(text)
+    validated(text, "fitting")
 }
 
 /// One layer of the training shader, with where its input, output and ∂loss/∂s live in a
@@ -289,10 +285,15 @@ pub fn write_wgsl_trainer(encoder: &DecoderSpec, decoder: &DecoderSpec, source: 
         backward,
     };
     let text = t.render().map_err(|e| e.to_string())?;
-    let module = naga::front::wgsl::parse_str(&text).map_err(|e| format!("generated training WGSL does not parse: {}", e.emit_to_string(&text)))?;
+    validated(text, "training")
+}
+
+/// `text`, the emitted WGSL of a `what` shader, once naga has parsed and validated it.
+fn validated(text: String, what: &str) -> Result<String, String> {
+    let module = naga::front::wgsl::parse_str(&text).map_err(|e| format!("generated {what} WGSL does not parse: {}", e.emit_to_string(&text)))?;
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
         .validate(&module)
-        .map_err(|e| format!("generated training WGSL does not validate: {}", e.emit_to_string(&text)))?;
+        .map_err(|e| format!("generated {what} WGSL does not validate: {}", e.emit_to_string(&text)))?;
     Ok(text)
 }
 
@@ -320,11 +321,7 @@ pub fn write_wgsl_batch(parameters: usize) -> Result<String, String> {
         return Err("a stack of no parameters".into());
     }
     let text = WgslBatch { parameters, dir_stride: BATCH_DIRECTION_STRIDE }.render().map_err(|e| e.to_string())?;
-    let module = naga::front::wgsl::parse_str(&text).map_err(|e| format!("generated batch WGSL does not parse: {}", e.emit_to_string(&text)))?;
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
-        .validate(&module)
-        .map_err(|e| format!("generated batch WGSL does not validate: {}", e.emit_to_string(&text)))?;
-    Ok(text)
+    validated(text, "batch")
 }
 
 #[derive(Template)]
@@ -350,11 +347,7 @@ pub fn write_wgsl_fit_step(parameters: usize, latent: usize) -> Result<String, S
         return Err(format!("a fitting step for {parameters} parameters and a latent of {latent}"));
     }
     let text = WgslFitStep { parameters, latent, inputs: latent + 9, row_stride: parameters + latent + 17 }.render().map_err(|e| e.to_string())?;
-    let module = naga::front::wgsl::parse_str(&text).map_err(|e| format!("generated fitting-step WGSL does not parse: {}", e.emit_to_string(&text)))?;
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
-        .validate(&module)
-        .map_err(|e| format!("generated fitting-step WGSL does not validate: {}", e.emit_to_string(&text)))?;
-    Ok(text)
+    validated(text, "fitting-step")
 }
 
 /// Entry point, bindings and workgroup size of the emitted WGSL compute shader.
@@ -411,9 +404,5 @@ pub fn write_wgsl_decoder(spec: &DecoderSpec) -> Result<String, String> {
     let layers = layers(spec)?;
     let t = WgslDecoder { source: &spec.source, inputs: spec.widths[0], outputs: *spec.widths.last().unwrap(), max_width: *spec.widths.iter().max().unwrap(), layers };
     let text = t.render().map_err(|e| e.to_string())?;
-    let module = naga::front::wgsl::parse_str(&text).map_err(|e| format!("generated decoder WGSL does not parse: {}", e.emit_to_string(&text)))?;
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
-        .validate(&module)
-        .map_err(|e| format!("generated decoder WGSL does not validate: {}", e.emit_to_string(&text)))?;
-    Ok(text)
+    validated(text, "decoder")
 }

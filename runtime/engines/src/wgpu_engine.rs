@@ -161,22 +161,7 @@ impl WgpuEngine {
         let inputs = buf(inputs.data(), wgpu::BufferUsages::STORAGE);
         let out_len = (n * p.shape.output_columns) as u64 * 4;
         let outputs = d.create_buffer(&wgpu::BufferDescriptor { label: None, size: out_len, usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC, mapped_at_creation: false });
-        let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents: bytemuck::cast_slice(&[n as u32, 0, 0, 0]), usage: wgpu::BufferUsages::UNIFORM });
-        let mut group_entries = vec![
-            wgpu::BindGroupEntry { binding: BINDING_GEOMETRY, resource: geometry.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: BINDING_OUTPUTS, resource: outputs.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: BINDING_PARAMS, resource: params.as_entire_binding() },
-        ];
-        if p.shape.input_columns > 0 {
-            group_entries.push(wgpu::BindGroupEntry { binding: BINDING_INPUTS, resource: inputs.as_entire_binding() });
-        }
-        for (k, v) in views.iter().enumerate() {
-            group_entries.push(wgpu::BindGroupEntry { binding: BINDING_FIRST_TEXTURE + k as u32, resource: wgpu::BindingResource::TextureView(v) });
-        }
-        if let Some(t) = &p.albedo_tables {
-            group_entries.push(wgpu::BindGroupEntry { binding: BINDING_ALBEDO_TABLES, resource: t.as_entire_binding() });
-        }
-        let group = d.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &p.layout, entries: &group_entries });
+        let group = self.kernel_group(p, n, &geometry, &inputs, &outputs, views);
         let mut encoder = d.create_command_encoder(&Default::default());
         self.record(&mut encoder, &p.pipeline, &group, n, WORKGROUP_SIZE)?;
         let result = self.submit_and_read(encoder, &outputs, out_len)?;
@@ -200,8 +185,14 @@ impl WgpuEngine {
         need(geometry, GEOMETRY_STRIDE, "geometry")?;
         need(inputs, p.shape.input_columns, "inputs")?;
         need(outputs, p.shape.output_columns, "outputs")?;
-        let d = &self.device;
-        let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents: bytemuck::cast_slice(&[n as u32, 0, 0, 0]), usage: wgpu::BufferUsages::UNIFORM });
+        let group = self.kernel_group(p, n, geometry, inputs, outputs, &[]);
+        self.record(encoder, &p.pipeline, &group, n, WORKGROUP_SIZE)
+    }
+
+    /// A compiled kernel's bind group over `n` points: its geometry, inputs (bound when it has
+    /// input columns), outputs, point count, textures and albedo tables.
+    fn kernel_group(&self, p: &WgpuPipeline, n: usize, geometry: &wgpu::Buffer, inputs: &wgpu::Buffer, outputs: &wgpu::Buffer, views: &[wgpu::TextureView]) -> wgpu::BindGroup {
+        let params = self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents: bytemuck::cast_slice(&[n as u32, 0, 0, 0]), usage: wgpu::BufferUsages::UNIFORM });
         let mut entries = vec![
             wgpu::BindGroupEntry { binding: BINDING_GEOMETRY, resource: geometry.as_entire_binding() },
             wgpu::BindGroupEntry { binding: BINDING_OUTPUTS, resource: outputs.as_entire_binding() },
@@ -210,11 +201,20 @@ impl WgpuEngine {
         if p.shape.input_columns > 0 {
             entries.push(wgpu::BindGroupEntry { binding: BINDING_INPUTS, resource: inputs.as_entire_binding() });
         }
+        for (k, v) in views.iter().enumerate() {
+            entries.push(wgpu::BindGroupEntry { binding: BINDING_FIRST_TEXTURE + k as u32, resource: wgpu::BindingResource::TextureView(v) });
+        }
         if let Some(t) = &p.albedo_tables {
             entries.push(wgpu::BindGroupEntry { binding: BINDING_ALBEDO_TABLES, resource: t.as_entire_binding() });
         }
-        let group = d.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &p.layout, entries: &entries });
-        self.record(encoder, &p.pipeline, &group, n, WORKGROUP_SIZE)
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &p.layout, entries: &entries })
+    }
+
+    /// A bind group of whole buffers at their bindings in `layout` (the small joining shaders'
+    /// groups: `(binding, buffer)` pairs).
+    pub fn bind_buffers(&self, layout: &wgpu::BindGroupLayout, buffers: &[(u32, &wgpu::Buffer)]) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = buffers.iter().map(|(binding, b)| wgpu::BindGroupEntry { binding: *binding, resource: b.as_entire_binding() }).collect();
+        self.device.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout, entries: &entries })
     }
 
     /// The workgroup grid for `n` invocations in workgroups of `size`: (groups, 1) while one

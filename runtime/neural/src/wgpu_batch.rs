@@ -199,11 +199,7 @@ impl DeviceBatches {
         let init = |contents: &[u8], usage: wgpu::BufferUsages| d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents, usage });
         let uniform = |v: &[u32]| init(bytemuck::cast_slice(v), wgpu::BufferUsages::UNIFORM);
         let storage = |v: &[u8]| init(if v.is_empty() { &[0; 4] } else { v }, wgpu::BufferUsages::STORAGE);
-        let group = |p: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
-            let layout = p.get_bind_group_layout(0);
-            let entries: Vec<wgpu::BindGroupEntry> = buffers.iter().map(|(binding, b)| wgpu::BindGroupEntry { binding: *binding, resource: b.as_entire_binding() }).collect();
-            d.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &layout, entries: &entries })
-        };
+        let group = |p: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| engine.bind_buffers(&p.get_bind_group_layout(0), buffers);
 
         // The parameters: the stack's defaults, a uniform class's rows as drawn, a graph
         // class's inputs through its kernel and nb_scatter.
@@ -257,11 +253,7 @@ impl DeviceBatches {
         let (d, q) = (&engine.device, &engine.queue);
         let init = |contents: &[u8], usage: wgpu::BufferUsages| d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents, usage });
         let uniform = |v: &[u32]| init(bytemuck::cast_slice(v), wgpu::BufferUsages::UNIFORM);
-        let group = |p: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| {
-            let layout = p.get_bind_group_layout(0);
-            let entries: Vec<wgpu::BindGroupEntry> = buffers.iter().map(|(binding, b)| wgpu::BindGroupEntry { binding: *binding, resource: b.as_entire_binding() }).collect();
-            d.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout: &layout, entries: &entries })
-        };
+        let group = |p: &wgpu::ComputePipeline, buffers: &[(u32, &wgpu::Buffer)]| engine.bind_buffers(&p.get_bind_group_layout(0), buffers);
 
         // The directions, the encoding table and the jitter.
         let mut dirs = vec![0.0f32; rows * BATCH_DIRECTION_STRIDE];

@@ -190,10 +190,7 @@ impl DeviceFit {
         let d = &engine.device;
         let mut encoder = d.create_command_encoder(&Default::default());
         self.batches.record_evaluation(engine, generator, key, rows, jitter, &mut encoder, &self.batch_rows)?;
-        let group = |layout: &wgpu::BindGroupLayout, buffers: &[(u32, &wgpu::Buffer)]| {
-            let entries: Vec<wgpu::BindGroupEntry> = buffers.iter().map(|(binding, b)| wgpu::BindGroupEntry { binding: *binding, resource: b.as_entire_binding() }).collect();
-            d.create_bind_group(&wgpu::BindGroupDescriptor { label: None, layout, entries: &entries })
-        };
+        let group = |layout: &wgpu::BindGroupLayout, buffers: &[(u32, &wgpu::Buffer)]| engine.bind_buffers(layout, buffers);
         let g = group(&self.gather.get_bind_group_layout(0), &[(0, &self.batch_rows), (1, &self.latents), (2, &self.input), (3, &self.target), (4, &self.step_uniform)]);
         engine.record(&mut encoder, &self.gather, &g, rows, FIT_STEP_WORKGROUP_SIZE)?;
         let g = group(&self.gradients.layout, &[(0, &self.gradients.weights), (1, &self.input), (2, &self.target), (3, &self.output), (4, &self.fit_uniform)]);

@@ -141,12 +141,6 @@ impl WgpuTrainer {
         self.finish_step(engine, encoder, rows, lr, t, w)
     }
 
-    /// The rows of the last step, as the kernels read them (for tests).
-    pub fn download_rows(&self, engine: &WgpuEngine) -> Result<Vec<f32>, String> {
-        let b = self.buffers.as_ref().ok_or("no step yet")?;
-        engine.submit_and_read(engine.device.create_command_encoder(&Default::default()), &b.rows_in, (b.rows * (self.parameters + self.latent + 17) * 4) as u64)
-    }
-
     /// Records the step's three kernels after `encoder`'s batch, submits, and reads the loss.
     fn finish_step(&mut self, engine: &WgpuEngine, mut encoder: wgpu::CommandEncoder, rows: usize, lr: f32, t: u64, w: LossWeights) -> Result<LossParts, String> {
         let (nf, nr) = (3.0 * rows as f64, rows as f64);
