@@ -21,6 +21,7 @@ mod enhance;
 mod export;
 mod glints;
 mod grazing_views;
+mod hostile;
 mod iridescence;
 mod kill_resume;
 mod layering;

@@ -1,0 +1,1 @@
+//! Hostile inputs: args (issue 46).

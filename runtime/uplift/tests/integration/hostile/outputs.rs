@@ -1,0 +1,1 @@
+//! Hostile inputs: outputs (issue 46).

@@ -1,0 +1,1 @@
+//! Hostile inputs: paths (issue 46).

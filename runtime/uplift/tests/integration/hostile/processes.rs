@@ -1,0 +1,1 @@
+//! Hostile inputs: processes (issue 46).

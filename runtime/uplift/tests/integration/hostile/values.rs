@@ -1,0 +1,1 @@
+//! Hostile inputs: values (issue 46).
