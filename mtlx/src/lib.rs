@@ -5,6 +5,7 @@
 
 pub mod diagnostic;
 pub mod document;
+pub mod file_access;
 pub mod library;
 pub mod position;
 pub mod reader;
@@ -16,9 +17,10 @@ pub mod value;
 
 pub use diagnostic::{has_errors, Diagnostic, Severity};
 pub use document::{Document, Element, ElementId};
+pub use file_access::{FileAccess, OutsideInput, UriTarget};
 pub use position::SourcePos;
 pub use library::Library;
-pub use reader::{read_file, read_str, without_includes};
+pub use reader::{read_file, read_file_with, read_str, read_str_with, without_includes};
 pub use writer::{write_file, write_string};
 pub use schema::{NodeDef, PortDef};
 pub use types::DataType;

@@ -5,7 +5,7 @@
 
 use crate::diagnostic::Diagnostic;
 use crate::document::Document;
-use crate::reader::{read_file, read_str};
+use crate::reader::read_str;
 use std::path::{Path, PathBuf};
 
 include!(concat!(env!("OUT_DIR"), "/builtin_library.rs"));
@@ -82,7 +82,8 @@ impl Library {
         for f in files_under(dir) {
             match f.extension().and_then(|e| e.to_str()) {
                 Some("mtlx") => {
-                    let (doc, diags) = read_file(&f);
+                    // A library file may include what lies in its library folder.
+                    let (doc, diags) = crate::reader::read_file_with(&f, &crate::FileAccess::within(vec![dir.to_path_buf()]));
                     self.documents.push(doc);
                     self.diagnostics.extend(diags);
                 }
@@ -97,6 +98,17 @@ impl Library {
             }
         }
     }
+}
+
+/// The builtin library document an include names, as `(path under libraries/, text)`: `href`'s
+/// path itself (`uplift/uplift_defs.mtlx`, as MaterialX names library files relative to its
+/// search path) or what follows its last `libraries/` (`../../mtlx/libraries/uplift/uplift_defs.mtlx`,
+/// as a rule written in the repository names it).
+pub fn builtin_document(href: &str) -> Option<(&'static str, &'static str)> {
+    let parts: Vec<&str> = href.split(['/', '\\']).filter(|p| !p.is_empty() && *p != ".").collect();
+    let start = parts.iter().rposition(|p| *p == "libraries").map_or(0, |i| i + 1);
+    let tail = parts[start..].join("/");
+    BUILTIN_FILES.iter().find(|(path, _)| path.ends_with(".mtlx") && *path == tail).copied()
 }
 
 /// Folders named by `MATERIALX_SEARCH_PATH`.

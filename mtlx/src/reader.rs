@@ -5,6 +5,7 @@
 
 use crate::diagnostic::Diagnostic;
 use crate::document::{Document, ElementId};
+use crate::file_access::FileAccess;
 use crate::position::SourcePos;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -12,12 +13,32 @@ use std::sync::Arc;
 /// Root attributes that MaterialX copies onto the children of an included document.
 const INHERITED_ROOT_ATTRIBUTES: [&str; 4] = ["fileprefix", "geomprefix", "colorspace", "namespace"];
 
-/// Reads a document from a file; the file's path names every position.
+/// Reads a document from a file; the file's path names every position. Its includes lie in its
+/// folder (or are library documents): [`read_file_with`] the default [`FileAccess`].
 pub fn read_file(path: &Path) -> (Document, Vec<Diagnostic>) {
+    read_file_with(path, &FileAccess::default())
+}
+
+/// Reads a document from a file, following its `xi:include`s where `access` allows: an include
+/// resolves relative to the including file, inside the top document's folder or a search path
+/// (`crate::file_access`), else among the search paths, else as a builtin library document
+/// (`crate::library::builtin_document`: `uplift/uplift_defs.mtlx`, as MaterialX resolves library
+/// includes through its search path). An include outside is an error, the same whether or not the
+/// file exists.
+pub fn read_file_with(path: &Path, access: &FileAccess) -> (Document, Vec<Diagnostic>) {
     let mut diags = Vec::new();
-    let mut stack = Vec::new();
-    let doc = read_file_inner(path, &mut diags, &mut stack, None);
+    let mut includes = Includes { stack: Vec::new(), access, top: path.to_path_buf() };
+    let doc = read_file_inner(path, &mut diags, &mut includes, None);
     (doc, diags)
+}
+
+/// The include chain being read and the rule for what it may name.
+struct Includes<'a> {
+    /// The documents being read, outermost first.
+    stack: Vec<PathBuf>,
+    access: &'a FileAccess,
+    /// The top document, whose folder includes may name files in.
+    top: PathBuf,
 }
 
 /// `text` with its `xi:include` lines emptied (lines kept, so positions stay the file's): for
@@ -30,16 +51,21 @@ pub fn without_includes(text: &str) -> String {
 /// Reads a document from text; `name` stands for the file in positions, and relative
 /// `xi:include` paths resolve against its folder.
 pub fn read_str(text: &str, name: &str) -> (Document, Vec<Diagnostic>) {
+    read_str_with(text, name, &FileAccess::default())
+}
+
+/// [`read_str`] with includes allowed where `access` says ([`read_file_with`]).
+pub fn read_str_with(text: &str, name: &str, access: &FileAccess) -> (Document, Vec<Diagnostic>) {
     let mut diags = Vec::new();
-    let mut stack = vec![PathBuf::from(name)];
-    let doc = parse_text(text, Path::new(name), &mut diags, &mut stack);
+    let mut includes = Includes { stack: vec![PathBuf::from(name)], access, top: PathBuf::from(name) };
+    let doc = parse_text(text, Path::new(name), &mut diags, &mut includes);
     (doc, diags)
 }
 
 fn read_file_inner(
     path: &Path,
     diags: &mut Vec<Diagnostic>,
-    stack: &mut Vec<PathBuf>,
+    stack: &mut Includes,
     included_from: Option<&SourcePos>,
 ) -> Document {
     let file: Arc<str> = Arc::from(path.display().to_string());
@@ -51,13 +77,13 @@ fn read_file_inner(
             return Document::new(SourcePos::new(file, 1, 1));
         }
     };
-    stack.push(path.to_path_buf());
+    stack.stack.push(path.to_path_buf());
     let doc = parse_text(&text, path, diags, stack);
-    stack.pop();
+    stack.stack.pop();
     doc
 }
 
-fn parse_text(text: &str, path: &Path, diags: &mut Vec<Diagnostic>, stack: &mut Vec<PathBuf>) -> Document {
+fn parse_text(text: &str, path: &Path, diags: &mut Vec<Diagnostic>, stack: &mut Includes) -> Document {
     let file: Arc<str> = Arc::from(path.display().to_string());
     let opts = || roxmltree::ParsingOptions { allow_dtd: true, ..Default::default() };
     // Strict XML first (one parse); only text it refuses goes through the repairs.
@@ -234,7 +260,7 @@ fn convert(
     doc: &mut Document,
     parent: ElementId,
     diags: &mut Vec<Diagnostic>,
-    stack: &mut Vec<PathBuf>,
+    stack: &mut Includes,
 ) {
     let mut work = vec![(node, parent)];
     while let Some((node, parent)) = work.pop() {
@@ -260,19 +286,50 @@ fn include(
     doc: &mut Document,
     parent: ElementId,
     diags: &mut Vec<Diagnostic>,
-    stack: &mut Vec<PathBuf>,
+    stack: &mut Includes,
 ) {
     let Some(href) = node.attribute("href") else {
         diags.push(Diagnostic::error(pos.clone(), "xi:include without an `href` attribute"));
         return;
     };
-    let target = path.parent().unwrap_or(Path::new(".")).join(href);
+    // Where the include lies (crate::file_access): beside the including file, in a search path,
+    // or in the builtin library; else the file beside it (to say it cannot be read) or an error.
+    let relative = stack.access.resolve(href, path, &stack.top);
+    let beside = relative.as_ref().ok().filter(|t| t.is_file()).cloned();
+    let searched = || stack.access.search()?.iter().find_map(|root| Some(root.join(href)).filter(|t| stack.access.contains_under(t, root) && t.is_file()));
+    let target = match beside.or_else(searched) {
+        Some(t) => t,
+        None => match (crate::library::builtin_document(href), relative) {
+            (Some((lib_path, text)), _) => {
+                let name = PathBuf::from(format!("<builtin>/{lib_path}"));
+                if stack.stack.contains(&name) {
+                    diags.push(Diagnostic::error(pos.clone(), format!("xi:include cycle: `{href}` includes itself")));
+                    return;
+                }
+                stack.stack.push(name.clone());
+                let included = parse_text(text, &name, diags, stack);
+                stack.stack.pop();
+                merge_included(&included, doc, parent);
+                return;
+            }
+            (None, Ok(t)) => t,
+            (None, Err(outside)) => {
+                diags.push(Diagnostic::error(pos.clone(), format!("xi:include: {outside}")));
+                return;
+            }
+        },
+    };
     let canonical = target.canonicalize().unwrap_or_else(|_| target.clone());
-    if stack.iter().any(|p| p.canonicalize().unwrap_or_else(|_| p.clone()) == canonical) {
+    if stack.stack.iter().any(|p| p.canonicalize().unwrap_or_else(|_| p.clone()) == canonical) {
         diags.push(Diagnostic::error(pos.clone(), format!("xi:include cycle: `{href}` includes itself")));
         return;
     }
     let included = read_file_inner(&target, diags, stack, Some(pos));
+    merge_included(&included, doc, parent);
+}
+
+/// The top-level elements of `included` merged under `parent` (see [`include`]).
+fn merge_included(included: &Document, doc: &mut Document, parent: ElementId) {
     let inc_root = included.get(included.root());
     let inherited: Vec<(String, String)> = INHERITED_ROOT_ATTRIBUTES
         .iter()
@@ -286,7 +343,7 @@ fn include(
         if !name.is_empty() && doc.child(parent, &name).is_some() {
             continue;
         }
-        let id = doc.import_subtree(parent, &included, child);
+        let id = doc.import_subtree(parent, included, child);
         for (k, v) in &inherited {
             if doc.get(id).attr(k).is_none() {
                 doc.get_mut(id).set_attr(k, v.clone());
