@@ -133,6 +133,9 @@ pub(crate) fn reserved_set() -> &'static KeywordSet {
     SET.get_or_init(|| KeywordSet::from_iter(RESERVED))
 }
 
+/// The scalar conversion of one lane: the lane's expression in, the converted one out.
+type LaneConversion = Box<dyn Fn(&str) -> (String, Prec)>;
+
 /// Operator precedence of a written expression (higher binds tighter).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 enum Prec {
@@ -1581,7 +1584,7 @@ impl<'m> Writer<'m> {
         };
         // The scalar conversion of one lane (`x` is written so that a method call or a cast may
         // follow it).
-        let lane: Box<dyn Fn(&str) -> (String, Prec)> = match (from_name, to_name, convert.is_some()) {
+        let lane: LaneConversion = match (from_name, to_name, convert.is_some()) {
             (f, t, _) if f == t => Box::new(|x: &str| (x.to_string(), Prec::Atom)),
             // Bitcasts.
             ("f32", "u32", false) => Box::new(|x: &str| (format!("{x}.to_bits()"), Prec::Atom)),

@@ -111,7 +111,7 @@ fn materialx_documents_compile_or_fail_with_a_reason() {
         let mut table = String::from("| document | output | status | reason |\n|---|---|---|---|\n");
         let (mut compiled, mut closure_only, mut failed) = (0, 0, 0);
         for f in &files {
-            let rel = f.strip_prefix(&data.join(set)).unwrap().display().to_string();
+            let rel = f.strip_prefix(data.join(set)).unwrap().display().to_string();
             let result = catch_unwind(AssertUnwindSafe(|| check_document(&compiler, f, context)));
             let (status, rows) = result.unwrap_or_else(|_| panic!("panic while compiling {}", f.display()));
             match status {

@@ -1,7 +1,8 @@
 //! `uplift eval`'s tables, read and written through the `csv` crate: a header row of column
 //! names, then rows of numbers. Cells are trimmed; blank lines (and a trailing newline) are
 //! skipped; `\r\n` line ends and quoted cells are accepted. Every error names the file, the
-//! 1-based line and the column, never panics.
+//! 1-based line and the column, never panics. Cells are finite numbers (`nan`, `inf`, `1e39`
+//! are errors, as in documents).
 
 /// A parsed table: column names and rows of numbers, each with the line it came from.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,8 +70,11 @@ pub fn parse(file: &str, text: &str) -> Result<Table, String> {
             if cell.is_empty() {
                 return Err(format!("{file}:{line}: column `{name}`: empty cell (expected a number)"));
             }
+            // Finite numbers only, as documents take them: `nan`, `inf` and values past f32's
+            // range (`1e39` parses to inf) are refused where they enter.
             match cell.parse::<f32>() {
-                Ok(v) => row.push(v),
+                Ok(v) if v.is_finite() => row.push(v),
+                Ok(_) => return Err(format!("{file}:{line}: column `{name}`: `{cell}` is not a finite number (|x| ≤ 3.4e38)")),
                 Err(_) => return Err(format!("{file}:{line}: column `{name}`: `{cell}` is not a number")),
             }
         }
@@ -115,6 +119,15 @@ mod tests {
         assert_eq!(t.header, ["a", "b"]);
         assert_eq!(t.rows, vec![vec![1.0, 2.5], vec![-0.3, 4.0]]);
         assert_eq!(t.lines, [2, 4]);
+    }
+
+    #[test]
+    fn non_finite_cells_are_refused_with_their_line_and_column() {
+        for cell in ["nan", "NaN", "inf", "-inf", "1e39", "-3.5e38"] {
+            let e = parse("t.csv", &format!("a,b\n1,2\n3,{cell}\n")).unwrap_err();
+            assert_eq!(e, format!("t.csv:3: column `b`: `{cell}` is not a finite number (|x| ≤ 3.4e38)"));
+        }
+        assert_eq!(parse("t.csv", "a\n3.4e38\n").unwrap().rows, vec![vec![3.4e38f32]]);
     }
 
     #[test]

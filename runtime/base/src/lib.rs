@@ -8,6 +8,7 @@
 //! Must never: depend on the compiler, an engine or any higher runtime crate.
 
 pub mod atomic_write;
+pub mod child_process;
 pub mod color;
 pub mod csv_table;
 pub mod exr;

@@ -7,7 +7,11 @@
 //! [`OutputFolder::install`]): a name is recorded in the manifest before it is written (so a killed
 //! run's files are still its own on the rerun), and an existing file or folder of that name the
 //! manifest does not list is refused, with `force` too: `force` only lets a command write beside
-//! files it did not write, never over them. Writes stay atomic (`atomic_write`).
+//! files it did not write, never over them. Writes stay atomic (`atomic_write`). Names starting
+//! `.uplift-` (manifests, a batch's `.uplift-shards/`) are uplift's bookkeeping and never
+//! foreign; a folder holding the command's own manifest (a batch's material folder, claimed on
+//! its own) is the command's, so concurrent shards of a batch never rewrite one shared manifest
+//! per material.
 
 use crate::atomic_write::write_atomically;
 use std::collections::BTreeSet;
@@ -49,7 +53,8 @@ impl OutputFolder {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
             Err(e) => return Err(format!("{}: {e}", manifest.display())),
         }
-        let mut foreign: Vec<String> = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?.flatten().map(|e| e.file_name().to_string_lossy().to_string()).collect();
+        let mut foreign: Vec<String> =
+            std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?.flatten().map(|e| e.file_name().to_string_lossy().to_string()).filter(|n| !is_bookkeeping(n)).collect();
         if foreign.is_empty() || force {
             return Ok(folder);
         }
@@ -102,10 +107,13 @@ impl OutputFolder {
         Ok(path)
     }
 
-    /// Refuses `name` when it exists and the command did not write it.
+    /// Refuses `name` when it exists and the command did not write it: it is neither listed in
+    /// the manifest, nor uplift's bookkeeping, nor a folder the command claimed itself (one that
+    /// holds its manifest: a batch's material folder).
     pub fn check(&self, name: &str) -> Result<(), String> {
         let path = self.dir.join(name);
-        if !self.owned.contains(name) && std::fs::symlink_metadata(&path).is_ok() {
+        let own = self.owned.contains(name) || is_bookkeeping(name) || path.join(manifest_name(&self.command)).is_file();
+        if !own && std::fs::symlink_metadata(&path).is_ok() {
             return Err(format!(
                 "{}: exists and was not written by `uplift {}` (its {} manifest does not list it); it is never replaced: move it away or write to another folder",
                 path.display(),
@@ -189,6 +197,13 @@ impl OutputFolder {
         let path = self.dir.join(manifest_name(&self.command));
         write_atomically(&path, self.manifest_text().as_bytes()).map_err(|e| format!("{}: {e}", path.display()))
     }
+}
+
+/// Whether `name` (a top-level name in an output folder) is uplift's bookkeeping, shared by its
+/// commands and never a user's: a command's manifest, a batch's shard manifests
+/// (`.uplift-shards/`). Such names are never counted as foreign.
+pub fn is_bookkeeping(name: &str) -> bool {
+    name.starts_with(".uplift-")
 }
 
 /// Every file under `dir`, as `/`-separated paths relative to it, sorted.

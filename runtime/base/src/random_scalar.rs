@@ -6,6 +6,11 @@
 
 use crate::rng::{hash_str, mix64, unit_f64};
 
+/// The largest magnitude of a random scalar's `uimin` and `uimax` (and so of its draws): every
+/// draw, its f32 value and the rule arithmetic on it stay finite (a range of ±1e30 made `fit`
+/// overflow). The widest range a shipped rule or class uses is 1,500–25,000 (a temperature).
+pub const SCALAR_LIMIT: f64 = 1e6;
+
 /// How a random scalar is drawn within `[min, max]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Distribution {
@@ -31,7 +36,7 @@ pub fn parse_distribution(text: &str) -> Option<Distribution> {
     let open = text.find('(')?;
     let args: Vec<f64> = text[open + 1..].strip_suffix(')')?.split(',').map(|a| a.trim().parse::<f64>()).collect::<Result<_, _>>().ok()?;
     match (&text[..open], args.as_slice()) {
-        ("normal", [mean, sd]) if *sd > 0.0 => Some(Distribution::Normal { mean: *mean, sd: *sd }),
+        ("normal", [mean, sd]) if mean.is_finite() && sd.is_finite() && *sd > 0.0 => Some(Distribution::Normal { mean: *mean, sd: *sd }),
         ("optional", [p]) if (0.0..=1.0).contains(p) => Some(Distribution::Optional { p: *p }),
         _ => None,
     }
@@ -49,9 +54,15 @@ impl RandomScalar {
         if ty != "float" {
             return Err(format!("random scalar `{name}` is {ty}; random scalars are floats"));
         }
-        let number = |s: &str, what: &str| s.trim().parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| format!("`{name}` has {what} `{s}`, not a number"));
+        let number = |s: &str, what: &str| {
+            let x = s.trim().parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| format!("`{name}` has {what} `{s}`, not a number"))?;
+            match x.abs() <= SCALAR_LIMIT {
+                true => Ok(x),
+                false => Err(format!("`{name}` has {what} `{s}`, outside ±{SCALAR_LIMIT:e} (the range random scalars may span)")),
+            }
+        };
         let (min, max) = (number(uimin, "uimin")?, number(uimax, "uimax")?);
-        if !(min <= max) {
+        if min > max {
             return Err(format!("`{name}` has uimin {min} above uimax {max}"));
         }
         let distribution = match distribution {
@@ -93,3 +104,29 @@ impl RandomScalar {
     }
 }
 
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_range_past_the_limit_or_f32_is_refused_where_it_is_read() {
+        for (lo, hi) in [("0", "1e39"), ("-1e30", "1e30"), ("0", "1000001"), ("nan", "1"), ("0", "inf")] {
+            let e = RandomScalar::from_attributes("rust_amount", "float", lo, hi, None).unwrap_err();
+            assert!(e.starts_with("`rust_amount` has "), "{lo}..{hi}: {e}");
+        }
+        let s = RandomScalar::from_attributes("t", "float", "1500", "25000", None).unwrap();
+        assert_eq!((s.min, s.max), (1500.0, 25000.0));
+        let e = RandomScalar::from_attributes("t", "float", "0", "2e6", None).unwrap_err();
+        assert_eq!(e, "`t` has uimax `2e6`, outside ±1e6 (the range random scalars may span)");
+    }
+
+    #[test]
+    fn a_distribution_with_a_non_finite_parameter_is_refused() {
+        for d in ["normal(nan, 0.08)", "normal(0.5, nan)", "normal(inf, 1)", "normal(0.5, 0)", "optional(nan)", "optional(1.5)"] {
+            assert_eq!(parse_distribution(d), None, "{d}");
+            assert!(RandomScalar::from_attributes("x", "float", "0", "1", Some(d)).is_err(), "{d}");
+        }
+        assert_eq!(parse_distribution("normal(0.5, 0.08)"), Some(Distribution::Normal { mean: 0.5, sd: 0.08 }));
+    }
+}

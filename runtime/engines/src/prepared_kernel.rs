@@ -27,7 +27,9 @@ impl<'a> From<&'a WgpuEngine> for Engine<'a> {
 }
 
 /// An engine owned by what runs kernels on it (the training-data generator, the renderer's
-/// shading): the CPU engine or the wgpu engine.
+/// shading): the CPU engine or the wgpu engine. One or two exist per process, so the wgpu
+/// engine's size is kept inline.
+#[allow(clippy::large_enum_variant)]
 pub enum AnyEngine {
     Cpu(CpuEngine),
     Wgpu(WgpuEngine),
@@ -79,7 +81,10 @@ impl PreparedKernel {
     pub fn new(engine: Engine<'_>, kernel: PatternKernel) -> Result<PreparedKernel, String> {
         let prepared = match engine {
             Engine::Cpu(e) => Prepared::Cpu(e.prepare(&kernel)?),
-            Engine::Wgpu(e) => Prepared::Wgpu(e.prepare(&kernel)),
+            Engine::Wgpu(e) => {
+                crate::batch::check_build_size(&kernel)?;
+                Prepared::Wgpu(e.prepare(&kernel))
+            }
         };
         Ok(PreparedKernel { kernel, prepared })
     }

@@ -183,7 +183,7 @@ impl Stack {
                 other => return Err(format!("{}: `uplift_optional` of `{name}` is `{other}`: expected true or false", at(id))),
             };
             for (c, suffix) in suffixes.iter().enumerate() {
-                if !(lo[c] < hi[c]) || (encoding == Encoding::Sqrt && lo[c] < 0.0) {
+                if lo[c].partial_cmp(&hi[c]) != Some(std::cmp::Ordering::Less) || (encoding == Encoding::Sqrt && lo[c] < 0.0) {
                     return Err(format!("{}: the encoder's range of `{name}{suffix}` is [{}, {}]: it must be non-empty (and non-negative for sqrt)", at(id), lo[c], hi[c]));
                 }
                 parameters.push(Parameter { input: name.clone(), component: c, channel: format!("{name}{suffix}"), lo: lo[c], hi: hi[c], encoding, default: default[c] });

@@ -17,6 +17,22 @@ pub struct WgpuEngine {
     pub adapter_info: wgpu::AdapterInfo,
 }
 
+/// Keeps a headless run quiet: Mesa's implicit Vulkan layer `VK_LAYER_MESA_device_select`
+/// connects to a Wayland display whenever the instance enables `VK_KHR_wayland_surface` (wgpu
+/// always does), and libwayland prints `error: XDG_RUNTIME_DIR is invalid or not set in the
+/// environment.` when there is none. Without a display (no `WAYLAND_DISPLAY`, no usable
+/// `XDG_RUNTIME_DIR`) the layer has no display to pick a device by, so it is switched off
+/// (`NODEVICE_SELECT=1`, Mesa's own switch) unless the user chose a device with it
+/// (`MESA_VK_DEVICE_SELECT`) or set the switch. Call at the start of `main`, before any thread
+/// exists (it sets an environment variable).
+pub fn quiet_headless_vulkan() {
+    let var = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty());
+    let runtime_dir = var("XDG_RUNTIME_DIR").is_some_and(|d| std::path::Path::new(&d).is_dir());
+    if var("WAYLAND_DISPLAY").is_none() && !runtime_dir && var("MESA_VK_DEVICE_SELECT").is_none() && var("NODEVICE_SELECT").is_none() {
+        std::env::set_var("NODEVICE_SELECT", "1");
+    }
+}
+
 impl WgpuEngine {
     /// Opens the best available adapter (falling back to a software one).
     pub fn new() -> Result<WgpuEngine, String> {
@@ -302,6 +318,7 @@ impl PatternEngine for WgpuEngine {
 
     fn run_pattern(&self, kernel: &PatternKernel, batch: &PatternBatch) -> Result<Columns, String> {
         batch.check(kernel)?; // before compiling the shader
+        crate::batch::check_build_size(kernel)?;
         let p = self.prepare(kernel);
         self.run_prepared(&p, batch)
     }

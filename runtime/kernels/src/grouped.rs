@@ -22,7 +22,7 @@ pub fn preferred() -> bool {
 /// nothing, where the grouped form cannot run: no AVX-512 or AVX2, or `k` does not divide `n`.
 #[allow(clippy::too_many_arguments)]
 pub fn run_grouped_blocks(grouped: &crate::shipped::Grouped, k: usize, n: usize, geometry: &[&[f32]], inputs: &[&[f32]], outputs: &mut [f32], output_columns: usize) -> bool {
-    if k == 0 || n % k != 0 || uplift_simd::Level::current() == uplift_simd::Level::Scalar {
+    if k == 0 || !n.is_multiple_of(k) || uplift_simd::Level::current() == uplift_simd::Level::Scalar {
         return false;
     }
     if n == 0 {

@@ -37,9 +37,12 @@ pub struct BuiltinKernel {
 /// points, reading the input columns in `point_columns` per point and every other column per
 /// group (`n / k` values) or per batch (1); `false`, having done nothing, without AVX-512 or
 /// AVX2.
+/// A grouped kernel's entry: point columns, group columns, output columns, group size.
+pub type GroupedRun = fn(&[&[f32]], &[&[f32]], &mut [&mut [f32]], usize) -> bool;
+
 #[derive(Clone, Copy)]
 pub struct Grouped {
-    pub run: fn(&[&[f32]], &[&[f32]], &mut [&mut [f32]], usize) -> bool,
+    pub run: GroupedRun,
     pub point_columns: &'static [usize],
 }
 

@@ -64,7 +64,8 @@ pub struct FitRecord {
     pub eq3_fitted_before_energy_bound: LossRecord,
     pub fitting_loss_first_step: LossRecord,
     pub fitting_loss_last_step: LossRecord,
-    /// `null` when fitting ran without the energy bound.
+    /// Absent when fitting ran without the energy bound (`null` in records before issue 46).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub energy_bound: Option<EnergyRecord>,
 }
 

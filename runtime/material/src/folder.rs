@@ -324,10 +324,27 @@ fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, String> {
 }
 
 /// Writes `value` as pretty JSON with a trailing newline, atomically.
+/// Writes a record atomically; a number that is not finite (which serde_json would write as
+/// `null`) is an error naming its field, and nothing is written. The records' optional fields
+/// are left out when absent, so a `null` can only be such a number.
 fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<(), String> {
+    let tree = serde_json::to_value(value).map_err(|e| format!("{}: {e}", path.display()))?;
+    if let Some(field) = null_field(&tree, String::new()) {
+        return Err(format!("{}: `{field}` is not a finite number; nothing written", path.display()));
+    }
     let mut text = serde_json::to_string_pretty(value).map_err(|e| format!("{}: {e}", path.display()))?;
     text.push('\n');
     write_atomically(path, text.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// The path (`a.b[2]`) of the first `null` in a JSON tree.
+fn null_field(v: &serde_json::Value, at: String) -> Option<String> {
+    match v {
+        serde_json::Value::Null => Some(at),
+        serde_json::Value::Array(a) => a.iter().enumerate().find_map(|(i, x)| null_field(x, format!("{at}[{i}]"))),
+        serde_json::Value::Object(o) => o.iter().find_map(|(k, x)| null_field(x, if at.is_empty() { k.clone() } else { format!("{at}.{k}") })),
+        _ => None,
+    }
 }
 
 /// A file's format must not be newer than what this build reads.

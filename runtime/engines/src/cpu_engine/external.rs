@@ -135,8 +135,11 @@ pub fn build_bundle(kernels: &[(String, KernelShape)], albedo_tables: Option<&st
         (false, false) => "-novec",
     };
     let module = kernels_module(kernels.len(), albedo_tables.is_some());
+    // One runner per distinct kernel code: each kernel's text is hashed without its first line,
+    // which names the document it came from (uplift_compiler::build_api::kernel_fingerprint),
+    // so one kernel read from another path, a staging copy or another material is one runner.
     let mut h = FNV1A_START;
-    for part in kernels.iter().map(|k| k.0.as_str()).chain([albedo_tables.unwrap_or(""), module.as_str(), RUNNER_MAIN, DRIVER, PROTOCOL, &manifest(""), &KERNEL_LLVM_ARGS.join(" ")]) {
+    for part in kernels.iter().map(|k| k.0.split_once('\n').map_or("", |(_, body)| body)).chain([albedo_tables.unwrap_or(""), module.as_str(), RUNNER_MAIN, DRIVER, PROTOCOL, &manifest(""), &KERNEL_LLVM_ARGS.join(" ")]) {
         h = fnv1a(h, part.as_bytes());
         h = fnv1a(h, &[0]);
     }
@@ -145,7 +148,7 @@ pub fn build_bundle(kernels: &[(String, KernelShape)], albedo_tables: Option<&st
     let crate_dir = kernels_dir.join(&name);
     let target_dir = kernels_dir.join(format!("target{variant}"));
     let exe = target_dir.join("release").join(format!("{name}{}", std::env::consts::EXE_SUFFIX));
-    let built: Vec<ExternalKernel> = kernels.iter().enumerate().map(|(index, k)| ExternalKernel { exe: exe.clone(), index, shape: k.1.clone() }).collect();
+    let built: Vec<ExternalKernel> = kernels.iter().enumerate().map(|(index, k)| ExternalKernel { exe: exe.clone(), index, shape: k.1 }).collect();
     if exe.is_file() {
         return Ok(built);
     }
@@ -181,7 +184,7 @@ pub fn build_bundle(kernels: &[(String, KernelShape)], albedo_tables: Option<&st
         }
         c.current_dir(&crate_dir).env("CARGO_TARGET_DIR", &target_dir).env_remove("RUSTFLAGS").env_remove("CARGO_BUILD_RUSTFLAGS");
         c.env("CARGO_ENCODED_RUSTFLAGS", flags.join("\u{1f}"));
-        c.stdin(Stdio::null()).output()
+        uplift_base::child_process::tie_to_parent(&mut c).stdin(Stdio::null()).output()
     };
     let describe = |e: std::io::Error| format!("the CPU engine builds kernels it was not built with by running cargo ({}), which failed to start: {e}; install Rust (rustup) or use --engine wgpu", Path::new(&cargo).display());
     // Offline first (the dependencies are usually cached); online when they are not.
@@ -222,7 +225,7 @@ fn request(k: &ExternalKernel, batch: &PatternBatch, threads: usize) -> Vec<u8> 
 
 /// Runs the runner with `args`, `input` on stdin; returns its stdout.
 fn exchange(k: &ExternalKernel, args: &[&str], input: Vec<u8>) -> Result<Vec<u8>, String> {
-    let mut child = Command::new(&k.exe)
+    let mut child = uplift_base::child_process::tie_to_parent(&mut Command::new(&k.exe))
         .args(args)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())

@@ -77,13 +77,21 @@ impl CpuEngine {
         driver::cpu_level()
     }
 
+    /// Whether `kernel` is one the runtime ships (runs in-process, no runner to build).
+    pub fn is_shipped(kernel: &PatternKernel) -> bool {
+        rust_of(kernel).is_ok_and(|rust| shipped::find(kernel_fingerprint(&rust)).is_some())
+    }
+
     /// Finds `kernel` among the shipped ones (by the fingerprint of its generated Rust), or
     /// builds its runner (the first time for a given kernel: a cargo build).
     pub fn prepare(&self, kernel: &PatternKernel) -> Result<CpuKernel, String> {
         let rust = rust_of(kernel)?;
         match shipped::find(kernel_fingerprint(&rust)) {
             Some(k) => Ok(CpuKernel::Builtin(k)),
-            None => external::build(&rust, crate::batch::kernel_shape(kernel), &self.runner).map(CpuKernel::External),
+            None => {
+                crate::batch::check_build_size(kernel)?;
+                external::build(&rust, crate::batch::kernel_shape(kernel), &self.runner).map(CpuKernel::External)
+            }
         }
     }
 
@@ -114,6 +122,7 @@ impl CpuEngine {
     /// Builds `kernel`'s runner even when it is shipped, with `options` (the benchmark builds
     /// one with vectorisation off).
     pub fn prepare_runner(&self, kernel: &PatternKernel, options: &RunnerOptions) -> Result<ExternalKernel, String> {
+        crate::batch::check_build_size(kernel)?;
         external::build(&rust_of(kernel)?, crate::batch::kernel_shape(kernel), options)
     }
 
@@ -122,6 +131,7 @@ impl CpuEngine {
     /// `albedo_tables` (the library's `NodeLibrary::albedo_table_data`) when it is given. For
     /// many kernels at once: a conformance run over a folder of documents.
     pub fn prepare_bundle(&self, kernels: &[&PatternKernel], albedo_tables: Option<&[f32]>, options: &RunnerOptions) -> Result<Vec<CpuKernel>, String> {
+        kernels.iter().try_for_each(|k| crate::batch::check_build_size(k))?;
         let rust_options = RustOptions { albedo_table_data: albedo_tables.map(|_| external::BUNDLE_ALBEDO_TABLES.to_string()), ..RustOptions::default() };
         let sources = kernels
             .iter()
