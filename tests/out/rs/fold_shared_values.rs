@@ -46,8 +46,15 @@ pub fn mx_multiply_vector2FA(in1_: Vec2, in2_: f32) -> Vec2 {
 }
 
 #[inline(always)]
-pub fn mx_noise_floor(x: f32) -> i32 {
-    x.floor() as i32
+pub fn mx_noise_cell(x: f32) -> i32 {
+    let wrapped = x - 4294967300.0f32 * (x / 4294967300.0f32).floor();
+    let far = ((if x.abs() <= 3.4028235e38f32 { wrapped } else { 0.0f32 }) as u32) as i32;
+    if x.abs() < 2147483600.0f32 { x.floor() as i32 } else { far }
+}
+
+#[inline(always)]
+pub fn mx_noise_frac(x_1: f32) -> f32 {
+    if x_1.abs() < 16777216.0f32 { x_1 - x_1.floor() } else { 0.0f32 }
 }
 
 #[inline(always)]
@@ -62,16 +69,16 @@ pub fn mx_noise_bilerp_float(v0_: f32, v1_: f32, v2_: f32, v3_: f32, s: f32, t_1
 }
 
 #[inline(always)]
-pub fn mx_gradient_float_2d(hash: u32, x_1: f32, y: f32) -> f32 {
+pub fn mx_gradient_float_2d(hash: u32, x_2: f32, y: f32) -> f32 {
     let h = hash & 7u32;
-    let u = if h < 4u32 { x_1 } else { y };
-    let v = 2.0f32 * (if h < 4u32 { y } else { x_1 });
+    let u = if h < 4u32 { x_2 } else { y };
+    let v = 2.0f32 * (if h < 4u32 { y } else { x_2 });
     (if h & 1u32 != 0u32 { -u } else { u }) + (if h & 2u32 != 0u32 { -v } else { v })
 }
 
 #[inline(always)]
-pub fn mx_rotl32_(x_2: u32, k: u32) -> u32 {
-    x_2.wrapping_shl(k) | x_2.wrapping_shr(32u32.wrapping_sub(k))
+pub fn mx_rotl32_(x_3: u32, k: u32) -> u32 {
+    x_3.wrapping_shl(k) | x_3.wrapping_shr(32u32.wrapping_sub(k))
 }
 
 #[inline(always)]
@@ -137,29 +144,29 @@ pub fn mx_bjfinal(a_in: u32, b_in: u32, c_in: u32) -> u32 {
 }
 
 #[inline(always)]
-pub fn mx_hash_int2_(x_3: i32, y_1: i32) -> u32 {
-    let _e7 = mx_bjfinal(3735928580u32.wrapping_add(x_3 as u32), 3735928580u32.wrapping_add(y_1 as u32), 3735928580u32);
+pub fn mx_hash_int2_(x_4: i32, y_1: i32) -> u32 {
+    let _e7 = mx_bjfinal(3735928580u32.wrapping_add(x_4 as u32), 3735928580u32.wrapping_add(y_1 as u32), 3735928580u32);
     _e7
 }
 
 #[inline(always)]
 #[allow(non_snake_case)]
 pub fn mx_perlin_noise_float_2d(p: Vec2) -> f32 {
-    let X = mx_noise_floor(p.x);
-    let Y = mx_noise_floor(p.y);
-    let fx = p.x - X as f32;
-    let fy = p.y - Y as f32;
+    let X = mx_noise_cell(p.x);
+    let Y = mx_noise_cell(p.y);
+    let fx = mx_noise_frac(p.x);
+    let fy = mx_noise_frac(p.y);
     let u_1 = mx_noise_fade(fx);
     let v_1 = mx_noise_fade(fy);
-    let _e13 = mx_hash_int2_(X, Y);
-    let _e14 = mx_gradient_float_2d(_e13, fx, fy);
-    let _e17 = mx_hash_int2_(X.wrapping_add(1i32), Y);
-    let _e20 = mx_gradient_float_2d(_e17, fx - 1.0f32, fy);
-    let _e23 = mx_hash_int2_(X, Y.wrapping_add(1i32));
-    let _e26 = mx_gradient_float_2d(_e23, fx, fy - 1.0f32);
-    let _e31 = mx_hash_int2_(X.wrapping_add(1i32), Y.wrapping_add(1i32));
-    let _e36 = mx_gradient_float_2d(_e31, fx - 1.0f32, fy - 1.0f32);
-    let result = mx_noise_bilerp_float(_e14, _e20, _e26, _e36, u_1, v_1);
+    let _e11 = mx_hash_int2_(X, Y);
+    let _e12 = mx_gradient_float_2d(_e11, fx, fy);
+    let _e15 = mx_hash_int2_(X.wrapping_add(1i32), Y);
+    let _e18 = mx_gradient_float_2d(_e15, fx - 1.0f32, fy);
+    let _e21 = mx_hash_int2_(X, Y.wrapping_add(1i32));
+    let _e24 = mx_gradient_float_2d(_e21, fx, fy - 1.0f32);
+    let _e29 = mx_hash_int2_(X.wrapping_add(1i32), Y.wrapping_add(1i32));
+    let _e34 = mx_gradient_float_2d(_e29, fx - 1.0f32, fy - 1.0f32);
+    let result = mx_noise_bilerp_float(_e12, _e18, _e24, _e34, u_1, v_1);
     0.6616f32 * result
 }
 

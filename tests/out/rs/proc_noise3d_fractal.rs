@@ -3,7 +3,7 @@
 // The pattern kernel in Rust: the library functions and `mx_pattern`, written from the same naga
 // module as the WGSL kernel, and `mx_pattern_batch`, a loop over structure-of-arrays columns.
 // Include it in a module of its own; it needs glam and nothing else.
-use glam::{UVec2, UVec3, Vec2, Vec3, Vec4};
+use glam::{BVec3, UVec2, UVec3, Vec2, Vec3, Vec4};
 
 /// Textures of a kernel, by index (binding − 4 in the WGSL kernel), implemented by the runtime.
 /// Coordinates are texel indices and may lie outside the texture: return zero there, as
@@ -37,8 +37,15 @@ pub struct MxOutputs {
 }
 
 #[inline(always)]
-pub fn mx_noise_floor(x: f32) -> i32 {
-    x.floor() as i32
+pub fn mx_noise_cell(x: f32) -> i32 {
+    let wrapped = x - 4294967300.0f32 * (x / 4294967300.0f32).floor();
+    let far = ((if x.abs() <= 3.4028235e38f32 { wrapped } else { 0.0f32 }) as u32) as i32;
+    if x.abs() < 2147483600.0f32 { x.floor() as i32 } else { far }
+}
+
+#[inline(always)]
+pub fn mx_noise_frac(x_1: f32) -> f32 {
+    if x_1.abs() < 16777216.0f32 { x_1 - x_1.floor() } else { 0.0f32 }
 }
 
 #[inline(always)]
@@ -56,31 +63,31 @@ pub fn mx_noise_trilerp_vec3_(v0_: Vec3, v1_: Vec3, v2_: Vec3, v3_: Vec3, v4_: V
 
 #[inline(always)]
 #[allow(unused_assignments)]
-pub fn mx_gradient_float_3d(hash: u32, x_1: f32, y: f32, z: f32) -> f32 {
+pub fn mx_gradient_float_3d(hash: u32, x_2: f32, y: f32, z: f32) -> f32 {
     let mut local: bool = false;
     let h = hash & 15u32;
-    let u = if h < 8u32 { x_1 } else { y };
+    let u = if h < 8u32 { x_2 } else { y };
     if !(h == 12u32) {
         local = h == 14u32;
     } else {
         local = true;
     }
     let _e17 = local;
-    let v = if h < 4u32 { y } else { if _e17 { x_1 } else { z } };
+    let v = if h < 4u32 { y } else { if _e17 { x_2 } else { z } };
     (if h & 1u32 != 0u32 { -u } else { u }) + (if h & 2u32 != 0u32 { -v } else { v })
 }
 
 #[inline(always)]
-pub fn mx_gradient_vec3_3d(hash_1: UVec3, x_2: f32, y_1: f32, z_1: f32) -> Vec3 {
-    let _e5 = mx_gradient_float_3d(hash_1.x, x_2, y_1, z_1);
-    let _e7 = mx_gradient_float_3d(hash_1.y, x_2, y_1, z_1);
-    let _e9 = mx_gradient_float_3d(hash_1.z, x_2, y_1, z_1);
+pub fn mx_gradient_vec3_3d(hash_1: UVec3, x_3: f32, y_1: f32, z_1: f32) -> Vec3 {
+    let _e5 = mx_gradient_float_3d(hash_1.x, x_3, y_1, z_1);
+    let _e7 = mx_gradient_float_3d(hash_1.y, x_3, y_1, z_1);
+    let _e9 = mx_gradient_float_3d(hash_1.z, x_3, y_1, z_1);
     Vec3::new(_e5, _e7, _e9)
 }
 
 #[inline(always)]
-pub fn mx_rotl32_(x_3: u32, k: u32) -> u32 {
-    x_3.wrapping_shl(k) | x_3.wrapping_shr(32u32.wrapping_sub(k))
+pub fn mx_rotl32_(x_4: u32, k: u32) -> u32 {
+    x_4.wrapping_shl(k) | x_4.wrapping_shr(32u32.wrapping_sub(k))
 }
 
 #[inline(always)]
@@ -146,46 +153,46 @@ pub fn mx_bjfinal(a_in: u32, b_in: u32, c_in: u32) -> u32 {
 }
 
 #[inline(always)]
-pub fn mx_hash_int3_(x_4: i32, y_2: i32, z_2: i32) -> u32 {
-    let _e10 = mx_bjfinal(3735928584u32.wrapping_add(x_4 as u32), 3735928584u32.wrapping_add(y_2 as u32), 3735928584u32.wrapping_add(z_2 as u32));
+pub fn mx_hash_int3_(x_5: i32, y_2: i32, z_2: i32) -> u32 {
+    let _e10 = mx_bjfinal(3735928584u32.wrapping_add(x_5 as u32), 3735928584u32.wrapping_add(y_2 as u32), 3735928584u32.wrapping_add(z_2 as u32));
     _e10
 }
 
 #[inline(always)]
-pub fn mx_hash_vec3_3d(x_5: i32, y_3: i32, z_3: i32) -> UVec3 {
-    let h_1 = mx_hash_int3_(x_5, y_3, z_3);
+pub fn mx_hash_vec3_3d(x_6: i32, y_3: i32, z_3: i32) -> UVec3 {
+    let h_1 = mx_hash_int3_(x_6, y_3, z_3);
     UVec3::new(h_1 & 255u32, h_1.wrapping_shr(8u32) & 255u32, h_1.wrapping_shr(16u32) & 255u32)
 }
 
 #[inline(always)]
 #[allow(non_snake_case)]
 pub fn mx_perlin_noise_vec3_3d(p: Vec3) -> Vec3 {
-    let X = mx_noise_floor(p.x);
-    let Y = mx_noise_floor(p.y);
-    let Z = mx_noise_floor(p.z);
-    let fx = p.x - X as f32;
-    let fy = p.y - Y as f32;
-    let fz = p.z - Z as f32;
+    let X = mx_noise_cell(p.x);
+    let Y = mx_noise_cell(p.y);
+    let Z = mx_noise_cell(p.z);
+    let fx = mx_noise_frac(p.x);
+    let fy = mx_noise_frac(p.y);
+    let fz = mx_noise_frac(p.z);
     let u_1 = mx_noise_fade(fx);
     let v_1 = mx_noise_fade(fy);
     let w = mx_noise_fade(fz);
-    let _e19 = mx_hash_vec3_3d(X, Y, Z);
-    let _e20 = mx_gradient_vec3_3d(_e19, fx, fy, fz);
-    let _e23 = mx_hash_vec3_3d(X.wrapping_add(1i32), Y, Z);
-    let _e26 = mx_gradient_vec3_3d(_e23, fx - 1.0f32, fy, fz);
-    let _e29 = mx_hash_vec3_3d(X, Y.wrapping_add(1i32), Z);
-    let _e32 = mx_gradient_vec3_3d(_e29, fx, fy - 1.0f32, fz);
-    let _e37 = mx_hash_vec3_3d(X.wrapping_add(1i32), Y.wrapping_add(1i32), Z);
-    let _e42 = mx_gradient_vec3_3d(_e37, fx - 1.0f32, fy - 1.0f32, fz);
-    let _e45 = mx_hash_vec3_3d(X, Y, Z.wrapping_add(1i32));
-    let _e48 = mx_gradient_vec3_3d(_e45, fx, fy, fz - 1.0f32);
-    let _e53 = mx_hash_vec3_3d(X.wrapping_add(1i32), Y, Z.wrapping_add(1i32));
-    let _e58 = mx_gradient_vec3_3d(_e53, fx - 1.0f32, fy, fz - 1.0f32);
-    let _e63 = mx_hash_vec3_3d(X, Y.wrapping_add(1i32), Z.wrapping_add(1i32));
-    let _e68 = mx_gradient_vec3_3d(_e63, fx, fy - 1.0f32, fz - 1.0f32);
-    let _e75 = mx_hash_vec3_3d(X.wrapping_add(1i32), Y.wrapping_add(1i32), Z.wrapping_add(1i32));
-    let _e82 = mx_gradient_vec3_3d(_e75, fx - 1.0f32, fy - 1.0f32, fz - 1.0f32);
-    let result_1 = mx_noise_trilerp_vec3_(_e20, _e26, _e32, _e42, _e48, _e58, _e68, _e82, u_1, v_1, w);
+    let _e16 = mx_hash_vec3_3d(X, Y, Z);
+    let _e17 = mx_gradient_vec3_3d(_e16, fx, fy, fz);
+    let _e20 = mx_hash_vec3_3d(X.wrapping_add(1i32), Y, Z);
+    let _e23 = mx_gradient_vec3_3d(_e20, fx - 1.0f32, fy, fz);
+    let _e26 = mx_hash_vec3_3d(X, Y.wrapping_add(1i32), Z);
+    let _e29 = mx_gradient_vec3_3d(_e26, fx, fy - 1.0f32, fz);
+    let _e34 = mx_hash_vec3_3d(X.wrapping_add(1i32), Y.wrapping_add(1i32), Z);
+    let _e39 = mx_gradient_vec3_3d(_e34, fx - 1.0f32, fy - 1.0f32, fz);
+    let _e42 = mx_hash_vec3_3d(X, Y, Z.wrapping_add(1i32));
+    let _e45 = mx_gradient_vec3_3d(_e42, fx, fy, fz - 1.0f32);
+    let _e50 = mx_hash_vec3_3d(X.wrapping_add(1i32), Y, Z.wrapping_add(1i32));
+    let _e55 = mx_gradient_vec3_3d(_e50, fx - 1.0f32, fy, fz - 1.0f32);
+    let _e60 = mx_hash_vec3_3d(X, Y.wrapping_add(1i32), Z.wrapping_add(1i32));
+    let _e65 = mx_gradient_vec3_3d(_e60, fx, fy - 1.0f32, fz - 1.0f32);
+    let _e72 = mx_hash_vec3_3d(X.wrapping_add(1i32), Y.wrapping_add(1i32), Z.wrapping_add(1i32));
+    let _e79 = mx_gradient_vec3_3d(_e72, fx - 1.0f32, fy - 1.0f32, fz - 1.0f32);
+    let result_1 = mx_noise_trilerp_vec3_(_e17, _e23, _e29, _e39, _e45, _e55, _e65, _e79, u_1, v_1, w);
     0.982f32 * result_1
 }
 
@@ -214,6 +221,27 @@ pub fn mx_position_vector3_(geom_1: mx_geometry, space: i32) -> Vec3 {
 }
 
 #[inline(always)]
+#[allow(unused_assignments)]
+pub fn mx_fractal_done_3d(pp: Vec3, amplitude_1: f32, lacunarity: f32) -> bool {
+    let mut local_1: bool = false;
+    let mut local_2: bool = false;
+    let lattice = wgsl_or_bvec3_bvec3(pp.cmpeq(Vec3::splat(0.0f32)), pp.abs().cmpge(Vec3::splat(16777216.0f32)));
+    if !(amplitude_1 == 0.0f32) {
+        if lattice.all() {
+            local_2 = lacunarity.abs() >= 1.0f32;
+        } else {
+            local_2 = false;
+        }
+        let _e23 = local_2;
+        local_1 = _e23;
+    } else {
+        local_1 = true;
+    }
+    let _e25 = local_1;
+    _e25
+}
+
+#[inline(always)]
 pub fn mx_noise_trilerp_float(v0_1: f32, v1_1: f32, v2_1: f32, v3_1: f32, v4_1: f32, v5_1: f32, v6_1: f32, v7_1: f32, s_1: f32, t_2: f32, r_1: f32) -> f32 {
     let s1_1 = 1.0f32 - s_1;
     let t1_1 = 1.0f32 - t_2;
@@ -224,43 +252,43 @@ pub fn mx_noise_trilerp_float(v0_1: f32, v1_1: f32, v2_1: f32, v3_1: f32, v4_1: 
 #[inline(always)]
 #[allow(non_snake_case)]
 pub fn mx_perlin_noise_float_3d(p_1: Vec3) -> f32 {
-    let X_1 = mx_noise_floor(p_1.x);
-    let Y_1 = mx_noise_floor(p_1.y);
-    let Z_1 = mx_noise_floor(p_1.z);
-    let fx_1 = p_1.x - X_1 as f32;
-    let fy_1 = p_1.y - Y_1 as f32;
-    let fz_1 = p_1.z - Z_1 as f32;
+    let X_1 = mx_noise_cell(p_1.x);
+    let Y_1 = mx_noise_cell(p_1.y);
+    let Z_1 = mx_noise_cell(p_1.z);
+    let fx_1 = mx_noise_frac(p_1.x);
+    let fy_1 = mx_noise_frac(p_1.y);
+    let fz_1 = mx_noise_frac(p_1.z);
     let u_2 = mx_noise_fade(fx_1);
     let v_2 = mx_noise_fade(fy_1);
     let w_1 = mx_noise_fade(fz_1);
-    let _e19 = mx_hash_int3_(X_1, Y_1, Z_1);
-    let _e20 = mx_gradient_float_3d(_e19, fx_1, fy_1, fz_1);
-    let _e23 = mx_hash_int3_(X_1.wrapping_add(1i32), Y_1, Z_1);
-    let _e26 = mx_gradient_float_3d(_e23, fx_1 - 1.0f32, fy_1, fz_1);
-    let _e29 = mx_hash_int3_(X_1, Y_1.wrapping_add(1i32), Z_1);
-    let _e32 = mx_gradient_float_3d(_e29, fx_1, fy_1 - 1.0f32, fz_1);
-    let _e37 = mx_hash_int3_(X_1.wrapping_add(1i32), Y_1.wrapping_add(1i32), Z_1);
-    let _e42 = mx_gradient_float_3d(_e37, fx_1 - 1.0f32, fy_1 - 1.0f32, fz_1);
-    let _e45 = mx_hash_int3_(X_1, Y_1, Z_1.wrapping_add(1i32));
-    let _e48 = mx_gradient_float_3d(_e45, fx_1, fy_1, fz_1 - 1.0f32);
-    let _e53 = mx_hash_int3_(X_1.wrapping_add(1i32), Y_1, Z_1.wrapping_add(1i32));
-    let _e58 = mx_gradient_float_3d(_e53, fx_1 - 1.0f32, fy_1, fz_1 - 1.0f32);
-    let _e63 = mx_hash_int3_(X_1, Y_1.wrapping_add(1i32), Z_1.wrapping_add(1i32));
-    let _e68 = mx_gradient_float_3d(_e63, fx_1, fy_1 - 1.0f32, fz_1 - 1.0f32);
-    let _e75 = mx_hash_int3_(X_1.wrapping_add(1i32), Y_1.wrapping_add(1i32), Z_1.wrapping_add(1i32));
-    let _e82 = mx_gradient_float_3d(_e75, fx_1 - 1.0f32, fy_1 - 1.0f32, fz_1 - 1.0f32);
-    let result_2 = mx_noise_trilerp_float(_e20, _e26, _e32, _e42, _e48, _e58, _e68, _e82, u_2, v_2, w_1);
+    let _e16 = mx_hash_int3_(X_1, Y_1, Z_1);
+    let _e17 = mx_gradient_float_3d(_e16, fx_1, fy_1, fz_1);
+    let _e20 = mx_hash_int3_(X_1.wrapping_add(1i32), Y_1, Z_1);
+    let _e23 = mx_gradient_float_3d(_e20, fx_1 - 1.0f32, fy_1, fz_1);
+    let _e26 = mx_hash_int3_(X_1, Y_1.wrapping_add(1i32), Z_1);
+    let _e29 = mx_gradient_float_3d(_e26, fx_1, fy_1 - 1.0f32, fz_1);
+    let _e34 = mx_hash_int3_(X_1.wrapping_add(1i32), Y_1.wrapping_add(1i32), Z_1);
+    let _e39 = mx_gradient_float_3d(_e34, fx_1 - 1.0f32, fy_1 - 1.0f32, fz_1);
+    let _e42 = mx_hash_int3_(X_1, Y_1, Z_1.wrapping_add(1i32));
+    let _e45 = mx_gradient_float_3d(_e42, fx_1, fy_1, fz_1 - 1.0f32);
+    let _e50 = mx_hash_int3_(X_1.wrapping_add(1i32), Y_1, Z_1.wrapping_add(1i32));
+    let _e55 = mx_gradient_float_3d(_e50, fx_1 - 1.0f32, fy_1, fz_1 - 1.0f32);
+    let _e60 = mx_hash_int3_(X_1, Y_1.wrapping_add(1i32), Z_1.wrapping_add(1i32));
+    let _e65 = mx_gradient_float_3d(_e60, fx_1, fy_1 - 1.0f32, fz_1 - 1.0f32);
+    let _e72 = mx_hash_int3_(X_1.wrapping_add(1i32), Y_1.wrapping_add(1i32), Z_1.wrapping_add(1i32));
+    let _e79 = mx_gradient_float_3d(_e72, fx_1 - 1.0f32, fy_1 - 1.0f32, fz_1 - 1.0f32);
+    let result_2 = mx_noise_trilerp_float(_e17, _e23, _e29, _e39, _e45, _e55, _e65, _e79, u_2, v_2, w_1);
     0.982f32 * result_2
 }
 
 #[inline(always)]
 #[allow(unused_assignments)]
-pub fn mx_fractal3d_noise_float(p_2: Vec3, octaves: i32, lacunarity: f32, diminish: f32) -> f32 {
+pub fn mx_fractal3d_noise_float(p_2: Vec3, octaves: i32, lacunarity_1: f32, diminish: f32) -> f32 {
     let mut result: f32 = 0.0f32;
-    let mut amplitude_1: f32 = 1.0f32;
-    let mut pp: Vec3 = Vec3::ZERO;
+    let mut amplitude_2: f32 = 1.0f32;
+    let mut pp_1: Vec3 = Vec3::ZERO;
     let mut i: i32 = 0i32;
-    pp = p_2;
+    pp_1 = p_2;
     loop {
         let _e11 = i;
         if _e11 < octaves {
@@ -268,40 +296,46 @@ pub fn mx_fractal3d_noise_float(p_2: Vec3, octaves: i32, lacunarity: f32, dimini
             break;
         }
         {
-            let _e13 = result;
-            let _e14 = amplitude_1;
-            let _e15 = pp;
-            let _e16 = mx_perlin_noise_float_3d(_e15);
-            result = _e13 + _e14 * _e16;
-            let _e19 = amplitude_1;
-            amplitude_1 = _e19 * diminish;
-            let _e21 = pp;
-            pp = _e21 * lacunarity;
+            let _e13 = pp_1;
+            let _e14 = amplitude_2;
+            let _e15 = mx_fractal_done_3d(_e13, _e14, lacunarity_1);
+            if _e15 {
+                break;
+            }
+            let _e16 = result;
+            let _e17 = amplitude_2;
+            let _e18 = pp_1;
+            let _e19 = mx_perlin_noise_float_3d(_e18);
+            result = _e16 + _e17 * _e19;
+            let _e22 = amplitude_2;
+            amplitude_2 = _e22 * diminish;
+            let _e24 = pp_1;
+            pp_1 = _e24 * lacunarity_1;
         }
-        let _e24 = i;
-        i = _e24.wrapping_add(1i32);
+        let _e27 = i;
+        i = _e27.wrapping_add(1i32);
     }
-    let _e26 = result;
-    _e26
+    let _e29 = result;
+    _e29
 }
 
 #[inline(always)]
-pub fn mx_fractal3d_float(amplitude_2: f32, octaves_1: i32, lacunarity_1: f32, diminish_1: f32, position_1: Vec3) -> f32 {
-    let _e5 = mx_fractal3d_noise_float(position_1, octaves_1, lacunarity_1, diminish_1);
-    _e5 * amplitude_2
+pub fn mx_fractal3d_float(amplitude_3: f32, octaves_1: i32, lacunarity_2: f32, diminish_1: f32, position_1: Vec3) -> f32 {
+    let _e5 = mx_fractal3d_noise_float(position_1, octaves_1, lacunarity_2, diminish_1);
+    _e5 * amplitude_3
 }
 
 #[inline(always)]
-pub fn mx_fractal3d_noise_vec2_(p_3: Vec3, octaves_2: i32, lacunarity_2: f32, diminish_2: f32) -> Vec2 {
-    let _e4 = mx_fractal3d_noise_float(p_3, octaves_2, lacunarity_2, diminish_2);
-    let _e10 = mx_fractal3d_noise_float(p_3 + Vec3::new(19.0f32, 193.0f32, 17.0f32), octaves_2, lacunarity_2, diminish_2);
+pub fn mx_fractal3d_noise_vec2_(p_3: Vec3, octaves_2: i32, lacunarity_3: f32, diminish_2: f32) -> Vec2 {
+    let _e4 = mx_fractal3d_noise_float(p_3, octaves_2, lacunarity_3, diminish_2);
+    let _e10 = mx_fractal3d_noise_float(p_3 + Vec3::new(19.0f32, 193.0f32, 17.0f32), octaves_2, lacunarity_3, diminish_2);
     Vec2::new(_e4, _e10)
 }
 
 #[inline(always)]
-pub fn mx_fractal3d_vector2_(amplitude_3: Vec2, octaves_3: i32, lacunarity_3: f32, diminish_3: f32, position_2: Vec3) -> Vec2 {
-    let _e5 = mx_fractal3d_noise_vec2_(position_2, octaves_3, lacunarity_3, diminish_3);
-    _e5 * amplitude_3
+pub fn mx_fractal3d_vector2_(amplitude_4: Vec2, octaves_3: i32, lacunarity_4: f32, diminish_3: f32, position_2: Vec3) -> Vec2 {
+    let _e5 = mx_fractal3d_noise_vec2_(position_2, octaves_3, lacunarity_4, diminish_3);
+    _e5 * amplitude_4
 }
 
 #[inline(always)]
@@ -315,6 +349,11 @@ pub fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {
     let v15_ = mx_fractal3d_float(1.0f32, 5i32, 2.0f32, 0.5f32, v14_);
     let v17_ = mx_fractal3d_vector2_(Vec2::new(1.0f32, 1.0f32), 2i32, 2.0f32, 0.5f32, geom_2.position_object);
     MxOutputs { noise: v10_, fractal: v15_, fractal_v2_: v17_ }
+}
+
+#[inline(always)]
+fn wgsl_or_bvec3_bvec3(a: BVec3, b: BVec3) -> BVec3 {
+    BVec3::new(a.x | b.x, a.y | b.y, a.z | b.z)
 }
 
 /// Columns of `geom`: texcoord (2), then position, normal and tangent, each in object and world

@@ -32,8 +32,14 @@ fn mx_multiply_vector2FA(in1_: vec2<f32>, in2_: f32) -> vec2<f32> {
     return (in1_ * in2_);
 }
 
-fn mx_noise_floor(x: f32) -> i32 {
-    return i32(floor(x));
+fn mx_noise_cell(x: f32) -> i32 {
+    let wrapped = (x - (4294967300f * floor((x / 4294967300f))));
+    let far = i32(u32(select(0f, wrapped, (abs(x) <= 340282350000000000000000000000000000000f))));
+    return select(far, i32(floor(x)), (abs(x) < 2147483600f));
+}
+
+fn mx_noise_frac(x_1: f32) -> f32 {
+    return select(0f, (x_1 - floor(x_1)), (abs(x_1) < 16777216f));
 }
 
 fn mx_noise_fade(t: f32) -> f32 {
@@ -45,15 +51,15 @@ fn mx_noise_bilerp_float(v0_: f32, v1_: f32, v2_: f32, v3_: f32, s: f32, t_1: f3
     return (((1f - t_1) * ((v0_ * s1_) + (v1_ * s))) + (t_1 * ((v2_ * s1_) + (v3_ * s))));
 }
 
-fn mx_gradient_float_2d(hash: u32, x_1: f32, y: f32) -> f32 {
+fn mx_gradient_float_2d(hash: u32, x_2: f32, y: f32) -> f32 {
     let h = (hash & 7u);
-    let u = select(y, x_1, (h < 4u));
-    let v = (2f * select(x_1, y, (h < 4u)));
+    let u = select(y, x_2, (h < 4u));
+    let v = (2f * select(x_2, y, (h < 4u)));
     return (select(u, -(u), ((h & 1u) != 0u)) + select(v, -(v), ((h & 2u) != 0u)));
 }
 
-fn mx_rotl32_(x_2: u32, k: u32) -> u32 {
-    return ((x_2 << k) | (x_2 >> (32u - k)));
+fn mx_rotl32_(x_3: u32, k: u32) -> u32 {
+    return ((x_3 << k) | (x_3 >> (32u - k)));
 }
 
 fn mx_bjfinal(a_in: u32, b_in: u32, c_in: u32) -> u32 {
@@ -117,28 +123,28 @@ fn mx_bjfinal(a_in: u32, b_in: u32, c_in: u32) -> u32 {
     return _e62;
 }
 
-fn mx_hash_int2_(x_3: i32, y_1: i32) -> u32 {
-    let _e7 = mx_bjfinal((3735928580u + u32(x_3)), (3735928580u + u32(y_1)), 3735928580u);
+fn mx_hash_int2_(x_4: i32, y_1: i32) -> u32 {
+    let _e7 = mx_bjfinal((3735928580u + u32(x_4)), (3735928580u + u32(y_1)), 3735928580u);
     return _e7;
 }
 
 fn mx_perlin_noise_float_2d(p: vec2<f32>) -> f32 {
-    let _e2 = mx_noise_floor(p.x);
-    let _e4 = mx_noise_floor(p.y);
-    let fx = (p.x - f32(_e2));
-    let fy = (p.y - f32(_e4));
-    let _e11 = mx_noise_fade(fx);
-    let _e12 = mx_noise_fade(fy);
-    let _e13 = mx_hash_int2_(_e2, _e4);
-    let _e14 = mx_gradient_float_2d(_e13, fx, fy);
-    let _e17 = mx_hash_int2_((_e2 + 1i), _e4);
-    let _e20 = mx_gradient_float_2d(_e17, (fx - 1f), fy);
-    let _e23 = mx_hash_int2_(_e2, (_e4 + 1i));
-    let _e26 = mx_gradient_float_2d(_e23, fx, (fy - 1f));
-    let _e31 = mx_hash_int2_((_e2 + 1i), (_e4 + 1i));
-    let _e36 = mx_gradient_float_2d(_e31, (fx - 1f), (fy - 1f));
-    let _e37 = mx_noise_bilerp_float(_e14, _e20, _e26, _e36, _e11, _e12);
-    return (0.6616f * _e37);
+    let _e2 = mx_noise_cell(p.x);
+    let _e4 = mx_noise_cell(p.y);
+    let _e6 = mx_noise_frac(p.x);
+    let _e8 = mx_noise_frac(p.y);
+    let _e9 = mx_noise_fade(_e6);
+    let _e10 = mx_noise_fade(_e8);
+    let _e11 = mx_hash_int2_(_e2, _e4);
+    let _e12 = mx_gradient_float_2d(_e11, _e6, _e8);
+    let _e15 = mx_hash_int2_((_e2 + 1i), _e4);
+    let _e18 = mx_gradient_float_2d(_e15, (_e6 - 1f), _e8);
+    let _e21 = mx_hash_int2_(_e2, (_e4 + 1i));
+    let _e24 = mx_gradient_float_2d(_e21, _e6, (_e8 - 1f));
+    let _e29 = mx_hash_int2_((_e2 + 1i), (_e4 + 1i));
+    let _e34 = mx_gradient_float_2d(_e29, (_e6 - 1f), (_e8 - 1f));
+    let _e35 = mx_noise_bilerp_float(_e12, _e18, _e24, _e34, _e9, _e10);
+    return (0.6616f * _e35);
 }
 
 fn mx_noise2d_float(amplitude: f32, pivot: f32, texcoord: vec2<f32>) -> f32 {
@@ -151,35 +157,35 @@ fn mx_noise_bilerp_vec3_(v0_1: vec3<f32>, v1_1: vec3<f32>, v2_1: vec3<f32>, v3_1
     return (((1f - t_2) * ((v0_1 * s1_1) + (v1_1 * s_1))) + (t_2 * ((v2_1 * s1_1) + (v3_1 * s_1))));
 }
 
-fn mx_gradient_vec3_2d(hash_1: vec3<u32>, x_4: f32, y_2: f32) -> vec3<f32> {
-    let _e4 = mx_gradient_float_2d(hash_1.x, x_4, y_2);
-    let _e6 = mx_gradient_float_2d(hash_1.y, x_4, y_2);
-    let _e8 = mx_gradient_float_2d(hash_1.z, x_4, y_2);
+fn mx_gradient_vec3_2d(hash_1: vec3<u32>, x_5: f32, y_2: f32) -> vec3<f32> {
+    let _e4 = mx_gradient_float_2d(hash_1.x, x_5, y_2);
+    let _e6 = mx_gradient_float_2d(hash_1.y, x_5, y_2);
+    let _e8 = mx_gradient_float_2d(hash_1.z, x_5, y_2);
     return vec3<f32>(_e4, _e6, _e8);
 }
 
-fn mx_hash_vec3_2d(x_5: i32, y_3: i32) -> vec3<u32> {
-    let _e2 = mx_hash_int2_(x_5, y_3);
+fn mx_hash_vec3_2d(x_6: i32, y_3: i32) -> vec3<u32> {
+    let _e2 = mx_hash_int2_(x_6, y_3);
     return vec3<u32>((_e2 & 255u), ((_e2 >> 8u) & 255u), ((_e2 >> 16u) & 255u));
 }
 
 fn mx_perlin_noise_vec3_2d(p_1: vec2<f32>) -> vec3<f32> {
-    let _e2 = mx_noise_floor(p_1.x);
-    let _e4 = mx_noise_floor(p_1.y);
-    let fx_1 = (p_1.x - f32(_e2));
-    let fy_1 = (p_1.y - f32(_e4));
-    let _e11 = mx_noise_fade(fx_1);
-    let _e12 = mx_noise_fade(fy_1);
-    let _e13 = mx_hash_vec3_2d(_e2, _e4);
-    let _e14 = mx_gradient_vec3_2d(_e13, fx_1, fy_1);
-    let _e17 = mx_hash_vec3_2d((_e2 + 1i), _e4);
-    let _e20 = mx_gradient_vec3_2d(_e17, (fx_1 - 1f), fy_1);
-    let _e23 = mx_hash_vec3_2d(_e2, (_e4 + 1i));
-    let _e26 = mx_gradient_vec3_2d(_e23, fx_1, (fy_1 - 1f));
-    let _e31 = mx_hash_vec3_2d((_e2 + 1i), (_e4 + 1i));
-    let _e36 = mx_gradient_vec3_2d(_e31, (fx_1 - 1f), (fy_1 - 1f));
-    let _e37 = mx_noise_bilerp_vec3_(_e14, _e20, _e26, _e36, _e11, _e12);
-    return (0.6616f * _e37);
+    let _e2 = mx_noise_cell(p_1.x);
+    let _e4 = mx_noise_cell(p_1.y);
+    let _e6 = mx_noise_frac(p_1.x);
+    let _e8 = mx_noise_frac(p_1.y);
+    let _e9 = mx_noise_fade(_e6);
+    let _e10 = mx_noise_fade(_e8);
+    let _e11 = mx_hash_vec3_2d(_e2, _e4);
+    let _e12 = mx_gradient_vec3_2d(_e11, _e6, _e8);
+    let _e15 = mx_hash_vec3_2d((_e2 + 1i), _e4);
+    let _e18 = mx_gradient_vec3_2d(_e15, (_e6 - 1f), _e8);
+    let _e21 = mx_hash_vec3_2d(_e2, (_e4 + 1i));
+    let _e24 = mx_gradient_vec3_2d(_e21, _e6, (_e8 - 1f));
+    let _e29 = mx_hash_vec3_2d((_e2 + 1i), (_e4 + 1i));
+    let _e34 = mx_gradient_vec3_2d(_e29, (_e6 - 1f), (_e8 - 1f));
+    let _e35 = mx_noise_bilerp_vec3_(_e12, _e18, _e24, _e34, _e9, _e10);
+    return (0.6616f * _e35);
 }
 
 fn mx_noise2d_vector3_(amplitude_1: vec3<f32>, pivot_1: f32, texcoord_1: vec2<f32>) -> vec3<f32> {

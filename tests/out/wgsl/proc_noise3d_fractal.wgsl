@@ -24,8 +24,14 @@ var<storage, read_write> mx_output_buffer: array<f32>;
 @group(0) @binding(3) 
 var<uniform> mx_params: vec4<u32>;
 
-fn mx_noise_floor(x: f32) -> i32 {
-    return i32(floor(x));
+fn mx_noise_cell(x: f32) -> i32 {
+    let wrapped = (x - (4294967300f * floor((x / 4294967300f))));
+    let far = i32(u32(select(0f, wrapped, (abs(x) <= 340282350000000000000000000000000000000f))));
+    return select(far, i32(floor(x)), (abs(x) < 2147483600f));
+}
+
+fn mx_noise_frac(x_1: f32) -> f32 {
+    return select(0f, (x_1 - floor(x_1)), (abs(x_1) < 16777216f));
 }
 
 fn mx_noise_fade(t: f32) -> f32 {
@@ -39,30 +45,30 @@ fn mx_noise_trilerp_vec3_(v0_: vec3<f32>, v1_: vec3<f32>, v2_: vec3<f32>, v3_: v
     return ((r1_ * ((t1_ * ((v0_ * s1_) + (v1_ * s))) + (t_1 * ((v2_ * s1_) + (v3_ * s))))) + (r * ((t1_ * ((v4_ * s1_) + (v5_ * s))) + (t_1 * ((v6_ * s1_) + (v7_ * s))))));
 }
 
-fn mx_gradient_float_3d(hash: u32, x_1: f32, y: f32, z: f32) -> f32 {
+fn mx_gradient_float_3d(hash: u32, x_2: f32, y: f32, z: f32) -> f32 {
     var local: bool;
 
     let h = (hash & 15u);
-    let u = select(y, x_1, (h < 8u));
+    let u = select(y, x_2, (h < 8u));
     if !((h == 12u)) {
         local = (h == 14u);
     } else {
         local = true;
     }
     let _e17 = local;
-    let v = select(select(z, x_1, _e17), y, (h < 4u));
+    let v = select(select(z, x_2, _e17), y, (h < 4u));
     return (select(u, -(u), ((h & 1u) != 0u)) + select(v, -(v), ((h & 2u) != 0u)));
 }
 
-fn mx_gradient_vec3_3d(hash_1: vec3<u32>, x_2: f32, y_1: f32, z_1: f32) -> vec3<f32> {
-    let _e5 = mx_gradient_float_3d(hash_1.x, x_2, y_1, z_1);
-    let _e7 = mx_gradient_float_3d(hash_1.y, x_2, y_1, z_1);
-    let _e9 = mx_gradient_float_3d(hash_1.z, x_2, y_1, z_1);
+fn mx_gradient_vec3_3d(hash_1: vec3<u32>, x_3: f32, y_1: f32, z_1: f32) -> vec3<f32> {
+    let _e5 = mx_gradient_float_3d(hash_1.x, x_3, y_1, z_1);
+    let _e7 = mx_gradient_float_3d(hash_1.y, x_3, y_1, z_1);
+    let _e9 = mx_gradient_float_3d(hash_1.z, x_3, y_1, z_1);
     return vec3<f32>(_e5, _e7, _e9);
 }
 
-fn mx_rotl32_(x_3: u32, k: u32) -> u32 {
-    return ((x_3 << k) | (x_3 >> (32u - k)));
+fn mx_rotl32_(x_4: u32, k: u32) -> u32 {
+    return ((x_4 << k) | (x_4 >> (32u - k)));
 }
 
 fn mx_bjfinal(a_in: u32, b_in: u32, c_in: u32) -> u32 {
@@ -126,44 +132,44 @@ fn mx_bjfinal(a_in: u32, b_in: u32, c_in: u32) -> u32 {
     return _e62;
 }
 
-fn mx_hash_int3_(x_4: i32, y_2: i32, z_2: i32) -> u32 {
-    let _e10 = mx_bjfinal((3735928584u + u32(x_4)), (3735928584u + u32(y_2)), (3735928584u + u32(z_2)));
+fn mx_hash_int3_(x_5: i32, y_2: i32, z_2: i32) -> u32 {
+    let _e10 = mx_bjfinal((3735928584u + u32(x_5)), (3735928584u + u32(y_2)), (3735928584u + u32(z_2)));
     return _e10;
 }
 
-fn mx_hash_vec3_3d(x_5: i32, y_3: i32, z_3: i32) -> vec3<u32> {
-    let _e3 = mx_hash_int3_(x_5, y_3, z_3);
+fn mx_hash_vec3_3d(x_6: i32, y_3: i32, z_3: i32) -> vec3<u32> {
+    let _e3 = mx_hash_int3_(x_6, y_3, z_3);
     return vec3<u32>((_e3 & 255u), ((_e3 >> 8u) & 255u), ((_e3 >> 16u) & 255u));
 }
 
 fn mx_perlin_noise_vec3_3d(p: vec3<f32>) -> vec3<f32> {
-    let _e2 = mx_noise_floor(p.x);
-    let _e4 = mx_noise_floor(p.y);
-    let _e6 = mx_noise_floor(p.z);
-    let fx = (p.x - f32(_e2));
-    let fy = (p.y - f32(_e4));
-    let fz = (p.z - f32(_e6));
-    let _e16 = mx_noise_fade(fx);
-    let _e17 = mx_noise_fade(fy);
-    let _e18 = mx_noise_fade(fz);
-    let _e19 = mx_hash_vec3_3d(_e2, _e4, _e6);
-    let _e20 = mx_gradient_vec3_3d(_e19, fx, fy, fz);
-    let _e23 = mx_hash_vec3_3d((_e2 + 1i), _e4, _e6);
-    let _e26 = mx_gradient_vec3_3d(_e23, (fx - 1f), fy, fz);
-    let _e29 = mx_hash_vec3_3d(_e2, (_e4 + 1i), _e6);
-    let _e32 = mx_gradient_vec3_3d(_e29, fx, (fy - 1f), fz);
-    let _e37 = mx_hash_vec3_3d((_e2 + 1i), (_e4 + 1i), _e6);
-    let _e42 = mx_gradient_vec3_3d(_e37, (fx - 1f), (fy - 1f), fz);
-    let _e45 = mx_hash_vec3_3d(_e2, _e4, (_e6 + 1i));
-    let _e48 = mx_gradient_vec3_3d(_e45, fx, fy, (fz - 1f));
-    let _e53 = mx_hash_vec3_3d((_e2 + 1i), _e4, (_e6 + 1i));
-    let _e58 = mx_gradient_vec3_3d(_e53, (fx - 1f), fy, (fz - 1f));
-    let _e63 = mx_hash_vec3_3d(_e2, (_e4 + 1i), (_e6 + 1i));
-    let _e68 = mx_gradient_vec3_3d(_e63, fx, (fy - 1f), (fz - 1f));
-    let _e75 = mx_hash_vec3_3d((_e2 + 1i), (_e4 + 1i), (_e6 + 1i));
-    let _e82 = mx_gradient_vec3_3d(_e75, (fx - 1f), (fy - 1f), (fz - 1f));
-    let _e83 = mx_noise_trilerp_vec3_(_e20, _e26, _e32, _e42, _e48, _e58, _e68, _e82, _e16, _e17, _e18);
-    return (0.982f * _e83);
+    let _e2 = mx_noise_cell(p.x);
+    let _e4 = mx_noise_cell(p.y);
+    let _e6 = mx_noise_cell(p.z);
+    let _e8 = mx_noise_frac(p.x);
+    let _e10 = mx_noise_frac(p.y);
+    let _e12 = mx_noise_frac(p.z);
+    let _e13 = mx_noise_fade(_e8);
+    let _e14 = mx_noise_fade(_e10);
+    let _e15 = mx_noise_fade(_e12);
+    let _e16 = mx_hash_vec3_3d(_e2, _e4, _e6);
+    let _e17 = mx_gradient_vec3_3d(_e16, _e8, _e10, _e12);
+    let _e20 = mx_hash_vec3_3d((_e2 + 1i), _e4, _e6);
+    let _e23 = mx_gradient_vec3_3d(_e20, (_e8 - 1f), _e10, _e12);
+    let _e26 = mx_hash_vec3_3d(_e2, (_e4 + 1i), _e6);
+    let _e29 = mx_gradient_vec3_3d(_e26, _e8, (_e10 - 1f), _e12);
+    let _e34 = mx_hash_vec3_3d((_e2 + 1i), (_e4 + 1i), _e6);
+    let _e39 = mx_gradient_vec3_3d(_e34, (_e8 - 1f), (_e10 - 1f), _e12);
+    let _e42 = mx_hash_vec3_3d(_e2, _e4, (_e6 + 1i));
+    let _e45 = mx_gradient_vec3_3d(_e42, _e8, _e10, (_e12 - 1f));
+    let _e50 = mx_hash_vec3_3d((_e2 + 1i), _e4, (_e6 + 1i));
+    let _e55 = mx_gradient_vec3_3d(_e50, (_e8 - 1f), _e10, (_e12 - 1f));
+    let _e60 = mx_hash_vec3_3d(_e2, (_e4 + 1i), (_e6 + 1i));
+    let _e65 = mx_gradient_vec3_3d(_e60, _e8, (_e10 - 1f), (_e12 - 1f));
+    let _e72 = mx_hash_vec3_3d((_e2 + 1i), (_e4 + 1i), (_e6 + 1i));
+    let _e79 = mx_gradient_vec3_3d(_e72, (_e8 - 1f), (_e10 - 1f), (_e12 - 1f));
+    let _e80 = mx_noise_trilerp_vec3_(_e17, _e23, _e29, _e39, _e45, _e55, _e65, _e79, _e13, _e14, _e15);
+    return (0.982f * _e80);
 }
 
 fn mx_noise3d_vector3_(amplitude: vec3<f32>, pivot: f32, position: vec3<f32>) -> vec3<f32> {
@@ -186,6 +192,26 @@ fn mx_position_vector3_(geom_1: mx_geometry, space: i32) -> vec3<f32> {
     return geom_1.position_object;
 }
 
+fn mx_fractal_done_3d(pp: vec3<f32>, amplitude_1: f32, lacunarity: f32) -> bool {
+    var local_1: bool;
+    var local_2: bool;
+
+    let lattice = ((pp == vec3(0f)) | (abs(pp) >= vec3(16777216f)));
+    if !((amplitude_1 == 0f)) {
+        if all(lattice) {
+            local_2 = (abs(lacunarity) >= 1f);
+        } else {
+            local_2 = false;
+        }
+        let _e23 = local_2;
+        local_1 = _e23;
+    } else {
+        local_1 = true;
+    }
+    let _e25 = local_1;
+    return _e25;
+}
+
 fn mx_noise_trilerp_float(v0_1: f32, v1_1: f32, v2_1: f32, v3_1: f32, v4_1: f32, v5_1: f32, v6_1: f32, v7_1: f32, s_1: f32, t_2: f32, r_1: f32) -> f32 {
     let s1_1 = (1f - s_1);
     let t1_1 = (1f - t_2);
@@ -194,42 +220,42 @@ fn mx_noise_trilerp_float(v0_1: f32, v1_1: f32, v2_1: f32, v3_1: f32, v4_1: f32,
 }
 
 fn mx_perlin_noise_float_3d(p_1: vec3<f32>) -> f32 {
-    let _e2 = mx_noise_floor(p_1.x);
-    let _e4 = mx_noise_floor(p_1.y);
-    let _e6 = mx_noise_floor(p_1.z);
-    let fx_1 = (p_1.x - f32(_e2));
-    let fy_1 = (p_1.y - f32(_e4));
-    let fz_1 = (p_1.z - f32(_e6));
-    let _e16 = mx_noise_fade(fx_1);
-    let _e17 = mx_noise_fade(fy_1);
-    let _e18 = mx_noise_fade(fz_1);
-    let _e19 = mx_hash_int3_(_e2, _e4, _e6);
-    let _e20 = mx_gradient_float_3d(_e19, fx_1, fy_1, fz_1);
-    let _e23 = mx_hash_int3_((_e2 + 1i), _e4, _e6);
-    let _e26 = mx_gradient_float_3d(_e23, (fx_1 - 1f), fy_1, fz_1);
-    let _e29 = mx_hash_int3_(_e2, (_e4 + 1i), _e6);
-    let _e32 = mx_gradient_float_3d(_e29, fx_1, (fy_1 - 1f), fz_1);
-    let _e37 = mx_hash_int3_((_e2 + 1i), (_e4 + 1i), _e6);
-    let _e42 = mx_gradient_float_3d(_e37, (fx_1 - 1f), (fy_1 - 1f), fz_1);
-    let _e45 = mx_hash_int3_(_e2, _e4, (_e6 + 1i));
-    let _e48 = mx_gradient_float_3d(_e45, fx_1, fy_1, (fz_1 - 1f));
-    let _e53 = mx_hash_int3_((_e2 + 1i), _e4, (_e6 + 1i));
-    let _e58 = mx_gradient_float_3d(_e53, (fx_1 - 1f), fy_1, (fz_1 - 1f));
-    let _e63 = mx_hash_int3_(_e2, (_e4 + 1i), (_e6 + 1i));
-    let _e68 = mx_gradient_float_3d(_e63, fx_1, (fy_1 - 1f), (fz_1 - 1f));
-    let _e75 = mx_hash_int3_((_e2 + 1i), (_e4 + 1i), (_e6 + 1i));
-    let _e82 = mx_gradient_float_3d(_e75, (fx_1 - 1f), (fy_1 - 1f), (fz_1 - 1f));
-    let _e83 = mx_noise_trilerp_float(_e20, _e26, _e32, _e42, _e48, _e58, _e68, _e82, _e16, _e17, _e18);
-    return (0.982f * _e83);
+    let _e2 = mx_noise_cell(p_1.x);
+    let _e4 = mx_noise_cell(p_1.y);
+    let _e6 = mx_noise_cell(p_1.z);
+    let _e8 = mx_noise_frac(p_1.x);
+    let _e10 = mx_noise_frac(p_1.y);
+    let _e12 = mx_noise_frac(p_1.z);
+    let _e13 = mx_noise_fade(_e8);
+    let _e14 = mx_noise_fade(_e10);
+    let _e15 = mx_noise_fade(_e12);
+    let _e16 = mx_hash_int3_(_e2, _e4, _e6);
+    let _e17 = mx_gradient_float_3d(_e16, _e8, _e10, _e12);
+    let _e20 = mx_hash_int3_((_e2 + 1i), _e4, _e6);
+    let _e23 = mx_gradient_float_3d(_e20, (_e8 - 1f), _e10, _e12);
+    let _e26 = mx_hash_int3_(_e2, (_e4 + 1i), _e6);
+    let _e29 = mx_gradient_float_3d(_e26, _e8, (_e10 - 1f), _e12);
+    let _e34 = mx_hash_int3_((_e2 + 1i), (_e4 + 1i), _e6);
+    let _e39 = mx_gradient_float_3d(_e34, (_e8 - 1f), (_e10 - 1f), _e12);
+    let _e42 = mx_hash_int3_(_e2, _e4, (_e6 + 1i));
+    let _e45 = mx_gradient_float_3d(_e42, _e8, _e10, (_e12 - 1f));
+    let _e50 = mx_hash_int3_((_e2 + 1i), _e4, (_e6 + 1i));
+    let _e55 = mx_gradient_float_3d(_e50, (_e8 - 1f), _e10, (_e12 - 1f));
+    let _e60 = mx_hash_int3_(_e2, (_e4 + 1i), (_e6 + 1i));
+    let _e65 = mx_gradient_float_3d(_e60, _e8, (_e10 - 1f), (_e12 - 1f));
+    let _e72 = mx_hash_int3_((_e2 + 1i), (_e4 + 1i), (_e6 + 1i));
+    let _e79 = mx_gradient_float_3d(_e72, (_e8 - 1f), (_e10 - 1f), (_e12 - 1f));
+    let _e80 = mx_noise_trilerp_float(_e17, _e23, _e29, _e39, _e45, _e55, _e65, _e79, _e13, _e14, _e15);
+    return (0.982f * _e80);
 }
 
-fn mx_fractal3d_noise_float(p_2: vec3<f32>, octaves: i32, lacunarity: f32, diminish: f32) -> f32 {
+fn mx_fractal3d_noise_float(p_2: vec3<f32>, octaves: i32, lacunarity_1: f32, diminish: f32) -> f32 {
     var result: f32 = 0f;
-    var amplitude_1: f32 = 1f;
-    var pp: vec3<f32>;
+    var amplitude_2: f32 = 1f;
+    var pp_1: vec3<f32>;
     var i: i32 = 0i;
 
-    pp = p_2;
+    pp_1 = p_2;
     loop {
         let _e11 = i;
         if (_e11 < octaves) {
@@ -237,39 +263,45 @@ fn mx_fractal3d_noise_float(p_2: vec3<f32>, octaves: i32, lacunarity: f32, dimin
             break;
         }
         {
-            let _e13 = result;
-            let _e14 = amplitude_1;
-            let _e15 = pp;
-            let _e16 = mx_perlin_noise_float_3d(_e15);
-            result = (_e13 + (_e14 * _e16));
-            let _e19 = amplitude_1;
-            amplitude_1 = (_e19 * diminish);
-            let _e21 = pp;
-            pp = (_e21 * lacunarity);
+            let _e13 = pp_1;
+            let _e14 = amplitude_2;
+            let _e15 = mx_fractal_done_3d(_e13, _e14, lacunarity_1);
+            if _e15 {
+                break;
+            }
+            let _e16 = result;
+            let _e17 = amplitude_2;
+            let _e18 = pp_1;
+            let _e19 = mx_perlin_noise_float_3d(_e18);
+            result = (_e16 + (_e17 * _e19));
+            let _e22 = amplitude_2;
+            amplitude_2 = (_e22 * diminish);
+            let _e24 = pp_1;
+            pp_1 = (_e24 * lacunarity_1);
         }
         continuing {
-            let _e24 = i;
-            i = (_e24 + 1i);
+            let _e27 = i;
+            i = (_e27 + 1i);
         }
     }
-    let _e26 = result;
-    return _e26;
+    let _e29 = result;
+    return _e29;
 }
 
-fn mx_fractal3d_float(amplitude_2: f32, octaves_1: i32, lacunarity_1: f32, diminish_1: f32, position_1: vec3<f32>) -> f32 {
-    let _e5 = mx_fractal3d_noise_float(position_1, octaves_1, lacunarity_1, diminish_1);
-    return (_e5 * amplitude_2);
+fn mx_fractal3d_float(amplitude_3: f32, octaves_1: i32, lacunarity_2: f32, diminish_1: f32, position_1: vec3<f32>) -> f32 {
+    let _e5 = mx_fractal3d_noise_float(position_1, octaves_1, lacunarity_2, diminish_1);
+    return (_e5 * amplitude_3);
 }
 
-fn mx_fractal3d_noise_vec2_(p_3: vec3<f32>, octaves_2: i32, lacunarity_2: f32, diminish_2: f32) -> vec2<f32> {
-    let _e4 = mx_fractal3d_noise_float(p_3, octaves_2, lacunarity_2, diminish_2);
-    let _e10 = mx_fractal3d_noise_float((p_3 + vec3<f32>(19f, 193f, 17f)), octaves_2, lacunarity_2, diminish_2);
+fn mx_fractal3d_noise_vec2_(p_3: vec3<f32>, octaves_2: i32, lacunarity_3: f32, diminish_2: f32) -> vec2<f32> {
+    let _e4 = mx_fractal3d_noise_float(p_3, octaves_2, lacunarity_3, diminish_2);
+    let _e10 = mx_fractal3d_noise_float((p_3 + vec3<f32>(19f, 193f, 17f)), octaves_2, lacunarity_3, diminish_2);
     return vec2<f32>(_e4, _e10);
 }
 
-fn mx_fractal3d_vector2_(amplitude_3: vec2<f32>, octaves_3: i32, lacunarity_3: f32, diminish_3: f32, position_2: vec3<f32>) -> vec2<f32> {
-    let _e5 = mx_fractal3d_noise_vec2_(position_2, octaves_3, lacunarity_3, diminish_3);
-    return (_e5 * amplitude_3);
+fn mx_fractal3d_vector2_(amplitude_4: vec2<f32>, octaves_3: i32, lacunarity_4: f32, diminish_3: f32, position_2: vec3<f32>) -> vec2<f32> {
+    let _e5 = mx_fractal3d_noise_vec2_(position_2, octaves_3, lacunarity_4, diminish_3);
+    return (_e5 * amplitude_4);
 }
 
 fn mx_pattern(geom_2: mx_geometry) -> MxOutputs {

@@ -26,6 +26,24 @@ fn mx_noise_floor(x: f32) -> i32 {
     return i32(floor(x));
 }
 
+// The Perlin lattice cell of x: MaterialX's int(floor(x)) for |x| < 2^31. Beyond, where the
+// GLSL conversion is undefined (and a saturating one leaves x - float(cell) huge, so the fade
+// overflows and the noise is NaN), every f32 is an integer and the cell is x modulo 2^32 — the
+// two's-complement wrap the u32 hash arithmetic applies to lattice coordinates anyway (exact:
+// the remainder is a multiple of x's ulp below 2^32); ±inf and NaN give cell 0.
+fn mx_noise_cell(x: f32) -> i32 {
+    let wrapped = x - 4294967296.0 * floor(x / 4294967296.0);
+    let far = i32(u32(select(0.0, wrapped, abs(x) <= 3.4028235e38)));
+    return select(far, i32(floor(x)), abs(x) < 2147483648.0);
+}
+
+// x's position in its cell, x - floor(x): MaterialX's x - float(int(floor(x))) wherever that is
+// defined. From |x| = 2^24 on every f32 is an integer and it is 0 (so Perlin noise is 0 there,
+// as MaterialX's is up to 2^31); also 0 for ±inf and NaN, which would give NaN.
+fn mx_noise_frac(x: f32) -> f32 {
+    return select(0.0, x - floor(x), abs(x) < 16777216.0);
+}
+
 // Quintic fade 6t^5 - 15t^4 + 10t^3.
 fn mx_noise_fade(t: f32) -> f32 {
     return t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
@@ -167,10 +185,10 @@ fn mx_hash_vec3_3d(x: i32, y: i32, z: i32) -> vec3<u32> {
 // Perlin gradient noise, signed, roughly [-1, 1].
 
 fn mx_perlin_noise_float_2d(p: vec2<f32>) -> f32 {
-    let X = mx_noise_floor(p.x);
-    let Y = mx_noise_floor(p.y);
-    let fx = p.x - f32(X);
-    let fy = p.y - f32(Y);
+    let X = mx_noise_cell(p.x);
+    let Y = mx_noise_cell(p.y);
+    let fx = mx_noise_frac(p.x);
+    let fy = mx_noise_frac(p.y);
     let u = mx_noise_fade(fx);
     let v = mx_noise_fade(fy);
     let result = mx_noise_bilerp_float(
@@ -183,12 +201,12 @@ fn mx_perlin_noise_float_2d(p: vec2<f32>) -> f32 {
 }
 
 fn mx_perlin_noise_float_3d(p: vec3<f32>) -> f32 {
-    let X = mx_noise_floor(p.x);
-    let Y = mx_noise_floor(p.y);
-    let Z = mx_noise_floor(p.z);
-    let fx = p.x - f32(X);
-    let fy = p.y - f32(Y);
-    let fz = p.z - f32(Z);
+    let X = mx_noise_cell(p.x);
+    let Y = mx_noise_cell(p.y);
+    let Z = mx_noise_cell(p.z);
+    let fx = mx_noise_frac(p.x);
+    let fy = mx_noise_frac(p.y);
+    let fz = mx_noise_frac(p.z);
     let u = mx_noise_fade(fx);
     let v = mx_noise_fade(fy);
     let w = mx_noise_fade(fz);
@@ -206,10 +224,10 @@ fn mx_perlin_noise_float_3d(p: vec3<f32>) -> f32 {
 }
 
 fn mx_perlin_noise_vec3_2d(p: vec2<f32>) -> vec3<f32> {
-    let X = mx_noise_floor(p.x);
-    let Y = mx_noise_floor(p.y);
-    let fx = p.x - f32(X);
-    let fy = p.y - f32(Y);
+    let X = mx_noise_cell(p.x);
+    let Y = mx_noise_cell(p.y);
+    let fx = mx_noise_frac(p.x);
+    let fy = mx_noise_frac(p.y);
     let u = mx_noise_fade(fx);
     let v = mx_noise_fade(fy);
     let result = mx_noise_bilerp_vec3(
@@ -222,12 +240,12 @@ fn mx_perlin_noise_vec3_2d(p: vec2<f32>) -> vec3<f32> {
 }
 
 fn mx_perlin_noise_vec3_3d(p: vec3<f32>) -> vec3<f32> {
-    let X = mx_noise_floor(p.x);
-    let Y = mx_noise_floor(p.y);
-    let Z = mx_noise_floor(p.z);
-    let fx = p.x - f32(X);
-    let fy = p.y - f32(Y);
-    let fz = p.z - f32(Z);
+    let X = mx_noise_cell(p.x);
+    let Y = mx_noise_cell(p.y);
+    let Z = mx_noise_cell(p.z);
+    let fx = mx_noise_frac(p.x);
+    let fy = mx_noise_frac(p.y);
+    let fz = mx_noise_frac(p.z);
     let u = mx_noise_fade(fx);
     let v = mx_noise_fade(fy);
     let w = mx_noise_fade(fz);
@@ -278,13 +296,34 @@ fn mx_cell_noise_vec3_3d(p: vec3<f32>) -> vec3<f32> {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Fractal (fBm) sums of Perlin noise: sum_{i<octaves} diminish^i * perlin(p * lacunarity^i).
+// Fractal (fBm) sums of Perlin noise: sum_{i<octaves} diminish^i * perlin(p * lacunarity^i),
+// MaterialX's loop (powers by repeated multiplication). It stays finite for any octave count:
+// the lattice helpers above give 0 where MaterialX's int conversion overflows (lacunarity 2
+// takes a coordinate of 1 past 2^31 at octave 32, and MaterialX's GLSL is undefined there; a
+// saturating conversion gives NaN), and the loop stops at the first octave from which every
+// later one adds exactly 0 — the amplitude has underflowed to 0, or every coordinate is 0 or an
+// integer of at least 2^24 that |lacunarity| >= 1 keeps integer (Perlin noise is 0 on the
+// lattice). Where MaterialX's sum is defined, the value is MaterialX's to the bit; beyond, it
+// is the converged sum. (With diminish > 1 the sum grows as MaterialX's does.)
+
+fn mx_fractal_done_2d(pp: vec2<f32>, amplitude: f32, lacunarity: f32) -> bool {
+    let lattice = (pp == vec2<f32>(0.0)) | (abs(pp) >= vec2<f32>(16777216.0));
+    return amplitude == 0.0 || (all(lattice) && abs(lacunarity) >= 1.0);
+}
+
+fn mx_fractal_done_3d(pp: vec3<f32>, amplitude: f32, lacunarity: f32) -> bool {
+    let lattice = (pp == vec3<f32>(0.0)) | (abs(pp) >= vec3<f32>(16777216.0));
+    return amplitude == 0.0 || (all(lattice) && abs(lacunarity) >= 1.0);
+}
 
 fn mx_fractal2d_noise_float(p: vec2<f32>, octaves: i32, lacunarity: f32, diminish: f32) -> f32 {
     var result = 0.0;
     var amplitude = 1.0;
     var pp = p;
     for (var i = 0; i < octaves; i++) {
+        if (mx_fractal_done_2d(pp, amplitude, lacunarity)) {
+            break;
+        }
         result += amplitude * mx_perlin_noise_float_2d(pp);
         amplitude *= diminish;
         pp *= lacunarity;
@@ -297,6 +336,9 @@ fn mx_fractal2d_noise_vec3(p: vec2<f32>, octaves: i32, lacunarity: f32, diminish
     var amplitude = 1.0;
     var pp = p;
     for (var i = 0; i < octaves; i++) {
+        if (mx_fractal_done_2d(pp, amplitude, lacunarity)) {
+            break;
+        }
         result += amplitude * mx_perlin_noise_vec3_2d(pp);
         amplitude *= diminish;
         pp *= lacunarity;
@@ -320,6 +362,9 @@ fn mx_fractal3d_noise_float(p: vec3<f32>, octaves: i32, lacunarity: f32, diminis
     var amplitude = 1.0;
     var pp = p;
     for (var i = 0; i < octaves; i++) {
+        if (mx_fractal_done_3d(pp, amplitude, lacunarity)) {
+            break;
+        }
         result += amplitude * mx_perlin_noise_float_3d(pp);
         amplitude *= diminish;
         pp *= lacunarity;
@@ -332,6 +377,9 @@ fn mx_fractal3d_noise_vec3(p: vec3<f32>, octaves: i32, lacunarity: f32, diminish
     var amplitude = 1.0;
     var pp = p;
     for (var i = 0; i < octaves; i++) {
+        if (mx_fractal_done_3d(pp, amplitude, lacunarity)) {
+            break;
+        }
         result += amplitude * mx_perlin_noise_vec3_3d(pp);
         amplitude *= diminish;
         pp *= lacunarity;

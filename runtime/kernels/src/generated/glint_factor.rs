@@ -69,8 +69,8 @@ pub fn mx_frame_new(normal: Vec3, tangent: Vec3, wv: Vec3) -> mx_frame {
     let a_1 = -1.0f32 / (s_1 + n.z);
     let b_1 = n.x * n.y * a_1;
     let any_x = Vec3::new(1.0f32 + s_1 * n.x * n.x * a_1, s_1 * b_1, -s_1 * n.x);
-    let x_5 = mx_normalize_or(tangent - tangent.dot(n) * n, any_x);
-    mx_frame { x: x_5, y: n.cross(x_5), n: n }
+    let x_6 = mx_normalize_or(tangent - tangent.dot(n) * n, any_x);
+    mx_frame { x: x_6, y: n.cross(x_6), n: n }
 }
 
 #[inline(always)]
@@ -86,8 +86,15 @@ pub fn uplift_glint_hash(x: u32) -> u32 {
 }
 
 #[inline(always)]
-pub fn mx_noise_floor(x_1: f32) -> i32 {
-    x_1.floor() as i32
+pub fn mx_noise_cell(x_1: f32) -> i32 {
+    let wrapped = x_1 - 4294967300.0f32 * (x_1 / 4294967300.0f32).floor();
+    let far = ((if x_1.abs() <= 3.4028235e38f32 { wrapped } else { 0.0f32 }) as u32) as i32;
+    if x_1.abs() < 2147483600.0f32 { x_1.floor() as i32 } else { far }
+}
+
+#[inline(always)]
+pub fn mx_noise_frac(x_2: f32) -> f32 {
+    if x_2.abs() < 16777216.0f32 { x_2 - x_2.floor() } else { 0.0f32 }
 }
 
 #[inline(always)]
@@ -105,23 +112,23 @@ pub fn mx_noise_trilerp_float(v0_: f32, v1_: f32, v2_: f32, v3_: f32, v4_: f32, 
 
 #[inline(always)]
 #[allow(unused_assignments)]
-pub fn mx_gradient_float_3d(hash: u32, x_2: f32, y: f32, z: f32) -> f32 {
+pub fn mx_gradient_float_3d(hash: u32, x_3: f32, y: f32, z: f32) -> f32 {
     let mut local: bool = false;
     let h_1 = hash & 15u32;
-    let u = if h_1 < 8u32 { x_2 } else { y };
+    let u = if h_1 < 8u32 { x_3 } else { y };
     if !(h_1 == 12u32) {
         local = h_1 == 14u32;
     } else {
         local = true;
     }
     let _e17 = local;
-    let v_2 = if h_1 < 4u32 { y } else { if _e17 { x_2 } else { z } };
+    let v_2 = if h_1 < 4u32 { y } else { if _e17 { x_3 } else { z } };
     (if h_1 & 1u32 != 0u32 { -u } else { u }) + (if h_1 & 2u32 != 0u32 { -v_2 } else { v_2 })
 }
 
 #[inline(always)]
-pub fn mx_rotl32_(x_3: u32, k: u32) -> u32 {
-    x_3.wrapping_shl(k) | x_3.wrapping_shr(32u32.wrapping_sub(k))
+pub fn mx_rotl32_(x_4: u32, k: u32) -> u32 {
+    x_4.wrapping_shl(k) | x_4.wrapping_shr(32u32.wrapping_sub(k))
 }
 
 #[inline(always)]
@@ -187,40 +194,40 @@ pub fn mx_bjfinal(a_in: u32, b_in: u32, c_in: u32) -> u32 {
 }
 
 #[inline(always)]
-pub fn mx_hash_int3_(x_4: i32, y_1: i32, z_1: i32) -> u32 {
-    let _e10 = mx_bjfinal(3735928584u32.wrapping_add(x_4 as u32), 3735928584u32.wrapping_add(y_1 as u32), 3735928584u32.wrapping_add(z_1 as u32));
+pub fn mx_hash_int3_(x_5: i32, y_1: i32, z_1: i32) -> u32 {
+    let _e10 = mx_bjfinal(3735928584u32.wrapping_add(x_5 as u32), 3735928584u32.wrapping_add(y_1 as u32), 3735928584u32.wrapping_add(z_1 as u32));
     _e10
 }
 
 #[inline(always)]
 #[allow(non_snake_case)]
 pub fn mx_perlin_noise_float_3d(p: Vec3) -> f32 {
-    let X = mx_noise_floor(p.x);
-    let Y = mx_noise_floor(p.y);
-    let Z = mx_noise_floor(p.z);
-    let fx = p.x - X as f32;
-    let fy = p.y - Y as f32;
-    let fz = p.z - Z as f32;
+    let X = mx_noise_cell(p.x);
+    let Y = mx_noise_cell(p.y);
+    let Z = mx_noise_cell(p.z);
+    let fx = mx_noise_frac(p.x);
+    let fy = mx_noise_frac(p.y);
+    let fz = mx_noise_frac(p.z);
     let u_1 = mx_noise_fade(fx);
     let v_3 = mx_noise_fade(fy);
     let w = mx_noise_fade(fz);
-    let _e19 = mx_hash_int3_(X, Y, Z);
-    let _e20 = mx_gradient_float_3d(_e19, fx, fy, fz);
-    let _e23 = mx_hash_int3_(X.wrapping_add(1i32), Y, Z);
-    let _e26 = mx_gradient_float_3d(_e23, fx - 1.0f32, fy, fz);
-    let _e29 = mx_hash_int3_(X, Y.wrapping_add(1i32), Z);
-    let _e32 = mx_gradient_float_3d(_e29, fx, fy - 1.0f32, fz);
-    let _e37 = mx_hash_int3_(X.wrapping_add(1i32), Y.wrapping_add(1i32), Z);
-    let _e42 = mx_gradient_float_3d(_e37, fx - 1.0f32, fy - 1.0f32, fz);
-    let _e45 = mx_hash_int3_(X, Y, Z.wrapping_add(1i32));
-    let _e48 = mx_gradient_float_3d(_e45, fx, fy, fz - 1.0f32);
-    let _e53 = mx_hash_int3_(X.wrapping_add(1i32), Y, Z.wrapping_add(1i32));
-    let _e58 = mx_gradient_float_3d(_e53, fx - 1.0f32, fy, fz - 1.0f32);
-    let _e63 = mx_hash_int3_(X, Y.wrapping_add(1i32), Z.wrapping_add(1i32));
-    let _e68 = mx_gradient_float_3d(_e63, fx, fy - 1.0f32, fz - 1.0f32);
-    let _e75 = mx_hash_int3_(X.wrapping_add(1i32), Y.wrapping_add(1i32), Z.wrapping_add(1i32));
-    let _e82 = mx_gradient_float_3d(_e75, fx - 1.0f32, fy - 1.0f32, fz - 1.0f32);
-    let result = mx_noise_trilerp_float(_e20, _e26, _e32, _e42, _e48, _e58, _e68, _e82, u_1, v_3, w);
+    let _e16 = mx_hash_int3_(X, Y, Z);
+    let _e17 = mx_gradient_float_3d(_e16, fx, fy, fz);
+    let _e20 = mx_hash_int3_(X.wrapping_add(1i32), Y, Z);
+    let _e23 = mx_gradient_float_3d(_e20, fx - 1.0f32, fy, fz);
+    let _e26 = mx_hash_int3_(X, Y.wrapping_add(1i32), Z);
+    let _e29 = mx_gradient_float_3d(_e26, fx, fy - 1.0f32, fz);
+    let _e34 = mx_hash_int3_(X.wrapping_add(1i32), Y.wrapping_add(1i32), Z);
+    let _e39 = mx_gradient_float_3d(_e34, fx - 1.0f32, fy - 1.0f32, fz);
+    let _e42 = mx_hash_int3_(X, Y, Z.wrapping_add(1i32));
+    let _e45 = mx_gradient_float_3d(_e42, fx, fy, fz - 1.0f32);
+    let _e50 = mx_hash_int3_(X.wrapping_add(1i32), Y, Z.wrapping_add(1i32));
+    let _e55 = mx_gradient_float_3d(_e50, fx - 1.0f32, fy, fz - 1.0f32);
+    let _e60 = mx_hash_int3_(X, Y.wrapping_add(1i32), Z.wrapping_add(1i32));
+    let _e65 = mx_gradient_float_3d(_e60, fx, fy - 1.0f32, fz - 1.0f32);
+    let _e72 = mx_hash_int3_(X.wrapping_add(1i32), Y.wrapping_add(1i32), Z.wrapping_add(1i32));
+    let _e79 = mx_gradient_float_3d(_e72, fx - 1.0f32, fy - 1.0f32, fz - 1.0f32);
+    let result = mx_noise_trilerp_float(_e17, _e23, _e29, _e39, _e45, _e55, _e65, _e79, u_1, v_3, w);
     0.982f32 * result
 }
 

@@ -3,7 +3,7 @@
 // The pattern kernel in Rust: the library functions and `mx_pattern`, written from the same naga
 // module as the WGSL kernel, and `mx_pattern_batch`, a loop over structure-of-arrays columns.
 // Include it in a module of its own; it needs glam and nothing else.
-use glam::{UVec2, Vec2, Vec3, Vec4};
+use glam::{BVec3, UVec2, Vec2, Vec3, Vec4};
 
 /// Textures of a kernel, by index (binding − 4 in the WGSL kernel), implemented by the runtime.
 /// Coordinates are texel indices and may lie outside the texture: return zero there, as
@@ -62,8 +62,36 @@ pub fn mx_extract_vector3_(in_: Vec3, index: i32) -> f32 {
 }
 
 #[inline(always)]
-pub fn mx_noise_floor(x: f32) -> i32 {
-    x.floor() as i32
+#[allow(unused_assignments)]
+pub fn mx_fractal_done_3d(pp: Vec3, amplitude: f32, lacunarity: f32) -> bool {
+    let mut local: bool = false;
+    let mut local_1: bool = false;
+    let lattice = wgsl_or_bvec3_bvec3(pp.cmpeq(Vec3::splat(0.0f32)), pp.abs().cmpge(Vec3::splat(16777216.0f32)));
+    if !(amplitude == 0.0f32) {
+        if lattice.all() {
+            local_1 = lacunarity.abs() >= 1.0f32;
+        } else {
+            local_1 = false;
+        }
+        let _e23 = local_1;
+        local = _e23;
+    } else {
+        local = true;
+    }
+    let _e25 = local;
+    _e25
+}
+
+#[inline(always)]
+pub fn mx_noise_cell(x: f32) -> i32 {
+    let wrapped = x - 4294967300.0f32 * (x / 4294967300.0f32).floor();
+    let far = ((if x.abs() <= 3.4028235e38f32 { wrapped } else { 0.0f32 }) as u32) as i32;
+    if x.abs() < 2147483600.0f32 { x.floor() as i32 } else { far }
+}
+
+#[inline(always)]
+pub fn mx_noise_frac(x_1: f32) -> f32 {
+    if x_1.abs() < 16777216.0f32 { x_1 - x_1.floor() } else { 0.0f32 }
 }
 
 #[inline(always)]
@@ -81,23 +109,23 @@ pub fn mx_noise_trilerp_float(v0_: f32, v1_: f32, v2_: f32, v3_: f32, v4_: f32, 
 
 #[inline(always)]
 #[allow(unused_assignments)]
-pub fn mx_gradient_float_3d(hash: u32, x_1: f32, y: f32, z: f32) -> f32 {
-    let mut local: bool = false;
+pub fn mx_gradient_float_3d(hash: u32, x_2: f32, y: f32, z: f32) -> f32 {
+    let mut local_2: bool = false;
     let h = hash & 15u32;
-    let u = if h < 8u32 { x_1 } else { y };
+    let u = if h < 8u32 { x_2 } else { y };
     if !(h == 12u32) {
-        local = h == 14u32;
+        local_2 = h == 14u32;
     } else {
-        local = true;
+        local_2 = true;
     }
-    let _e17 = local;
-    let v = if h < 4u32 { y } else { if _e17 { x_1 } else { z } };
+    let _e17 = local_2;
+    let v = if h < 4u32 { y } else { if _e17 { x_2 } else { z } };
     (if h & 1u32 != 0u32 { -u } else { u }) + (if h & 2u32 != 0u32 { -v } else { v })
 }
 
 #[inline(always)]
-pub fn mx_rotl32_(x_2: u32, k: u32) -> u32 {
-    x_2.wrapping_shl(k) | x_2.wrapping_shr(32u32.wrapping_sub(k))
+pub fn mx_rotl32_(x_3: u32, k: u32) -> u32 {
+    x_3.wrapping_shl(k) | x_3.wrapping_shr(32u32.wrapping_sub(k))
 }
 
 #[inline(always)]
@@ -163,51 +191,51 @@ pub fn mx_bjfinal(a_in: u32, b_in: u32, c_in: u32) -> u32 {
 }
 
 #[inline(always)]
-pub fn mx_hash_int3_(x_3: i32, y_1: i32, z_1: i32) -> u32 {
-    let _e10 = mx_bjfinal(3735928584u32.wrapping_add(x_3 as u32), 3735928584u32.wrapping_add(y_1 as u32), 3735928584u32.wrapping_add(z_1 as u32));
+pub fn mx_hash_int3_(x_4: i32, y_1: i32, z_1: i32) -> u32 {
+    let _e10 = mx_bjfinal(3735928584u32.wrapping_add(x_4 as u32), 3735928584u32.wrapping_add(y_1 as u32), 3735928584u32.wrapping_add(z_1 as u32));
     _e10
 }
 
 #[inline(always)]
 #[allow(non_snake_case)]
 pub fn mx_perlin_noise_float_3d(p: Vec3) -> f32 {
-    let X = mx_noise_floor(p.x);
-    let Y = mx_noise_floor(p.y);
-    let Z = mx_noise_floor(p.z);
-    let fx = p.x - X as f32;
-    let fy = p.y - Y as f32;
-    let fz = p.z - Z as f32;
+    let X = mx_noise_cell(p.x);
+    let Y = mx_noise_cell(p.y);
+    let Z = mx_noise_cell(p.z);
+    let fx = mx_noise_frac(p.x);
+    let fy = mx_noise_frac(p.y);
+    let fz = mx_noise_frac(p.z);
     let u_1 = mx_noise_fade(fx);
     let v_1 = mx_noise_fade(fy);
     let w = mx_noise_fade(fz);
-    let _e19 = mx_hash_int3_(X, Y, Z);
-    let _e20 = mx_gradient_float_3d(_e19, fx, fy, fz);
-    let _e23 = mx_hash_int3_(X.wrapping_add(1i32), Y, Z);
-    let _e26 = mx_gradient_float_3d(_e23, fx - 1.0f32, fy, fz);
-    let _e29 = mx_hash_int3_(X, Y.wrapping_add(1i32), Z);
-    let _e32 = mx_gradient_float_3d(_e29, fx, fy - 1.0f32, fz);
-    let _e37 = mx_hash_int3_(X.wrapping_add(1i32), Y.wrapping_add(1i32), Z);
-    let _e42 = mx_gradient_float_3d(_e37, fx - 1.0f32, fy - 1.0f32, fz);
-    let _e45 = mx_hash_int3_(X, Y, Z.wrapping_add(1i32));
-    let _e48 = mx_gradient_float_3d(_e45, fx, fy, fz - 1.0f32);
-    let _e53 = mx_hash_int3_(X.wrapping_add(1i32), Y, Z.wrapping_add(1i32));
-    let _e58 = mx_gradient_float_3d(_e53, fx - 1.0f32, fy, fz - 1.0f32);
-    let _e63 = mx_hash_int3_(X, Y.wrapping_add(1i32), Z.wrapping_add(1i32));
-    let _e68 = mx_gradient_float_3d(_e63, fx, fy - 1.0f32, fz - 1.0f32);
-    let _e75 = mx_hash_int3_(X.wrapping_add(1i32), Y.wrapping_add(1i32), Z.wrapping_add(1i32));
-    let _e82 = mx_gradient_float_3d(_e75, fx - 1.0f32, fy - 1.0f32, fz - 1.0f32);
-    let result_1 = mx_noise_trilerp_float(_e20, _e26, _e32, _e42, _e48, _e58, _e68, _e82, u_1, v_1, w);
+    let _e16 = mx_hash_int3_(X, Y, Z);
+    let _e17 = mx_gradient_float_3d(_e16, fx, fy, fz);
+    let _e20 = mx_hash_int3_(X.wrapping_add(1i32), Y, Z);
+    let _e23 = mx_gradient_float_3d(_e20, fx - 1.0f32, fy, fz);
+    let _e26 = mx_hash_int3_(X, Y.wrapping_add(1i32), Z);
+    let _e29 = mx_gradient_float_3d(_e26, fx, fy - 1.0f32, fz);
+    let _e34 = mx_hash_int3_(X.wrapping_add(1i32), Y.wrapping_add(1i32), Z);
+    let _e39 = mx_gradient_float_3d(_e34, fx - 1.0f32, fy - 1.0f32, fz);
+    let _e42 = mx_hash_int3_(X, Y, Z.wrapping_add(1i32));
+    let _e45 = mx_gradient_float_3d(_e42, fx, fy, fz - 1.0f32);
+    let _e50 = mx_hash_int3_(X.wrapping_add(1i32), Y, Z.wrapping_add(1i32));
+    let _e55 = mx_gradient_float_3d(_e50, fx - 1.0f32, fy, fz - 1.0f32);
+    let _e60 = mx_hash_int3_(X, Y.wrapping_add(1i32), Z.wrapping_add(1i32));
+    let _e65 = mx_gradient_float_3d(_e60, fx, fy - 1.0f32, fz - 1.0f32);
+    let _e72 = mx_hash_int3_(X.wrapping_add(1i32), Y.wrapping_add(1i32), Z.wrapping_add(1i32));
+    let _e79 = mx_gradient_float_3d(_e72, fx - 1.0f32, fy - 1.0f32, fz - 1.0f32);
+    let result_1 = mx_noise_trilerp_float(_e17, _e23, _e29, _e39, _e45, _e55, _e65, _e79, u_1, v_1, w);
     0.982f32 * result_1
 }
 
 #[inline(always)]
 #[allow(unused_assignments)]
-pub fn mx_fractal3d_noise_float(p_1: Vec3, octaves: i32, lacunarity: f32, diminish: f32) -> f32 {
+pub fn mx_fractal3d_noise_float(p_1: Vec3, octaves: i32, lacunarity_1: f32, diminish: f32) -> f32 {
     let mut result: f32 = 0.0f32;
-    let mut amplitude: f32 = 1.0f32;
-    let mut pp: Vec3 = Vec3::ZERO;
+    let mut amplitude_1: f32 = 1.0f32;
+    let mut pp_1: Vec3 = Vec3::ZERO;
     let mut i: i32 = 0i32;
-    pp = p_1;
+    pp_1 = p_1;
     loop {
         let _e11 = i;
         if _e11 < octaves {
@@ -215,27 +243,33 @@ pub fn mx_fractal3d_noise_float(p_1: Vec3, octaves: i32, lacunarity: f32, dimini
             break;
         }
         {
-            let _e13 = result;
-            let _e14 = amplitude;
-            let _e15 = pp;
-            let _e16 = mx_perlin_noise_float_3d(_e15);
-            result = _e13 + _e14 * _e16;
-            let _e19 = amplitude;
-            amplitude = _e19 * diminish;
-            let _e21 = pp;
-            pp = _e21 * lacunarity;
+            let _e13 = pp_1;
+            let _e14 = amplitude_1;
+            let _e15 = mx_fractal_done_3d(_e13, _e14, lacunarity_1);
+            if _e15 {
+                break;
+            }
+            let _e16 = result;
+            let _e17 = amplitude_1;
+            let _e18 = pp_1;
+            let _e19 = mx_perlin_noise_float_3d(_e18);
+            result = _e16 + _e17 * _e19;
+            let _e22 = amplitude_1;
+            amplitude_1 = _e22 * diminish;
+            let _e24 = pp_1;
+            pp_1 = _e24 * lacunarity_1;
         }
-        let _e24 = i;
-        i = _e24.wrapping_add(1i32);
+        let _e27 = i;
+        i = _e27.wrapping_add(1i32);
     }
-    let _e26 = result;
-    _e26
+    let _e29 = result;
+    _e29
 }
 
 #[inline(always)]
-pub fn mx_fractal3d_float(amplitude_1: f32, octaves_1: i32, lacunarity_1: f32, diminish_1: f32, position: Vec3) -> f32 {
-    let _e5 = mx_fractal3d_noise_float(position, octaves_1, lacunarity_1, diminish_1);
-    _e5 * amplitude_1
+pub fn mx_fractal3d_float(amplitude_2: f32, octaves_1: i32, lacunarity_2: f32, diminish_1: f32, position: Vec3) -> f32 {
+    let _e5 = mx_fractal3d_noise_float(position, octaves_1, lacunarity_2, diminish_1);
+    _e5 * amplitude_2
 }
 
 #[inline(always)]
@@ -254,12 +288,12 @@ pub fn mx_multiply_float(in1_2: f32, in2_2: f32) -> f32 {
 }
 
 #[inline(always)]
-pub fn mx_pow(x_4: f32, y_2: f32) -> f32 {
-    let m = if x_4 == 0.0f32 { 0.0f32 } else { x_4.abs().powf(y_2) };
+pub fn mx_pow(x_5: f32, y_2: f32) -> f32 {
+    let m = if x_5 == 0.0f32 { 0.0f32 } else { x_5.abs().powf(y_2) };
     let integer = y_2.trunc() == y_2;
     let odd = integer & (y_2.abs() < 16777216.0f32) & (y_2 as i32 & 1i32 != 0i32);
     let negative = if odd { -m } else { if integer { m } else { 0.0f32 } };
-    if y_2 == 0.0f32 { 1.0f32 } else { if x_4 < 0.0f32 { negative } else { m } }
+    if y_2 == 0.0f32 { 1.0f32 } else { if x_5 < 0.0f32 { negative } else { m } }
 }
 
 #[inline(always)]
@@ -286,6 +320,11 @@ pub fn mx_pattern(geom_2: mx_geometry, inputs: MxInputs) -> MxOutputs {
     let v18_ = mx_power_float(v16_, 3.0f32);
     let v19_ = mx_mix_color3_(inputs.vein_color, inputs.base_color, v18_);
     MxOutputs { marble_out_color: v19_, marble_out_roughness: v18_ }
+}
+
+#[inline(always)]
+fn wgsl_or_bvec3_bvec3(a: BVec3, b: BVec3) -> BVec3 {
+    BVec3::new(a.x | b.x, a.y | b.y, a.z | b.z)
 }
 
 /// Columns of `geom`: texcoord (2), then position, normal and tangent, each in object and world

@@ -634,6 +634,58 @@ fn fractal3d_all_variants() {
     fractal_test(3);
 }
 
+/// Issue 46: fractal3d at 34, 64 and 1000 octaves (MaterialX's GLSL converts lattice
+/// coordinates past 2^31 to int, undefined; a saturating conversion gave NaN from 34 octaves on)
+/// is finite and is the converged sum. With lacunarity 2, every coordinate of p · 2^i is an f32
+/// integer from the first octave K where all of them are (at most 2^25 here, inside MaterialX's
+/// defined range), and Perlin noise is exactly 0 on the lattice, so MaterialX's sum over K
+/// octaves is the sum over any more: the extra octaves must add exactly 0 (the same bits as at K
+/// octaves), and the value must match the reference's K-octave sum within the fractal tests'
+/// tolerance, 1e-5 · Σ 0.5^i < 2e-5 (f32 rounding of each term, possible FMA contraction).
+/// A point whose coordinates differ by 2^-70 (one passes 2^31 long before the other is an
+/// integer) is finite and within the ±Σ 0.5^i = 2 bound.
+#[test]
+fn fractal3d_is_finite_and_converged_for_any_octave_count() {
+    let doc = graph_doc(
+        &[("p", "vector3"), ("octaves", "integer")],
+        &[node("fractal3d", "n", "float", &[("octaves", "integer", Src::I("octaves")), ("position", "vector3", Src::I("p"))])],
+        &[("n".to_string(), "float".to_string(), "n".to_string())],
+    );
+    let k = compile(&doc);
+    let mut rng = Rng::new(0x46_12);
+    let mut points: Vec<[f32; 3]> = (0..16).map(|_| [0; 3].map(|_| rng.range(0.5, 4.0) * if rng.next_u64() % 2 == 0 { 1.0 } else { -1.0 })).collect();
+    points.push([0.3, 0.7, 1.1]);
+    let lattice_from = |p: [f32; 3]| (0..64).find(|&i| p.iter().all(|c| { let x = c * 2f32.powi(i); x.floor() == x })).unwrap();
+    let counts = [34, 64, 1000];
+    let mut rows = Vec::new();
+    for p in &points {
+        let kk = lattice_from(*p);
+        assert!(kk <= 25, "{p:?}: lattice from octave {kk}");
+        for oct in std::iter::once(kk).chain(counts) {
+            rows.push(input_row(&k, &[("p", p.to_vec()), ("octaves", vec![oct as f32])]));
+        }
+    }
+    let mixed = [0.3f32, 0.3 * 2f32.powi(-70), 0.7];
+    for oct in counts {
+        rows.push(input_row(&k, &[("p", mixed.to_vec()), ("octaves", vec![oct as f32])]));
+    }
+    let got = run_rows(&k, &rows, None);
+    for (j, p) in points.iter().enumerate() {
+        let kk = lattice_from(*p);
+        let at_k = out(&k, &got[j * 4], "n")[0];
+        let want = r::fbm(*p, kk, 2.0, 0.5, &|x| vec![r::perlin3(x)])[0];
+        assert!((at_k - want).abs() <= 2e-5, "{p:?}, {kk} octaves: {at_k}, reference {want}");
+        for (c, oct) in counts.iter().enumerate() {
+            let v = out(&k, &got[j * 4 + 1 + c], "n")[0];
+            assert!(v.is_finite() && v.to_bits() == at_k.to_bits(), "{p:?}: {oct} octaves give {v}, {kk} octaves {at_k}");
+        }
+    }
+    for (c, oct) in counts.iter().enumerate() {
+        let v = out(&k, &got[points.len() * 4 + c], "n")[0];
+        assert!(v.is_finite() && v.abs() <= 2.0, "{mixed:?}: {oct} octaves give {v}");
+    }
+}
+
 // ---- cellnoise ----------------------------------------------------------------------------
 
 #[test]
