@@ -6,7 +6,7 @@ use crate::ir::Graph;
 use crate::kernel::{ClosureContext, PatternKernel};
 use crate::lower::{lower, LowerOptions};
 use crate::node_library::NodeLibrary;
-use mtlx::{has_errors, Diagnostic, Document, Library};
+use mtlx::{has_errors, Diagnostic, Document, FileAccess, Library};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -60,10 +60,31 @@ impl Compiler {
     /// documents name may lie in those folders and `MATERIALX_SEARCH_PATH` (each with its parent
     /// when it is a `libraries` folder).
     fn with_library(library: Library, dirs: &[PathBuf]) -> Compiler {
-        let mut roots: Vec<PathBuf> = dirs.iter().cloned().chain(mtlx::library::search_path_from_env()).collect();
-        let parents: Vec<PathBuf> = roots.iter().filter(|r| r.file_name().is_some_and(|n| n == "libraries")).filter_map(|r| r.parent().map(Path::to_path_buf)).collect();
-        roots.extend(parents);
+        let roots = FileAccess::library_roots(dirs);
         Compiler { library: NodeLibrary::new(library), file_roots: Some(roots), lower_options: LowerOptions::default(), constant_inputs: Vec::new() }
+    }
+
+    /// `overrides` loaded before the builtin library (`--stack DIR`, as [`Compiler::overriding`])
+    /// and `extra` folders after it (`--library DIR`, as [`Compiler::new`]).
+    pub fn layered(overrides: &[PathBuf], extra: &[PathBuf]) -> Compiler {
+        if overrides.is_empty() {
+            return Self::new(extra);
+        }
+        let mut library = Library::load_overriding(overrides);
+        for d in extra {
+            library.add_dir(d);
+        }
+        let dirs: Vec<PathBuf> = overrides.iter().chain(extra).cloned().collect();
+        Self::with_library(library, &dirs)
+    }
+
+    /// Where the files documents name may lie (`mtlx::file_access`): their own folder and
+    /// `file_roots`, or anywhere.
+    pub fn file_access(&self) -> FileAccess {
+        match &self.file_roots {
+            Some(roots) => FileAccess::within(roots.clone()),
+            None => FileAccess::any(),
+        }
     }
 
     /// Only the library embedded in the crate (tests, benchmarks).
@@ -83,7 +104,7 @@ impl Compiler {
     /// eval closure context (lowered and validated like any kernel). Returns every diagnostic,
     /// each once, in the order found.
     pub fn check_file(&self, path: &Path) -> Vec<Diagnostic> {
-        let (doc, read_diags) = mtlx::read_file(path);
+        let (doc, read_diags) = mtlx::read_file_with(path, &self.file_access());
         let source = path.display().to_string();
         let closures: Vec<String> = if has_errors(&read_diags) {
             Vec::new()
@@ -105,6 +126,17 @@ impl Compiler {
         diagnostics
     }
 
+    /// The names of a document's BSDF, surfaceshader and material outputs — its renderable
+    /// elements, as MaterialX's `generateshader.py` finds them — in document order (none when
+    /// the document cannot be read; compiling it reports why).
+    pub fn renderable_outputs(&self, path: &Path) -> Vec<String> {
+        let (doc, diags) = mtlx::read_file_with(path, &self.file_access());
+        if has_errors(&diags) {
+            return Vec::new();
+        }
+        document_outputs(&doc).into_iter().filter(|o| crate::wgsl_types::is_scattering(&o.ty)).map(|o| o.name).collect()
+    }
+
     pub fn compile_file(&self, path: &Path, selection: &OutputSelection) -> Compilation {
         self.compile_file_in(path, selection, None)
     }
@@ -112,7 +144,7 @@ impl Compiler {
     /// Compiles a document's pattern outputs (`context` None) or its one selected BSDF-typed
     /// output in a closure context.
     pub fn compile_file_in(&self, path: &Path, selection: &OutputSelection, context: Option<ClosureContext>) -> Compilation {
-        let (doc, diags) = mtlx::read_file(path);
+        let (doc, diags) = mtlx::read_file_with(path, &self.file_access());
         self.compile_document_in(doc, diags, &path.display().to_string(), selection, context)
     }
 

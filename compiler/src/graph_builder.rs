@@ -545,17 +545,23 @@ impl<'a> GraphBuilder<'a> {
         let prefix = Self::scoped_attr(doc, el, "fileprefix").unwrap_or_default();
         let colorspace = Self::scoped_attr(doc, el, "colorspace");
         let rel = format!("{prefix}{value}");
-        match resolve_file(&rel, Path::new(&*pos.file)) {
-            Some(path) if !value.is_empty() => {
-                if let Some(roots) = &self.file_roots {
-                    let doc_dir = Path::new(&*pos.file).parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-                    if !is_inside(&path, std::iter::once(doc_dir).chain(roots.iter().map(PathBuf::as_path))) {
-                        return Err(self.error(
-                            &pos,
-                            format!("`{rel}` resolves to `{}`, outside the document's folder and the library search paths (--library, MATERIALX_SEARCH_PATH); pass --allow-any-path to read it", path.display()),
-                        ));
-                    }
-                }
+        // The one containment rule (mtlx::file_access), decided before looking for the file, so
+        // that a name outside reads the same whether or not something is there.
+        let top = doc.get(doc.root()).pos.file.clone();
+        let access = match &self.file_roots {
+            Some(roots) => mtlx::FileAccess::within(roots.clone()),
+            None => mtlx::FileAccess::any(),
+        };
+        let found = match value.is_empty() || rel.contains('<') || rel.contains('{') {
+            true => None,
+            false => match access.resolve(&rel, Path::new(&*pos.file), Path::new(&*top)) {
+                Err(outside) => return Err(self.error(&pos, outside.to_string())),
+                Ok(direct) if direct.is_file() => Some(direct),
+                Ok(_) => resources_fallback(&rel, Path::new(&*pos.file)).find(|c| access.contains(c, Path::new(&*top)) && c.is_file()),
+            },
+        };
+        match found {
+            Some(path) => {
                 let binding = TextureBinding { path, colorspace, pos: pos.clone() };
                 let index = match self.graph.textures.iter().position(|t| t.path == binding.path && t.colorspace == binding.colorspace) {
                     Some(i) => i,
@@ -848,7 +854,7 @@ impl<'a> GraphBuilder<'a> {
         // A lobe whose weight is a constant at or below 0 that is then the empty BSDF
         // (closure_fold.rs): the empty BSDF, and the lobe leaves the kernel.
         if let (true, false, Some(w), [out]) = (closure, geometry, weight_arg, nd.outputs.as_slice()) {
-            let dead = matches!(&self.graph.values[args[w]].kind, ValueKind::Constant(Literal::Floats(f)) if f.len() == 1 && !(f[0] > 0.0));
+            let dead = matches!(&self.graph.values[args[w]].kind, ValueKind::Constant(Literal::Floats(f)) if f.len() == 1 && f[0].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater));
             // The weight's position among the function's parameters (the closure first).
             if dead && out.ty.is_closure() && crate::closure_fold::vanishes_at_zero_weight(self.lib, &fname, &sig.params, w + 1) {
                 return self.zero(&out.ty, pos, origin).map(NodeResult::Single);
@@ -906,29 +912,12 @@ impl GraphBuilder<'_> {
 /// Whether `path` lies inside one of `roots` (both resolved: `..` and links cannot leave a root).
 /// Whether `path` lies inside one of `roots` once both are canonical (`..` and links resolved):
 /// the path rule for files a document names.
-pub fn is_inside<'p>(path: &Path, roots: impl Iterator<Item = &'p Path>) -> bool {
-    let Ok(path) = path.canonicalize() else { return false };
-    roots.filter_map(|r| r.canonicalize().ok()).any(|r| path.starts_with(r))
-}
-
-/// Resolves a file named in a document at `doc_file`: relative to the document's folder; then,
-/// for MaterialX's own test documents that name files from the repository root
-/// (`resources/Images/…`), relative to each ancestor folder with `resources/` removed.
-pub fn resolve_file(name: &str, doc_file: &Path) -> Option<PathBuf> {
-    if name.is_empty() || name.contains('<') || name.contains('{') {
-        return None;
-    }
-    let p = Path::new(name);
-    if p.is_absolute() {
-        return p.is_file().then(|| p.to_path_buf());
-    }
-    let dir = doc_file.parent().unwrap_or(Path::new("."));
-    let direct = dir.join(p);
-    if direct.is_file() {
-        return Some(direct);
-    }
-    let stripped = name.strip_prefix("resources/")?;
-    dir.ancestors().map(|a| a.join(stripped)).find(|c| c.is_file())
+/// Where MaterialX's own test documents, which name files from the repository root
+/// (`resources/Images/…`), find a file named at `doc_file`: relative to each ancestor folder with
+/// `resources/` removed. Each candidate still goes through the containment rule.
+fn resources_fallback<'n>(name: &'n str, doc_file: &'n Path) -> impl Iterator<Item = PathBuf> + 'n {
+    let dir = mtlx::file_access::folder_of(doc_file);
+    name.strip_prefix("resources/").into_iter().flat_map(move |stripped| dir.ancestors().map(move |a| a.join(stripped)))
 }
 
 /// What makes two IR values one for hash-consing (with their type): the kind, floats compared

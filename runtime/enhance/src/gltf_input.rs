@@ -42,7 +42,12 @@ use glam::{DMat3, DMat4, DQuat, DVec2, DVec3};
 use gltf::json;
 use rayon::prelude::*;
 use std::ops::Range;
+use mtlx::{FileAccess, UriTarget};
 use std::path::{Path, PathBuf};
+
+/// The largest world coordinate a vertex may have (metres: 10⁹ m, far past any scene, where
+/// f32 squares still stay finite).
+pub const WORLD_LIMIT: f64 = 1e9;
 
 /// A loaded glTF asset: its materials and the decoded, instanced geometry.
 #[derive(Debug)]
@@ -185,12 +190,20 @@ impl GltfAsset {
     }
 }
 
-/// Loads a `.gltf` or `.glb` (told apart by the GLB magic, not the extension).
+/// Loads a `.gltf` or `.glb` (told apart by the GLB magic, not the extension); the files its
+/// URIs name lie in its folder ([`load_with`] the default `mtlx::FileAccess`).
 pub fn load(path: &Path) -> Result<GltfAsset, String> {
-    load_inner(path).map_err(|e| format!("{}: {e}", path.display()))
+    load_with(path, &FileAccess::default())
 }
 
-fn load_inner(path: &Path) -> Result<GltfAsset, String> {
+/// [`load`], with the files its buffer and image URIs name where `access` allows
+/// (`mtlx::file_access`: percent-decoded, `data:` URIs read in place; a URI outside is refused
+/// before anything is read, with the same message whether or not the file exists).
+pub fn load_with(path: &Path, access: &FileAccess) -> Result<GltfAsset, String> {
+    load_inner(path, access).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn load_inner(path: &Path, access: &FileAccess) -> Result<GltfAsset, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
     let (text, bin) = match bytes.starts_with(b"glTF") {
         true => split_glb(&bytes)?,
@@ -228,13 +241,11 @@ fn load_inner(path: &Path) -> Result<GltfAsset, String> {
         }
         e => format!("invalid glTF: {e}"),
     })?;
-    let dir = path.parent().unwrap_or(Path::new(""));
-
     let mut bufs = Vec::new();
     for b in doc.buffers() {
         let data = match b.source() {
             gltf::buffer::Source::Bin => bin.ok_or_else(|| format!("buffer {} has no uri and no GLB chunk", b.index()))?.to_vec(),
-            gltf::buffer::Source::Uri(uri) => read_uri(dir, uri).map_err(|e| format!("buffer {}: {e}", b.index()))?.1,
+            gltf::buffer::Source::Uri(uri) => read_uri(path, access, uri).map_err(|e| format!("buffer {}: {e}", b.index()))?.1,
         };
         if data.len() < b.length() {
             let (i, n, l) = (b.index(), data.len(), b.length());
@@ -251,11 +262,13 @@ fn load_inner(path: &Path) -> Result<GltfAsset, String> {
                 let mime = img.mime_type.as_ref().map_or(String::new(), |m| m.0.clone());
                 ImageSource::Embedded { bytes: view_bytes(&bufs, &view)?.to_vec(), mime }
             }
-            (None, Some(uri)) if uri.starts_with("data:") => {
-                let (mime, bytes) = read_uri(dir, uri)?;
-                ImageSource::Embedded { bytes, mime }
-            }
-            (None, Some(uri)) => ImageSource::File(dir.join(percent_decode(uri))),
+            (None, Some(uri)) => match access.resolve_uri(uri, path, path).map_err(|e| format!("image {i}: {e}"))? {
+                UriTarget::Data(_) => {
+                    let (mime, bytes) = read_uri(path, access, uri)?;
+                    ImageSource::Embedded { bytes, mime }
+                }
+                UriTarget::File(file) => ImageSource::File(file),
+            },
             (None, None) => return Err(format!("image {i} has neither uri nor bufferView")),
         };
         image_ext(&src).ok_or_else(|| format!("image {i} is not PNG or JPEG"))?;
@@ -281,17 +294,22 @@ fn load_inner(path: &Path) -> Result<GltfAsset, String> {
         let base_color_texture = tref(pbr.base_color_texture().map(info), "baseColorTexture")?;
         let metallic_roughness_texture = tref(pbr.metallic_roughness_texture().map(info), "metallicRoughnessTexture")?;
         let normal_texture = tref(normal.as_ref().map(|n| (n.texture(), n.tex_coord())), "normalTexture")?;
-        materials.push(GltfMaterial {
-            index,
-            name,
-            base_color_factor: pbr.base_color_factor(),
-            metallic_factor: pbr.metallic_factor(),
-            roughness_factor: pbr.roughness_factor(),
-            base_color_texture,
-            metallic_roughness_texture,
-            normal_texture,
-            normal_scale: normal.as_ref().map_or(1.0, |n| n.scale()),
-        });
+        let (base_color_factor, metallic_factor, roughness_factor) = (pbr.base_color_factor(), pbr.metallic_factor(), pbr.roughness_factor());
+        let normal_scale = normal.as_ref().map_or(1.0, |n| n.scale());
+        // Factors are checked where they enter (glTF 2.0: each in 0..1; a JSON number past f32
+        // reads as inf), naming the material.
+        let factors: [(&str, &[f32]); 3] = [
+            ("pbrMetallicRoughness.baseColorFactor", &base_color_factor[..]),
+            ("pbrMetallicRoughness.roughnessFactor", std::slice::from_ref(&roughness_factor)),
+            ("pbrMetallicRoughness.metallicFactor", std::slice::from_ref(&metallic_factor)),
+        ];
+        for (what, values) in factors {
+            crate::pbr_input::unit_range(values).map_err(|why| format!("materials[{index}] (`{name}`): {what} {why}"))?;
+        }
+        if !normal_scale.is_finite() {
+            return Err(format!("materials[{index}] (`{name}`): normalTexture.scale {normal_scale} is not a finite number"));
+        }
+        materials.push(GltfMaterial { index, name, base_color_factor, metallic_factor, roughness_factor, base_color_texture, metallic_roughness_texture, normal_texture, normal_scale });
     }
 
     let (mut prims, mut mesh_prims) = (Vec::new(), Vec::new());
@@ -316,6 +334,14 @@ fn load_inner(path: &Path) -> Result<GltfAsset, String> {
     for n in &roots {
         visit(n, DMat4::IDENTITY, 0, &mut visits, &mesh_prims, &mut instances)?;
     }
+    // World positions are checked where they enter: finite and within ±WORLD_LIMIT, so that the
+    // bake's positions, its bounding box and the object size stay finite in f32.
+    for &(pi, world) in &instances {
+        let p = &prims[pi];
+        if let Some(v) = p.pos.iter().map(|&v| world.transform_point3(v)).find(|v| !(v.is_finite() && v.abs().max_element() <= WORLD_LIMIT)) {
+            return Err(format!("mesh {} primitive {}: a vertex lies at {v} after its node's transform, past ±{WORLD_LIMIT:e} (a node scale or translation too large)", p.mesh, p.prim));
+        }
+    }
     Ok(GltfAsset { path: path.to_path_buf(), materials, prims, instances })
 }
 
@@ -335,6 +361,9 @@ fn visit(node: &gltf::Node, parent: DMat4, depth: usize, visits: &mut usize, mes
         }
     };
     let world = parent * local;
+    if !world.is_finite() {
+        return Err(format!("node {}: its transform is not finite (or overflows with its parents')", node.index()));
+    }
     if let Some(mesh) = node.mesh() {
         out.extend(mesh_prims[mesh.index()].clone().map(|p| (p, world)));
     }
@@ -349,6 +378,9 @@ fn decode_prim(p: &gltf::Primitive, mesh: usize, bufs: &[Vec<u8>]) -> Result<Pri
     use gltf::mesh::{Mode, Semantic};
     let attr = |s: Semantic, k: usize| p.get(&s).map(|a| read_acc(&a, bufs, k)).transpose();
     let pos = attr(Semantic::Positions, 3)?.ok_or("no POSITION attribute")?;
+    if let Some(i) = pos.iter().position(|v| !v.is_finite()) {
+        return Err(format!("POSITION of vertex {} is not finite", i / 3));
+    }
     let n = pos.len() / 3;
     let checked = |v: Option<Vec<f64>>, k: usize, name: &str| match v {
         Some(v) if v.len() != n * k => Err(format!("{name} has {} elements, POSITION has {n}", v.len() / k)),
@@ -456,15 +488,20 @@ fn split_glb(b: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
     Ok((json.ok_or(bad("no JSON chunk"))?, bin))
 }
 
-fn read_uri(dir: &Path, uri: &str) -> Result<(String, Vec<u8>), String> {
-    if let Some(rest) = uri.strip_prefix("data:") {
-        let (head, data) = rest.split_once(',').ok_or("malformed data: URI")?;
-        let mime = head.strip_suffix(";base64").ok_or("data: URI is not base64")?;
-        return Ok((mime.to_string(), base64(data)?));
+/// The bytes a URI of the asset at `gltf` names: a `data:` URI's, or a file's where `access`
+/// allows it (checked before the file is opened; no message holds the file's bytes).
+fn read_uri(gltf: &Path, access: &FileAccess, uri: &str) -> Result<(String, Vec<u8>), String> {
+    match access.resolve_uri(uri, gltf, gltf).map_err(|e| e.to_string())? {
+        UriTarget::Data(rest) => {
+            let (head, data) = rest.split_once(',').ok_or("malformed data: URI")?;
+            let mime = head.strip_suffix(";base64").ok_or("data: URI is not base64")?;
+            Ok((mime.to_string(), base64(data)?))
+        }
+        UriTarget::File(file) => {
+            let bytes = std::fs::read(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))?;
+            Ok((String::new(), bytes))
+        }
     }
-    let file = dir.join(percent_decode(uri));
-    let bytes = std::fs::read(&file).map_err(|e| format!("cannot read {}: {e}", file.display()))?;
-    Ok((String::new(), bytes))
 }
 
 fn base64(s: &str) -> Result<Vec<u8>, String> {
@@ -488,18 +525,6 @@ fn base64(s: &str) -> Result<Vec<u8>, String> {
         }
     }
     Ok(out)
-}
-
-fn percent_decode(s: &str) -> String {
-    let (b, mut out, mut i) = (s.as_bytes(), Vec::new(), 0);
-    while i < b.len() {
-        let hex = b.get(i + 1..i + 3).and_then(|h| u8::from_str_radix(std::str::from_utf8(h).ok()?, 16).ok());
-        match (b[i], hex) {
-            (b'%', Some(h)) => (out.push(h), i += 3),
-            (c, _) => (out.push(c), i += 1),
-        };
-    }
-    String::from_utf8_lossy(&out).into_owned()
 }
 
 /// Twice the signed area of (a, b, p), computed identically (up to sign) for (b, a, p).

@@ -153,8 +153,8 @@ pub fn from_folder(dir: &Path) -> Result<Option<PbrMaterial>, String> {
 }
 
 /// Every material of a glTF asset (b).
-pub fn from_gltf(path: &Path) -> Result<Vec<PbrMaterial>, String> {
-    let asset = Arc::new(gltf_input::load(path)?);
+pub fn from_gltf(path: &Path, access: &mtlx::FileAccess) -> Result<Vec<PbrMaterial>, String> {
+    let asset = Arc::new(gltf_input::load_with(path, access)?);
     let mut out = Vec::new();
     for (k, m) in asset.materials.iter().enumerate() {
         let decode = |t: &gltf_input::TextureRef, what: &str| -> Result<image::Rgba32FImage, String> {
@@ -219,13 +219,12 @@ const MTLX_SHADERS: [(&str, [&str; 4]); 4] = [
 ];
 
 /// Every material of a MaterialX document whose shader is a supported PBR shader (c).
-pub fn from_mtlx(path: &Path) -> Result<Vec<PbrMaterial>, String> {
-    let (doc, diags) = mtlx::read_file(path);
+pub fn from_mtlx(path: &Path, access: &mtlx::FileAccess) -> Result<Vec<PbrMaterial>, String> {
+    let (doc, diags) = mtlx::read_file_with(path, access);
     if let Some(d) = diags.iter().find(|d| d.severity == mtlx::Severity::Error) {
         return Err(d.to_string());
     }
     let root_cs = doc.get(doc.root()).attr("colorspace").map(str::to_string);
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf();
     let top = |name: &str| doc.top_level().iter().copied().find(|&id| doc.get(id).name() == name);
     let mut out = Vec::new();
     for &mat in doc.top_level() {
@@ -252,8 +251,12 @@ pub fn from_mtlx(path: &Path) -> Result<Vec<PbrMaterial>, String> {
             let channel = match input {
                 None if k < 3 => Some(PbrChannel::Constant(defaults[k].clone())),
                 None => None,
-                Some(i) => Some(mtlx_channel(&doc, i, &dir, root_cs.as_deref(), k == 3)?),
+                Some(i) => Some(mtlx_channel(&doc, i, (path, access), root_cs.as_deref(), k == 3)?),
             };
+            // A constant base color, roughness or metalness is physical: each component in 0..1.
+            if let (Some(i), Some(PbrChannel::Constant(v))) = (input, &channel) {
+                unit_range(v).map_err(|why| format!("{}: input `{input_name}` {why}", doc.get(i).pos))?;
+            }
             channels.push(channel);
         }
         let [base, rough, metal, normal]: [Option<PbrChannel>; 4] = channels.try_into().unwrap();
@@ -274,8 +277,17 @@ pub fn from_mtlx(path: &Path) -> Result<Vec<PbrMaterial>, String> {
     Ok(out)
 }
 
+/// Checks a base color, roughness or metalness: every component in 0..1 (a reflectance, a
+/// roughness, a metal fraction; MaterialX's and glTF's documented ranges), else says which.
+pub fn unit_range(values: &[f32]) -> Result<(), String> {
+    match values.iter().find(|v| !(0.0..=1.0).contains(*v)) {
+        None => Ok(()),
+        Some(v) => Err(format!("`{v}` is outside 0..1 (a physical base color, roughness and metalness lie in 0..1)")),
+    }
+}
+
 /// A shader input as a channel: its value, or the image it is connected to.
-fn mtlx_channel(doc: &mtlx::Document, input: mtlx::ElementId, dir: &Path, root_cs: Option<&str>, normal: bool) -> Result<PbrChannel, String> {
+fn mtlx_channel(doc: &mtlx::Document, input: mtlx::ElementId, (top, access): (&Path, &mtlx::FileAccess), root_cs: Option<&str>, normal: bool) -> Result<PbrChannel, String> {
     let e = doc.get(input);
     let pos = e.pos.clone();
     let mut node = match (e.attr("nodename"), e.attr("nodegraph")) {
@@ -320,14 +332,11 @@ fn mtlx_channel(doc: &mtlx::Document, input: mtlx::ElementId, dir: &Path, root_c
     let f = doc.get(file);
     let value = f.attr("value").unwrap_or("");
     let prefix = ancestors_attr(doc, file, "fileprefix").unwrap_or_default();
-    let path = dir.join(format!("{prefix}{value}"));
+    // The one path rule (mtlx::file_access), before looking for the file: the same message
+    // for a name outside whether or not a file is there.
+    let path = access.resolve(&format!("{prefix}{value}"), Path::new(&*f.pos.file), top).map_err(|outside| format!("{}: texture {outside}", f.pos))?;
     if !path.is_file() {
         return Err(format!("{}: texture `{}` not found", f.pos, path.display()));
-    }
-    // The compiler's path rule: a texture lies in the document's folder (`fileprefix` and `..`
-    // may not lead out of it).
-    if !uplift_compiler::graph_builder::is_inside(&path, std::iter::once(dir)) {
-        return Err(format!("{}: texture `{prefix}{value}` resolves to `{}`, outside the document's folder `{}`", f.pos, path.display(), dir.display()));
     }
     let colorspace = f
         .attr("colorspace")
@@ -349,12 +358,13 @@ fn ancestors_attr(doc: &mtlx::Document, mut id: mtlx::ElementId, name: &str) -> 
 
 /// The materials an input path holds: a glTF or MaterialX file, a folder of textures, or a
 /// folder of those (batch).
-pub fn discover(path: &Path) -> Result<Vec<PbrMaterial>, String> {
+/// The files they name lie where `access` allows (`--library`, `--allow-any-path`).
+pub fn discover(path: &Path, access: &mtlx::FileAccess) -> Result<Vec<PbrMaterial>, String> {
     let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
     if path.is_file() {
         return match ext.as_deref() {
-            Some("gltf" | "glb") => from_gltf(path),
-            Some("mtlx") => from_mtlx(path),
+            Some("gltf" | "glb") => from_gltf(path, access),
+            Some("mtlx") => from_mtlx(path, access),
             _ => Err(format!("{}: not a .gltf, .glb or .mtlx file (texture files go with --base-color, --roughness, --metalness)", path.display())),
         };
     }
@@ -374,7 +384,7 @@ pub fn discover(path: &Path) -> Result<Vec<PbrMaterial>, String> {
                 out.push(m);
             }
         } else if matches!(ext.as_deref(), Some("gltf" | "glb" | "mtlx")) {
-            out.extend(discover(&e)?);
+            out.extend(discover(&e, access)?);
         }
     }
     if out.is_empty() {

@@ -12,6 +12,7 @@ use crate::rule_option::RuleOption;
 use crate::rules::{self, uniform, EnhancementType, RuleInterface};
 use uplift_base::rng::{hash_str, mix64};
 use uplift_base::atomic_write::write_atomically;
+use uplift_base::output_folder::OutputFolder;
 use uplift_engines::batch::{Columns, Geometry, PatternBatch, PatternEngine, TextureData};
 use uplift_base::exr::ExrImage;
 use uplift_material::meta::META_FORMAT;
@@ -165,20 +166,42 @@ fn write_channel(input: &str, c: &PbrChannel, size: (usize, usize), dir: &Path) 
     };
     match c {
         PbrChannel::Constant(v) => Ok(PbrValue::Constant(v.clone())),
-        PbrChannel::File { path, colorspace } if texture_size(c)? == Some(size) => {
-            let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("png").to_ascii_lowercase();
-            let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
-            save(format!("{input}.{ext}"), &bytes, colorspace)
-        }
+        // A file is decoded and its texels checked here, where it enters (errors name the
+        // user's file, not the copy), then copied as it is or resampled.
         PbrChannel::File { path, colorspace } => {
-            let t = resample(&load_texture(path, Some(colorspace))?, size.0, size.1);
-            save(format!("{input}.png"), &png16(&t, grey)?, "lin_rec709")
+            let t = load_texture(path, Some(colorspace))?;
+            check_texels(input, &t).map_err(|why| format!("{}: {why}", path.display()))?;
+            if (t.width as usize, t.height as usize) == size {
+                let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("png").to_ascii_lowercase();
+                let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+                save(format!("{input}.{ext}"), &bytes, colorspace)
+            } else {
+                save(format!("{input}.png"), &png16(&resample(&t, size.0, size.1), grey)?, "lin_rec709")
+            }
         }
         PbrChannel::Pixels(t) => {
+            check_texels(input, t)?;
             let t = if (t.width as usize, t.height as usize) == size { (**t).clone() } else { resample(t, size.0, size.1) };
             save(format!("{input}.png"), &png16(&t, grey)?, "lin_rec709")
         }
     }
+}
+
+/// Checks a PBR input's texels where they enter: finite, and for a base color, roughness or
+/// metalness in 0..1 (`pbr_input::unit_range`; a normal map's may be any finite value).
+fn check_texels(input: &str, t: &TextureData) -> Result<(), String> {
+    let channels = if input == "base_color" { 3 } else { 1 };
+    for (i, px) in t.rgba.chunks_exact(4).enumerate() {
+        let (x, y) = (i % t.width.max(1) as usize, i / t.width.max(1) as usize);
+        let v = &px[..if input == "normal_map" { 3 } else { channels }];
+        if let Some(bad) = v.iter().find(|c| !c.is_finite()) {
+            return Err(format!("{input} texel ({x}, {y}) is {bad}, not a finite number"));
+        }
+        if input != "normal_map" {
+            crate::pbr_input::unit_range(v).map_err(|why| format!("{input} texel ({x}, {y}): {why}"))?;
+        }
+    }
+    Ok(())
 }
 
 /// Per-texel geometry of the material's texture space and the object's size.
@@ -216,7 +239,9 @@ fn mask_seed(seed: u64, kind: MaskKind) -> u64 {
 pub fn rule_kernel(rule: &RuleInterface, dir: &Path) -> Result<uplift_compiler::PatternKernel, String> {
     let name = dir.join(rule.file_name()).display().to_string();
     let outputs: Vec<String> = stack_outputs(&rule.document).into_iter().map(|o| format!("{}/{o}", rules::RULE_GRAPH)).collect();
-    compile_outputs(&rule.stack, rule.standalone_text(), &name, outputs)
+    // Compiled as if it lay in the material's folder (so its `masks/…` resolve to the masks
+    // written there), but its messages name the user's rule (the lines are the file's).
+    compile_outputs(&rule.stack, rule.standalone_text(), &name, outputs).map_err(|e| e.replace(&name, &rule.path))
 }
 
 /// The pattern kernel of `outputs` of the document `text` (named `source`), compiled with the
@@ -263,8 +288,19 @@ pub fn channel_names(output: &str, components: usize, is_color: bool) -> Vec<Str
     }
 }
 
-/// Enhances one material into `out` (replaced if it exists).
+/// Enhances one material into `out`: a new or empty folder, or `enhance`'s own earlier output
+/// (uplift_base::output_folder; a foreign folder is refused).
 pub fn enhance(material: &PbrMaterial, options: &EnhanceOptions, out: &Path, engine: &dyn PatternEngine) -> Result<Enhanced, String> {
+    enhance_into(material, options, out, false, engine)
+}
+
+/// [`enhance`], and with `force` into a folder that holds files `enhance` did not write (they
+/// are kept). The output is written into a staging folder beside `out` and put in place at the
+/// end: renamed as a whole onto a new path; onto its own earlier output, its files replace that
+/// output's (and the folder's `fit.json`, the record of a fit of the replaced parameters, is
+/// removed so that a batch `fit` refits it), every other file left as it was.
+pub fn enhance_into(material: &PbrMaterial, options: &EnhanceOptions, out: &Path, force: bool, engine: &dyn PatternEngine) -> Result<Enhanced, String> {
+    let mut claim = OutputFolder::claim(out, "enhance", force)?;
     let rule = choose_rule(material, options)?;
     let kind = rule.kind;
     let mut scalars = rules::draw_all(&rule.random, options.seed);
@@ -275,23 +311,25 @@ pub fn enhance(material: &PbrMaterial, options: &EnhanceOptions, out: &Path, eng
     let parent = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     std::fs::create_dir_all(parent).map_err(|e| format!("{}: {e}", parent.display()))?;
     let leaf = out.file_name().map(|n| n.to_string_lossy().to_string()).ok_or_else(|| format!("{}: not a folder name", out.display()))?;
-    // What a killed run left: its staging folder, or the replaced output it was removing.
+    // What a killed run left: its staging folder, or the replaced output it was removing
+    // (`.old-`, the name builds before output_folder used).
     uplift_base::atomic_write::remove_stale(parent, &format!(".{leaf}.staging-"), "");
     uplift_base::atomic_write::remove_stale(parent, &format!(".{leaf}.old-"), "");
     let staging = parent.join(format!(".{leaf}.staging-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&staging);
     std::fs::create_dir_all(&staging).map_err(|e| format!("{}: {e}", staging.display()))?;
-    let result = write_outputs(material, options, kind, &rule, &scalars, &staging, engine);
+    let result = write_outputs(material, options, kind, &rule, &scalars, &staging, engine).and_then(|()| {
+        let replacing = claim.owns("meta.json");
+        claim.install(&staging, Some("meta.json"))?;
+        if replacing {
+            let _ = std::fs::remove_file(out.join("fit.json"));
+        }
+        Ok(())
+    });
     if let Err(e) = result {
         let _ = std::fs::remove_dir_all(&staging);
         return Err(e);
     }
-    if out.exists() {
-        let old = parent.join(format!(".{leaf}.old-{}", std::process::id()));
-        std::fs::rename(out, &old).map_err(|e| format!("{}: {e}", out.display()))?;
-        let _ = std::fs::remove_dir_all(&old);
-    }
-    std::fs::rename(&staging, out).map_err(|e| format!("{}: {e}", out.display()))?;
     let name = std::iter::once(rule.name.as_str()).chain(options.rule_options.iter().map(|o| o.name.as_str())).collect::<Vec<_>>().join("+");
     Ok(Enhanced { kind, rule: name, out_dir: out.to_path_buf(), scalars })
 }
@@ -341,6 +379,13 @@ fn write_outputs(
     let mut params = bake(rule, scalars, &pbr, dir, &geometry, w, h, engine)?;
     for o in &options.rule_options {
         bake_option(o, &rule.stack, scalars, &geometry, &mut params, engine)?;
+    }
+    // Never a non-finite parameter on disk: the rule's arithmetic on its inputs is checked here,
+    // naming the channel and texel (an input past its range, a division by zero in the rule).
+    for c in &params.channels {
+        if let Some(i) = c.data.iter().position(|x| !x.is_finite()) {
+            return Err(format!("{}: the rule gives `{}` = {} at texel ({}, {}); parameters must be finite", rule.path, c.name, c.data[i], i % w, i / w));
+        }
     }
     folder.write_params_image(&params)?;
     // meta.json last: its presence marks a finished material.
@@ -477,26 +522,33 @@ pub fn batch_names(materials: &[PbrMaterial]) -> Vec<String> {
 /// `options.seed` and its name (so a material's output does not depend on the rest of the
 /// batch, or on how it is split); finished outputs (a `meta.json` present) are skipped.
 /// `finished(name, skipped)` runs after each. Shows a progress bar. Returns (enhanced,
-/// skipped) counts.
+/// skipped) counts. `out` is the batch folder as the caller claimed it for `enhance`
+/// (uplift_base::output_folder, before anything is written there); each material's folder is
+/// checked against it (a foreign one of that name is refused) and claimed itself.
 pub fn enhance_batch(
     batch: &[(String, &PbrMaterial)],
     options: &EnhanceOptions,
-    out: &Path,
+    root: &OutputFolder,
+    force: bool,
     engine: &dyn PatternEngine,
     finished: &mut dyn FnMut(&str, bool) -> Result<(), String>,
 ) -> Result<(usize, usize), String> {
     let bar = indicatif::ProgressBar::new(batch.len() as u64);
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}").map_err(|e| e.to_string())?);
+    root.create()?;
     let (mut done, mut skipped) = (0, 0);
     for (name, m) in batch {
-        let dir = out.join(name);
+        // Each material's folder is claimed on its own (its manifest inside); the batch folder's
+        // manifest is not rewritten per material, so concurrent shards never race on it.
+        root.check(name)?;
+        let dir = root.dir().join(name);
         bar.set_message(name.clone());
         let skip = MaterialFolder::is_finished(&dir);
         if skip {
             skipped += 1;
         } else {
             let o = EnhanceOptions { seed: mix64(options.seed ^ hash_str(name)), ..options.clone() };
-            enhance(m, &o, &dir, engine).map_err(|e| format!("{name}: {e}"))?;
+            enhance_into(m, &o, &dir, force, engine).map_err(|e| format!("{name}: {e}"))?;
             done += 1;
         }
         finished(name, skip)?;

@@ -159,7 +159,19 @@ pub fn interface(kind: EnhancementType, stack: &Arc<Stack>) -> Result<RuleInterf
 /// interface is checked against the stack as every rule's is (`read_interface`). Errors name
 /// the file, line and column.
 pub fn interface_file(path: &std::path::Path, stack: &Arc<Stack>) -> Result<RuleInterface, String> {
+    interface_file_with(path, stack, &mtlx::FileAccess::default())
+}
+
+/// [`interface_file`], with the rule's `xi:include`s read as `uplift check` reads them, where
+/// `access` allows (`mtlx::file_access`; an include of a library document such as
+/// `uplift_defs.mtlx` resolves to the builtin library from any folder): an include outside, or
+/// one that cannot be read, is an error naming the rule's line.
+pub fn interface_file_with(path: &std::path::Path, stack: &Arc<Stack>, access: &mtlx::FileAccess) -> Result<RuleInterface, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    let (_, diags) = mtlx::read_str_with(&text, &path.display().to_string(), access);
+    if let Some(d) = diags.iter().find(|d| d.is_error()) {
+        return Err(d.to_string());
+    }
     let name = path.file_stem().map(|s| s.to_string_lossy().to_string()).filter(|s| !s.is_empty()).ok_or_else(|| format!("{}: not a rule file name", path.display()))?;
     read_interface(mtlx::without_includes(&text), &path.display().to_string(), &name, None, stack)
 }

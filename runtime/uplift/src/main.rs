@@ -65,6 +65,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    uplift_engines::wgpu_engine::quiet_headless_vulkan();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Check(a) => cli::check::run(a),

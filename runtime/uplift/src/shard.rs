@@ -3,7 +3,10 @@
 //! stable hash of each asset's id, so every process, on any machine, agrees which assets are its
 //! own without talking to the others; each shard records what it did in a manifest beside the
 //! outputs (`OUT/.uplift-shards/<stage>.<i>-of-<N>.json`, rewritten atomically after every
-//! asset), and [`status`] reads the manifests back: what is done, missing or duplicated.
+//! asset), and [`status`] reads the manifests back: what is done, missing or duplicated. A
+//! finished asset's files (`OUT/<asset>`, a file or the files under a folder) are recorded with
+//! their size and SHA-256 when it finishes, and [`status`] checks them again: an asset whose
+//! files were deleted or changed since is reported damaged, not finished.
 
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
@@ -136,11 +139,63 @@ pub struct Manifest {
     pub finished: BTreeMap<String, String>,
     /// Whether the shard's process reached the end of its list.
     pub complete: bool,
+    /// The files of each finished asset with an output at `OUT/<asset>`: path relative to it
+    /// (empty for a file asset) → size and SHA-256 (absent in manifests before issue 46).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub files: BTreeMap<String, BTreeMap<String, FileRecord>>,
+}
+
+/// A file as a finished asset left it.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct FileRecord {
+    pub size: u64,
+    pub sha256: String,
+}
+
+impl FileRecord {
+    /// The record of the file at `path` (read through, never held in memory whole).
+    pub fn of(path: &Path) -> Result<FileRecord, String> {
+        let mut f = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut hasher = Sha256::new();
+        let size = std::io::copy(&mut f, &mut hasher).map_err(|e| format!("{}: {e}", path.display()))?;
+        Ok(FileRecord { size, sha256: hex(&hasher.finalize()) })
+    }
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The files of an asset's output at `path`: itself when it is a file, else every file under it
+/// but hidden ones (a command's own bookkeeping), by relative path; none when nothing is there.
+fn asset_files(path: &Path) -> Result<BTreeMap<String, FileRecord>, String> {
+    let mut out = BTreeMap::new();
+    if path.is_file() {
+        out.insert(String::new(), FileRecord::of(path)?);
+        return Ok(out);
+    }
+    let mut work = vec![path.to_path_buf()];
+    while let Some(dir) = work.pop() {
+        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+        for e in entries.flatten() {
+            let p = e.path();
+            if e.file_name().to_string_lossy().starts_with('.') {
+                continue;
+            }
+            if p.is_dir() {
+                work.push(p);
+            } else if let Ok(rel) = p.strip_prefix(path) {
+                out.insert(rel.to_string_lossy().replace('\\', "/"), FileRecord::of(&p)?);
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// The manifest of a running shard, rewritten after every asset (none for an unsharded run).
 pub struct ShardRun {
     path: Option<PathBuf>,
+    out: PathBuf,
     pub manifest: Manifest,
 }
 
@@ -151,8 +206,8 @@ impl ShardRun {
     /// (an unsharded run) nothing is recorded.
     pub fn begin(out: &Path, stage: &str, shard: Option<Shard>, assigned: Vec<String>) -> Result<ShardRun, String> {
         let Some(shard) = shard else {
-            let manifest = Manifest { stage: stage.into(), shard: 0, shards: 1, assigned, finished: BTreeMap::new(), complete: false };
-            return Ok(ShardRun { path: None, manifest });
+            let manifest = Manifest { stage: stage.into(), shard: 0, shards: 1, assigned, finished: BTreeMap::new(), complete: false, files: BTreeMap::new() };
+            return Ok(ShardRun { path: None, out: out.to_path_buf(), manifest });
         };
         let dir = out.join(MANIFEST_DIR);
         for m in read_manifests(out)? {
@@ -168,17 +223,29 @@ impl ShardRun {
         }
         std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         let path = dir.join(format!("{stage}.{}-of-{}.json", shard.index, shard.count));
-        let finished = match read_manifest(&path)? {
-            Some(old) => old.finished.into_iter().filter(|(id, _)| assigned.contains(id)).collect(),
-            None => BTreeMap::new(),
+        let (finished, files) = match read_manifest(&path)? {
+            Some(old) => (
+                old.finished.into_iter().filter(|(id, _)| assigned.contains(id)).collect(),
+                old.files.into_iter().filter(|(id, _)| assigned.contains(id)).collect(),
+            ),
+            None => (BTreeMap::new(), BTreeMap::new()),
         };
-        let run = ShardRun { path: Some(path), manifest: Manifest { stage: stage.into(), shard: shard.index, shards: shard.count, assigned, finished, complete: false } };
+        let manifest = Manifest { stage: stage.into(), shard: shard.index, shards: shard.count, assigned, finished, complete: false, files };
+        let run = ShardRun { path: Some(path), out: out.to_path_buf(), manifest };
         run.write()?;
         Ok(run)
     }
 
-    /// Records a finished asset (`skipped`: its output was already there).
+    /// Records a finished asset (`skipped`: its output was already there), with the files of
+    /// its output at `OUT/<asset>` (in a sharded run).
     pub fn finished(&mut self, asset: &str, skipped: bool) -> Result<(), String> {
+        if self.path.is_some() {
+            let files = asset_files(&self.out.join(asset))?;
+            match files.is_empty() {
+                true => self.manifest.files.remove(asset),
+                false => self.manifest.files.insert(asset.to_string(), files),
+            };
+        }
         self.record(asset, if skipped { "skipped" } else { "done" })
     }
 
@@ -243,12 +310,33 @@ pub struct StageStatus {
     pub finished: usize,
     pub missing: Vec<String>,
     pub duplicated: Vec<String>,
+    /// Finished assets whose recorded files were deleted or changed since, with what is wrong
+    /// (not counted in `finished`).
+    pub damaged: Vec<(String, String)>,
 }
 
 impl StageStatus {
     pub fn is_done(&self) -> bool {
-        self.complete.len() == self.shards && self.missing.is_empty() && self.duplicated.is_empty()
+        self.complete.len() == self.shards && self.missing.is_empty() && self.duplicated.is_empty() && self.damaged.is_empty()
     }
+}
+
+/// What is wrong with a finished asset's recorded files now (None: each is as recorded).
+fn damage(root: &Path, files: &BTreeMap<String, FileRecord>) -> Option<String> {
+    for (rel, want) in files {
+        let path = if rel.is_empty() { root.to_path_buf() } else { root.join(rel) };
+        let name = path.display();
+        let Ok(meta) = std::fs::metadata(&path) else { return Some(format!("{name} is gone")) };
+        if meta.len() != want.size {
+            return Some(format!("{name} holds {} bytes, {} when it was written", meta.len(), want.size));
+        }
+        match FileRecord::of(&path) {
+            Ok(now) if now.sha256 == want.sha256 => {}
+            Ok(_) => return Some(format!("{name} changed since it was written (SHA-256 differs)")),
+            Err(e) => return Some(e),
+        }
+    }
+    None
 }
 
 /// The status of every stage with manifests under `out`; an error when one stage's manifests
@@ -273,12 +361,17 @@ pub fn status(out: &Path) -> Result<Vec<StageStatus>, String> {
         let finished_by = |a: &str| ms.iter().filter(|m| m.finished.contains_key(a)).count();
         let duplicated: Vec<String> = owners.iter().filter(|(a, o)| o.len() > 1 || finished_by(a) > 1).map(|(a, _)| a.to_string()).collect();
         let missing: Vec<String> = owners.keys().filter(|a| finished_by(a) == 0).map(|a| a.to_string()).collect();
-        let finished = owners.keys().filter(|a| finished_by(a) == 1).count();
+        let damaged: Vec<(String, String)> = owners
+            .keys()
+            .filter(|a| finished_by(a) == 1)
+            .filter_map(|a| ms.iter().find_map(|m| m.files.get(*a)).and_then(|files| damage(&out.join(a), files)).map(|why| (a.to_string(), why)))
+            .collect();
+        let finished = owners.keys().filter(|a| finished_by(a) == 1).count() - damaged.len();
         let mut started: Vec<usize> = ms.iter().map(|m| m.shard).collect();
         started.sort();
         started.dedup();
         let complete = ms.iter().filter(|m| m.complete).map(|m| m.shard).collect();
-        result.push(StageStatus { stage, shards, started, complete, finished, missing, duplicated });
+        result.push(StageStatus { stage, shards, started, complete, finished, missing, duplicated, damaged });
     }
     Ok(result)
 }

@@ -62,7 +62,7 @@ pub fn write_modality_video(out: &Path, name: &str, frames: usize) -> Result<(),
     }
     let (w, h) = size.ok_or_else(|| format!("{}: no frames for a video", out.join(name).display()))?;
     let tmp = out.join(format!(".{name}.mp4.tmp"));
-    let mut child = Command::new("ffmpeg")
+    let mut child = uplift_base::child_process::tie_to_parent(&mut Command::new("ffmpeg"))
         .args(["-hide_banner", "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgb24", "-s", &format!("{w}x{h}"), "-framerate", &VIDEO_FPS.to_string(), "-i", "pipe:0"])
         .args(["-c:v", "libx264rgb", "-qp", "0", "-preset", "medium", "-pix_fmt", "rgb24", "-threads", "1", "-fflags", "+bitexact", "-flags:v", "+bitexact", "-map_metadata", "-1", "-f", "mp4"])
         .arg(&tmp)

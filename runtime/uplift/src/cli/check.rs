@@ -14,10 +14,14 @@ pub struct CheckArgs {
     /// in the document's folder or a library search path.
     #[arg(long = "allow-any-path")]
     pub allow_any_path: bool,
+    /// Library folders loaded before the builtin one (a redefined `uplift_stack` with new lobes,
+    /// as for `enhance`; repeatable), so that a rule using them can be checked.
+    #[arg(long = "stack", value_name = "DIR")]
+    pub stack: Vec<PathBuf>,
 }
 
 pub fn run(args: CheckArgs) -> Result<(), String> {
-    let mut compiler = Compiler::new(&args.library);
+    let mut compiler = Compiler::layered(&args.stack, &args.library);
     if args.allow_any_path {
         compiler = compiler.allow_any_path();
     }

@@ -113,6 +113,10 @@ pub struct CompileArgs {
     /// in the document's folder or a library search path.
     #[arg(long = "allow-any-path")]
     pub allow_any_path: bool,
+    /// Library folders loaded before the builtin one (a redefined `uplift_stack` with new lobes,
+    /// as for `enhance`; repeatable).
+    #[arg(long = "stack", value_name = "DIR")]
+    pub stack: Vec<PathBuf>,
     /// Time library loading and per-document compilation instead of writing files.
     #[arg(long)]
     pub bench: bool,
@@ -156,7 +160,7 @@ pub fn run(args: CompileArgs) -> Result<(), String> {
     if args.bench {
         return crate::cli::compile_bench::run(&args.files, &args.library, args.context.map(|c| c.context()));
     }
-    let mut compiler = super::compiler(&args.library, args.allow_any_path)?;
+    let mut compiler = super::layered_compiler(&args.stack, &args.library, args.allow_any_path)?;
     for binding in &args.set {
         let Some((name, value)) = binding.split_once('=') else {
             return Err(format!("--set {binding}: expected NAME=VALUE"));
@@ -164,20 +168,49 @@ pub fn run(args: CompileArgs) -> Result<(), String> {
         compiler.constant_inputs.push((name.trim().to_string(), value.trim().to_string()));
     }
     let selection = if args.output.is_empty() { OutputSelection::AllNumeric } else { OutputSelection::Named(args.output.clone()) };
+    let context = args.context.map(|c| c.context());
     let mut failed = false;
     for file in &args.files {
-        let c = compiler.compile_file_in(file, &selection, args.context.map(|c| c.context()));
-        failed |= super::report(&c.diagnostics);
-        let Some(kernel) = c.kernel else { continue };
         let stem = file.file_stem().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "kernel".into());
-        std::fs::create_dir_all(&args.out_dir).map_err(|e| format!("{}: cannot create folder: {e}", args.out_dir.display()))?;
-        let bytes = emit(&kernel, args.target).map_err(|e| format!("{}: {e}", file.display()))?;
-        let path = args.out_dir.join(format!("{stem}.{}", args.target.extension()));
-        write_atomically(&path, &bytes).map_err(|e| format!("{}: {e}", path.display()))?;
-        println!("wrote {}", path.display());
-        if args.dump_ir {
-            let path = args.out_dir.join(format!("{stem}.ir"));
-            write_atomically(&path, kernel.graph.dump().as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
+        // A closure context without --output: each renderable element into its own file
+        // (`<stem>_<element>`, as MaterialX's generateshader.py writes one per element) when the
+        // document holds several; one kernel named after the document otherwise.
+        let renderable = match (context, args.output.is_empty()) {
+            (Some(_), true) => compiler.renderable_outputs(file),
+            _ => Vec::new(),
+        };
+        let units: Vec<(OutputSelection, String)> = match renderable.len() > 1 {
+            true => renderable.iter().map(|n| (OutputSelection::Named(vec![n.clone()]), format!("{stem}_{}", n.replace('/', "_")))).collect(),
+            false => vec![(selection.clone(), stem.clone())],
+        };
+        for (selection, name) in units {
+            let c = compiler.compile_file_in(file, &selection, context);
+            let errors = super::report(&c.diagnostics);
+            failed |= errors;
+            let Some(kernel) = c.kernel else {
+                // Never exit 0 with nothing written.
+                if !errors {
+                    failed = true;
+                    match (context, c.skipped_closures.is_empty()) {
+                        (None, false) => eprintln!(
+                            "{}: error: nothing written: its outputs ({}) are closures, which compile in a closure context: give --context eval|albedo|sample|pdf",
+                            file.display(),
+                            c.skipped_closures.join(", ")
+                        ),
+                        _ => eprintln!("{}: error: nothing written: the document has nothing to compile", file.display()),
+                    }
+                }
+                continue;
+            };
+            std::fs::create_dir_all(&args.out_dir).map_err(|e| format!("{}: cannot create folder: {e}", args.out_dir.display()))?;
+            let bytes = emit(&kernel, args.target).map_err(|e| format!("{}: {e}", file.display()))?;
+            let path = args.out_dir.join(format!("{name}.{}", args.target.extension()));
+            write_atomically(&path, &bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+            println!("wrote {}", path.display());
+            if args.dump_ir {
+                let path = args.out_dir.join(format!("{name}.ir"));
+                write_atomically(&path, kernel.graph.dump().as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
+            }
         }
     }
     if failed {

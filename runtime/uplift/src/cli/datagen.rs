@@ -25,21 +25,25 @@ pub struct DatagenArgs {
     #[arg(long, default_value = "all")]
     pub class: String,
     /// Rows to write.
-    #[arg(long)]
+    #[arg(long, value_parser = super::bounds::ROWS.parser::<usize>())]
     pub count: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Rows per shard (a multiple of 16384).
-    #[arg(long, default_value_t = 1 << 20)]
+    #[arg(long, default_value_t = 1 << 20, value_parser = super::bounds::SHARD_ROWS.parser::<usize>())]
     pub shard_rows: usize,
     /// Output folder.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write into an existing folder that holds files this command did not write (they are
+    /// kept; it refuses such a folder otherwise: docs/cli.md, output folders).
+    #[arg(long)]
+    pub force: bool,
     /// Light directions per (parameter set, view): rows come in groups of K sharing their
     /// material and view (the first K/2 lit uniformly, the rest sampled); the albedo runs once
     /// per group and eval and sample through the stack's dependence-split kernels. A divisor
     /// of 16384.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = super::bounds::DIRECTIONS_PER_VIEW.parser::<usize>())]
     pub directions_per_view: usize,
     /// The engine the stack's kernels run on: the CPU (generated Rust) or wgpu (generated WGSL).
     #[arg(long, value_enum, default_value_t = super::eval::Engine::Cpu)]
@@ -63,7 +67,11 @@ pub fn run(args: DatagenArgs) -> Result<(), String> {
     if args.directions_per_view == 0 || CHUNK % args.directions_per_view != 0 || args.count % args.directions_per_view != 0 {
         return Err(format!("--directions-per-view {}: a divisor of {CHUNK} and of --count {}", args.directions_per_view, args.count));
     }
-    std::fs::create_dir_all(&args.output).map_err(|e| format!("{}: {e}", args.output.display()))?;
+    // The shard list is built up front: bounded before anything is allocated or written.
+    super::bounds::SHARDS.check("--count / --shard-rows", args.count.div_ceil(args.shard_rows) as u64)?;
+    // Refused early when foreign; created once the arguments are known good (a failed run
+    // leaves nothing behind).
+    let output = uplift_base::output_folder::OutputFolder::claim(&args.output, "datagen", args.force)?;
     let stack = args.stack.load()?;
     let engine: AnyEngine = match args.engine {
         super::eval::Engine::Cpu => CpuEngine::new()?.into(),
@@ -80,6 +88,7 @@ pub fn run(args: DatagenArgs) -> Result<(), String> {
         generator.classes().index_of(name).map_err(|e| format!("--class: {e}"))?;
     }
     generator.directions_per_view = args.directions_per_view;
+    output.create()?;
     let shards = args.count.div_ceil(args.shard_rows);
     let file_name = |shard: usize| format!("{}-{shard:05}.safetensors", mix.name());
     let mine: Vec<usize> = (0..shards).filter(|&k| shard_spec.is_none_or(|s| s.owns(&file_name(k)))).collect();

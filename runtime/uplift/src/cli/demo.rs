@@ -12,6 +12,10 @@ use std::path::PathBuf;
 pub struct DemoArgs {
     #[arg(short, long, default_value = "out/demo")]
     pub output: PathBuf,
+    /// Write into an existing folder that holds files this command did not write (they are
+    /// kept; it refuses such a folder otherwise: docs/cli.md, output folders).
+    #[arg(long)]
+    pub force: bool,
     #[arg(long, default_value = SHIPPED_DECODER)]
     pub decoder: PathBuf,
     /// Materials per enhancement Type.
@@ -21,9 +25,9 @@ pub struct DemoArgs {
     #[arg(long, default_value_t = 128)]
     pub texture_size: usize,
     /// Preview-ball image size.
-    #[arg(long, default_value_t = 160)]
+    #[arg(long, default_value_t = 160, value_parser = super::bounds::IMAGE_SIDE.parser::<usize>())]
     pub render_size: usize,
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = 32, value_parser = super::bounds::SPP.parser::<usize>())]
     pub spp: usize,
     /// Adam steps of the latent fitting.
     #[arg(long, default_value_t = 100)]
@@ -41,6 +45,7 @@ pub struct DemoArgs {
 }
 
 pub fn run(args: DemoArgs) -> Result<(), String> {
+    super::claim_output(&args.output, "demo", args.force)?;
     let threads = args.threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())).max(1);
     let o = DemoOptions {
         out: args.output,

@@ -10,7 +10,8 @@ use uplift_engines::batch::PatternEngine;
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_engines::wgpu_engine::WgpuEngine;
 use uplift_enhance::pbr_input::{self, PbrMaterial};
-use uplift_enhance::pipeline::{batch_names, enhance, enhance_batch, EnhanceOptions};
+use uplift_base::output_folder::OutputFolder;
+use uplift_enhance::pipeline::{batch_names, enhance_batch, enhance_into, EnhanceOptions};
 use uplift::shard::{Shard, ShardRun};
 use uplift_enhance::rules::{self, EnhancementType};
 use clap::Args;
@@ -65,17 +66,30 @@ pub struct EnhanceArgs {
     #[arg(long)]
     pub resolution: Option<String>,
     /// Width of the square procedural masks.
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = super::bounds::TEXTURE_SIDE.parser::<usize>())]
     pub mask_size: usize,
-    /// Output folder.
+    /// Output folder: a new or empty one, or this command's own earlier output (its
+    /// `.uplift-output-enhance` manifest); finished materials of a batch are skipped.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write into an existing folder that holds files `enhance` did not write: they are kept,
+    /// and one with the name of an output is still refused (docs/ARCHITECTURE.md, outputs).
+    #[arg(long)]
+    pub force: bool,
     /// Enhance only this shard of a batch: `i/N`, or `auto` in a Slurm job array or a
     /// Kubernetes indexed job (docs/scale.md).
     #[arg(long)]
     pub shard: Option<String>,
     #[command(flatten)]
     pub stack: super::StackArgs,
+    /// Extra library folder (repeatable; MATERIALX_SEARCH_PATH is read too): files the input
+    /// and the rules name (textures, glTF buffers and images, includes) may also lie there.
+    #[arg(long = "library")]
+    pub library: Vec<PathBuf>,
+    /// Let the input and the rules name files anywhere; by default a file they name must lie in
+    /// the naming input's folder or a library search path.
+    #[arg(long = "allow-any-path")]
+    pub allow_any_path: bool,
 }
 
 fn parse_type(s: &str) -> Result<Option<EnhancementType>, String> {
@@ -141,6 +155,7 @@ pub fn run(args: EnhanceArgs) -> Result<(), String> {
         return Err(format!("--rule-share {bad}: a share must be positive"));
     }
     let stack = args.stack.load()?;
+    let access = mtlx::FileAccess::for_libraries(&args.library.iter().chain(&args.stack.stack).cloned().collect::<Vec<_>>(), args.allow_any_path);
     let mut user_rules = Vec::new();
     for (k, path) in args.rules.iter().enumerate() {
         if path.is_dir() {
@@ -148,10 +163,10 @@ pub fn run(args: EnhanceArgs) -> Result<(), String> {
                 return Err(format!("{}: a folder of rules takes its shares from its shares.json, not --rule-share", path.display()));
             }
             for (file, share) in rule_folder(path)? {
-                user_rules.push((rules::interface_file(&file, &stack)?, share));
+                user_rules.push((rules::interface_file_with(&file, &stack, &access)?, share));
             }
         } else {
-            user_rules.push((rules::interface_file(path, &stack)?, args.rule_shares.get(k).copied().unwrap_or(1.0)));
+            user_rules.push((rules::interface_file_with(path, &stack, &access)?, args.rule_shares.get(k).copied().unwrap_or(1.0)));
         }
     }
     let options = EnhanceOptions {
@@ -174,7 +189,7 @@ pub fn run(args: EnhanceArgs) -> Result<(), String> {
         return Err(format!("--mask-size {}: 1 to 8192", options.mask_size));
     }
     let materials: Vec<PbrMaterial> = match (&args.input, &args.base_color) {
-        (Some(input), None) => pbr_input::discover(input)?,
+        (Some(input), None) => pbr_input::discover(input, &access)?,
         (None, Some(base)) => {
             let name = args.output.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_else(|| "material".into());
             vec![pbr_input::from_files(base, args.roughness.as_ref().unwrap(), args.metalness.as_ref().unwrap(), args.normal.as_deref(), &name)?]
@@ -189,13 +204,16 @@ pub fn run(args: EnhanceArgs) -> Result<(), String> {
         return Err("--shard splits a batch: give INPUT (a folder of materials, or a document of several)".into());
     }
     if materials.len() == 1 && args.shard.is_none() {
-        let e = enhance(&materials[0], &options, &args.output, engine.as_ref())?;
+        let e = enhance_into(&materials[0], &options, &args.output, args.force, engine.as_ref())?;
         eprintln!("wrote {} (Type {}, {})", e.out_dir.display(), e.kind.index(), e.rule);
     } else {
         let shard = Shard::from_arg(args.shard.as_deref())?;
         let batch: Vec<(String, &PbrMaterial)> = batch_names(&materials).into_iter().zip(&materials).filter(|(name, _)| shard.is_none_or(|s| s.owns(name))).collect();
+        // Claimed before anything (the shard manifest included) is written there.
+        let root = OutputFolder::claim(&args.output, "enhance", args.force)?;
+        root.create()?;
         let mut run = ShardRun::begin(&args.output, "enhance", shard, batch.iter().map(|(n, _)| n.clone()).collect())?;
-        let (done, skipped) = enhance_batch(&batch, &options, &args.output, engine.as_ref(), &mut |name, skipped| run.finished(name, skipped))?;
+        let (done, skipped) = enhance_batch(&batch, &options, &root, args.force, engine.as_ref(), &mut |name, skipped| run.finished(name, skipped))?;
         run.end()?;
         let of = shard.map_or(String::new(), |s| format!(" (shard {s}: {} of {} materials)", batch.len(), materials.len()));
         eprintln!("enhanced {done} material(s) into {}; {skipped} already finished{of}", args.output.display());

@@ -15,7 +15,7 @@ use std::path::PathBuf;
 use uplift_base::atomic_write::write_atomically;
 use uplift_base::csv_table;
 use uplift_compiler::OutputSelection;
-use uplift_engines::batch::{Columns, PatternEngine};
+use uplift_engines::batch::PatternEngine;
 use uplift_engines::cpu_engine::CpuEngine;
 use uplift_engines::table_batch::{batch_from_table, graph_inputs, output_columns};
 use uplift_engines::wgpu_engine::WgpuEngine;
@@ -62,6 +62,18 @@ pub struct EvalArgs {
     pub context: Option<super::ContextArg>,
 }
 
+/// The document's whole pattern kernel and the offset of `kernel`'s one output in its rows, when
+/// that kernel is shipped (in-process on the CPU engine) and `kernel` is a pattern kernel.
+fn shipped_whole(compiler: &uplift_compiler::Compiler, args: &EvalArgs, kernel: &uplift_compiler::PatternKernel) -> Option<(uplift_compiler::PatternKernel, usize)> {
+    if kernel.context.is_some() || kernel.outputs.len() != 1 || CpuEngine::is_shipped(kernel) {
+        return None;
+    }
+    let whole = compiler.compile_file_in(&args.file, &OutputSelection::AllNumeric, None).kernel?;
+    let out = whole.outputs.iter().find(|o| o.name == kernel.outputs[0].name && o.ty == kernel.outputs[0].ty)?;
+    let offset = out.offset;
+    CpuEngine::is_shipped(&whole).then_some((whole, offset))
+}
+
 pub fn run(args: EvalArgs) -> Result<(), String> {
     let compiler = super::compiler(&args.library, args.allow_any_path)?;
     let c = compiler.compile_file_in(&args.file, &OutputSelection::Named(vec![args.output.clone()]), args.context.map(|c| c.context()));
@@ -80,11 +92,22 @@ pub fn run(args: EvalArgs) -> Result<(), String> {
     let table = csv_table::parse(&input_name, &text)?;
     let n = table.rows.len();
     let batch = batch_from_table(&kernel, &graph_inputs(&args.file, &args.output), &table, &input_name)?;
-    let values: Columns = match args.engine {
-        Engine::Wgpu => WgpuEngine::new()?.run_pattern(&kernel, &batch)?,
-        Engine::Cpu => CpuEngine::new()?.run_pattern(&kernel, &batch)?,
+    let named = |e: String| format!("{}: output `{}`: {e}", args.file.display(), args.output);
+    let (columns, rows) = match args.engine {
+        Engine::Wgpu => (output_columns(&kernel), WgpuEngine::new()?.run_pattern(&kernel, &batch).map_err(named)?.to_rows()),
+        Engine::Cpu => match shipped_whole(&compiler, &args, &kernel) {
+            // The document's whole pattern kernel ships with the runtime (examples/marble.mtlx):
+            // it runs in-process, and this output's columns are kept (the same code the
+            // one-output kernel would run, without a runner build).
+            Some((whole, offset)) => {
+                let width = kernel.output_stride;
+                let all = CpuEngine::new()?.run_pattern(&whole, &batch_from_table(&whole, &graph_inputs(&args.file, &args.output), &table, &input_name)?)?.to_rows();
+                (output_columns(&kernel), all.chunks_exact(whole.output_stride).flat_map(|r| r[offset..offset + width].to_vec()).collect())
+            }
+            None => (output_columns(&kernel), CpuEngine::new()?.run_pattern(&kernel, &batch).map_err(named)?.to_rows()),
+        },
     };
-    let text = csv_table::write(&output_columns(&kernel), &values.to_rows());
+    let text = csv_table::write(&columns, &rows);
     write_atomically(&args.out, text.as_bytes()).map_err(|e| format!("{}: {e}", args.out.display()))?;
     println!("wrote {} ({n} rows)", args.out.display());
     Ok(())

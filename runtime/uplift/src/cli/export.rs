@@ -23,20 +23,24 @@ pub struct ExportArgs {
     pub mesh: PathBuf,
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write into an existing folder that holds files this command did not write (they are
+    /// kept; it refuses such a folder otherwise: docs/cli.md, output folders).
+    #[arg(long)]
+    pub force: bool,
     /// Frames of the orbit (17 = 8k + 1 suits causal video tokenizers).
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = super::bounds::FRAMES.parser::<usize>())]
     pub frames: usize,
     /// Square frames of this many pixels.
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = super::bounds::IMAGE_SIDE.parser::<usize>())]
     pub size: usize,
     /// The video models' native 1280×704 instead of --size.
     #[arg(long)]
     pub native: bool,
     /// Samples per pixel of the shaded frames.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = super::bounds::SPP.parser::<usize>())]
     pub spp: usize,
     /// Bounces of the shaded frames' paths.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, value_parser = super::bounds::BOUNCES.parser::<usize>())]
     pub bounces: usize,
     /// Environment: an equirectangular .hdr/.exr file, `studio` or `white`.
     #[arg(long, default_value = "studio")]
@@ -97,6 +101,7 @@ pub fn run(args: ExportArgs) -> Result<(), String> {
         }
         dirs.into_iter().map(|d| (d.clone(), args.output.join(d.file_name().unwrap_or_default()))).filter(|(_, out)| shard.is_none_or(|s| s.owns(&asset_name(out)))).collect()
     };
+    super::claim_output(&args.output, "export", args.force)?;
     let mut run = ShardRun::begin(&args.output, "export", shard, assets.iter().map(|(_, out)| asset_name(out)).collect())?;
     for (dir, out) in &assets {
         let start = std::time::Instant::now();

@@ -25,10 +25,10 @@ pub struct FitArgs {
     #[arg(long, default_value = SHIPPED_DECODER)]
     pub decoder: PathBuf,
     /// Adam steps.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = 200, value_parser = super::bounds::STEPS.parser::<u64>())]
     pub steps: u64,
     /// Direction pairs per texel group and step (fresh every step).
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 8, value_parser = super::bounds::DIRECTIONS_PER_VIEW.parser::<usize>())]
     pub directions: usize,
     /// Quantisation steps per encoded parameter when grouping texels (0: exact vectors only).
     #[arg(long, default_value_t = 16)]
@@ -83,11 +83,21 @@ pub fn run(args: FitArgs) -> Result<(), String> {
     let mut run = ShardRun::begin(&args.material, "fit", shard, mine.iter().map(|f| name(f)).collect())?;
     let bar = indicatif::ProgressBar::new(mine.len() as u64);
     bar.set_style(indicatif::ProgressStyle::with_template("{bar:30} {pos}/{len} {msg}").map_err(|e| e.to_string())?);
-    let mut skipped = 0;
+    let (mut skipped, mut refitted) = (0, 0);
     for f in &mine {
         bar.set_message(name(f));
         let folder = MaterialFolder::open(f)?;
-        let skip = folder.has_fit();
+        // A finished fit is kept only when it was made with this run's settings; one with other
+        // settings is refitted, and the run says so.
+        let other = match folder.has_fit() {
+            true => other_settings(&folder.read_fit()?, &args, &o),
+            false => None,
+        };
+        if let Some(why) = &other {
+            bar.suspend(|| eprintln!("{}: refitting: its fit.json records {why}", f.display()));
+            refitted += 1;
+        }
+        let skip = folder.has_fit() && other.is_none();
         if skip {
             skipped += 1;
         } else {
@@ -99,8 +109,25 @@ pub fn run(args: FitArgs) -> Result<(), String> {
     bar.finish_and_clear();
     run.end()?;
     let of = shard.map_or(String::new(), |s| format!(" (shard {s}: {} of {} materials)", mine.len(), folders.len()));
-    eprintln!("fitted {} material(s) under {}; {skipped} already fitted{of}", mine.len() - skipped, args.material.display());
+    let re = if refitted > 0 { format!(" ({refitted} refitted: their fits had other settings)") } else { String::new() };
+    eprintln!("fitted {} material(s) under {}{re}; {skipped} already fitted with these settings{of}", mine.len() - skipped, args.material.display());
     Ok(())
+}
+
+/// How a finished fit's recorded settings differ from this run's (`--steps 600, this run 10`),
+/// or None when they are the same.
+fn other_settings(rec: &uplift_material::FitRecord, args: &FitArgs, o: &FitOptions) -> Option<String> {
+    let this_decoder = args.decoder.display().to_string();
+    let bound = |b: bool| if b { "on" } else { "off" }.to_string();
+    let pairs = [
+        ("--decoder", rec.decoder.clone(), this_decoder),
+        ("--steps", rec.steps.to_string(), o.steps.to_string()),
+        ("--directions", rec.directions.to_string(), o.directions.to_string()),
+        ("--levels", rec.levels.to_string(), o.levels.to_string()),
+        ("the energy bound", bound(rec.energy_bound.is_some()), bound(o.energy.is_some())),
+    ];
+    let differ: Vec<String> = pairs.iter().filter(|(_, a, b)| a != b).map(|(flag, a, b)| format!("{flag} {a}, this run {b}")).collect();
+    (!differ.is_empty()).then(|| differ.join("; "))
 }
 
 /// Fits one material folder; `verbose` prints its Eq. 3 and energy-bound figures.
@@ -115,6 +142,16 @@ fn fit_one(
 ) -> Result<(), String> {
     let ParamsImage { width: w, height: h, params, diffuse, .. } = folder.read_params(stack)?;
     let r = fit_material(model, generator, &params, diffuse.as_deref(), w, h, o, verbose)?;
+    // Never a non-finite fit on disk (or a `null` in fit.json): a diverged fit is an error and
+    // nothing is written.
+    let losses = [("before", r.before.total), ("after", r.after.total), ("after_unbounded", r.after_unbounded.total)];
+    if let Some((what, v)) = losses.iter().find(|(_, v)| !v.is_finite()) {
+        return Err(format!("{}: the fit diverged (Eq. 3 {what} the fit is {v}); nothing written — are params.exr's values inside the stack's ranges?", folder.dir().display()));
+    }
+    if let Some(i) = r.latents.iter().position(|x| !x.is_finite()) {
+        let t = i / r.latent.max(1);
+        return Err(format!("{}: the fit diverged (latent {} of texel ({}, {}) is {}); nothing written", folder.dir().display(), i % r.latent.max(1), t % w, t / w, r.latents[i]));
+    }
     folder.write_latents(&r.latent_image())?;
     folder.write_fit(&r.record(&args.decoder, o))?;
     if !verbose {

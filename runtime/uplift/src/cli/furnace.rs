@@ -33,7 +33,7 @@ pub struct FurnaceArgs {
     #[arg(long)]
     pub shard: Option<String>,
     /// View cosines per texel.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 16, value_parser = super::bounds::VIEWS.parser::<usize>())]
     pub views: usize,
     /// Light directions per texel and view.
     #[arg(long, default_value_t = 1024)]

@@ -4,7 +4,7 @@
 //! one PNG per material and `index.html`, a page that shows them with their document, name and
 //! the compiler's warnings (a missing texture, …), or why one failed. Failures do not stop the
 //! gallery; the command exits 1 after writing the page if any material failed. Rendered
-//! images are kept: a second run renders only what is missing (`--force` renders all).
+//! images are kept: a second run renders only what is missing (`--rerender` renders all).
 
 use super::render::{environment, write_outputs};
 use uplift::demo::report::escape;
@@ -26,6 +26,10 @@ pub struct GalleryArgs {
     /// The output folder (PNG per material, index.html).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write into an existing folder that holds files this command did not write (they are
+    /// kept; it refuses such a folder otherwise: docs/cli.md, output folders).
+    #[arg(long)]
+    pub force: bool,
     /// The engine the kernels run on (wgpu: no per-material build).
     #[arg(long, value_enum, default_value_t = super::eval::Engine::Wgpu)]
     pub engine: super::eval::Engine,
@@ -33,14 +37,14 @@ pub struct GalleryArgs {
     #[arg(long, default_value = "studio")]
     pub env: String,
     /// Image width and height in pixels.
-    #[arg(long, default_value_t = 160)]
+    #[arg(long, default_value_t = 160, value_parser = super::bounds::IMAGE_SIDE.parser::<usize>())]
     pub size: usize,
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = super::bounds::SPP.parser::<usize>())]
     pub spp: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Surface interactions after the first.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = super::bounds::BOUNCES.parser::<usize>())]
     pub bounces: usize,
     /// Extra library folder (repeatable); MATERIALX_SEARCH_PATH is read too.
     #[arg(long = "library")]
@@ -50,7 +54,7 @@ pub struct GalleryArgs {
     pub allow_any_path: bool,
     /// Render every material again, even those whose image exists.
     #[arg(long)]
-    pub force: bool,
+    pub rerender: bool,
 }
 
 /// One gallery entry.
@@ -97,7 +101,7 @@ pub fn run(args: GalleryArgs) -> Result<(), String> {
     if files.is_empty() {
         return Err(format!("{}: no MaterialX documents (.mtlx)", args.documents.display()));
     }
-    std::fs::create_dir_all(&args.output).map_err(|e| format!("{}: {e}", args.output.display()))?;
+    super::claim_output(&args.output, "gallery", args.force)?;
     // What to render: each document's materials, else its surface shaders.
     let mut jobs: Vec<(PathBuf, String, Option<String>)> = Vec::new();
     let mut entries: Vec<Entry> = Vec::new();
@@ -133,7 +137,7 @@ pub fn run(args: GalleryArgs) -> Result<(), String> {
                 // Positions relative to the gallery's folder, as the captions name documents.
                 let prefix = format!("{}/", root.display());
                 entry.notes = material.warnings.iter().map(|w| w.replace(&prefix, "")).collect();
-                let rendered = if out.is_file() && !args.force {
+                let rendered = if out.is_file() && !args.rerender {
                     Ok(())
                 } else {
                     render_model(&Sphere::preview(), &env, &material, &o, None).and_then(|img| write_outputs(&[out.clone()], &img.radiance, (img.width, img.height), 1.0))

@@ -12,18 +12,22 @@ pub struct MasksArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Width and height in texels.
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = super::bounds::TEXTURE_SIDE.parser::<usize>())]
     pub size: usize,
     /// Output folder.
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write into an existing folder that holds files this command did not write (they are
+    /// kept; it refuses such a folder otherwise: docs/cli.md, output folders).
+    #[arg(long)]
+    pub force: bool,
 }
 
 pub fn run(args: MasksArgs) -> Result<(), String> {
     if args.size == 0 || args.size > 16384 {
         return Err(format!("--size {}: masks are 1 to 16384 texels wide", args.size));
     }
-    std::fs::create_dir_all(&args.output).map_err(|e| format!("{}: {e}", args.output.display()))?;
+    super::claim_output(&args.output, "masks", args.force)?;
     for kind in [MaskKind::Dust, MaskKind::Damage] {
         let path = args.output.join(format!("{}.png", kind.file_stem()));
         generate(kind, args.seed, args.size).write_png(&path)?;

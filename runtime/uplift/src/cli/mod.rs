@@ -1,6 +1,7 @@
 //! Subcommands of the `uplift` binary, one module each. Each `run` returns `Err(message)` for
 //! a failure to print (already positioned as `file:line:col: …`); the binary exits 1.
 
+pub mod bounds;
 pub mod check;
 pub mod compile;
 pub mod compile_bench;
@@ -54,6 +55,15 @@ impl ContextArg {
     }
 }
 
+/// Claims the folder a command writes (`uplift_base::output_folder`) and creates it: a new or
+/// empty folder or the command's own earlier output; one holding other files is refused (and
+/// left untouched) unless `force`, which writes beside them.
+pub fn claim_output(dir: &std::path::Path, command: &str, force: bool) -> Result<uplift_base::output_folder::OutputFolder, String> {
+    let folder = uplift_base::output_folder::OutputFolder::claim(dir, command, force)?;
+    folder.create()?;
+    Ok(folder)
+}
+
 /// Prints diagnostics to stderr; returns true when any is an error.
 pub fn report(diagnostics: &[Diagnostic]) -> bool {
     for d in diagnostics {
@@ -66,7 +76,13 @@ pub fn report(diagnostics: &[Diagnostic]) -> bool {
 /// with `allow_any_path`, else in their folder or the search paths); the library's diagnostics are
 /// printed, and an error among them fails.
 pub fn compiler(library: &[PathBuf], allow_any_path: bool) -> Result<Compiler, String> {
-    let mut compiler = Compiler::new(library);
+    layered_compiler(&[], library, allow_any_path)
+}
+
+/// [`compiler`] with `stack` folders loaded before the builtin library (`--stack DIR`,
+/// `Compiler::layered`).
+pub fn layered_compiler(stack: &[PathBuf], library: &[PathBuf], allow_any_path: bool) -> Result<Compiler, String> {
+    let mut compiler = Compiler::layered(stack, library);
     if allow_any_path {
         compiler = compiler.allow_any_path();
     }

@@ -12,6 +12,10 @@ pub struct PackArgs {
     pub exports: Vec<PathBuf>,
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write into an existing folder that holds files this command did not write (they are
+    /// kept; it refuses such a folder otherwise: docs/cli.md, output folders).
+    #[arg(long)]
+    pub force: bool,
     /// The most bytes of a shard, in MiB (an asset never splits across shards).
     #[arg(long, default_value_t = 256)]
     pub shard_mb: u64,
@@ -32,6 +36,7 @@ pub fn run(args: PackArgs) -> Result<(), String> {
         found.sort();
         dirs.extend(found);
     }
+    super::claim_output(&args.output, "pack", args.force)?;
     let s = uplift::pack::pack(&dirs, &args.output, args.shard_mb.saturating_mul(1 << 20))?;
     eprintln!("packed {} samples into {} shards ({:.1} MiB) under {}", s.samples, s.shards, s.bytes as f64 / (1 << 20) as f64, args.output.display());
     Ok(())

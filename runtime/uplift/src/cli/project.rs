@@ -17,8 +17,12 @@ pub struct ProjectArgs {
     pub mesh: PathBuf,
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Write into an existing folder that holds files this command did not write (they are
+    /// kept; it refuses such a folder otherwise: docs/cli.md, output folders).
+    #[arg(long)]
+    pub force: bool,
     /// Texture size (width and height).
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = super::bounds::BAKE_SIDE.parser::<usize>())]
     pub resolution: usize,
     /// The glTF material whose texture space is filled.
     #[arg(long, default_value_t = 0)]
@@ -35,9 +39,6 @@ pub struct ProjectArgs {
 }
 
 pub fn run(args: ProjectArgs) -> Result<(), String> {
-    if args.resolution == 0 || args.resolution > 8192 {
-        return Err(format!("--resolution {}: between 1 and 8192", args.resolution));
-    }
     let asset = gltf_input::load(&args.mesh)?;
     let stack = args.stack.load()?;
     let fill = match args.fill.as_str() {
@@ -53,6 +54,7 @@ pub fn run(args: ProjectArgs) -> Result<(), String> {
         other => return Err(format!("--fill {other}: inpaint or diffuse")),
     };
     let o = ProjectOptions { width: args.resolution, height: args.resolution, material: args.gltf_material, fill };
+    super::claim_output(&args.output, "project", args.force)?;
     let s = project(&args.generated, &asset, &stack, &args.output, &o)?;
     eprintln!(
         "projected {} into {}: {} of {} texels in the UV charts seen by the frames, {} inpainted; {:.1} s ({:.0} k texels/s)",

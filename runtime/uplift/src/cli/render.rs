@@ -61,7 +61,7 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub settings: RenderSettings,
     /// Surface interactions after the first.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 2, value_parser = super::bounds::BOUNCES.parser::<usize>())]
     pub bounces: usize,
     /// Direct lighting: mis, bsdf or light.
     #[arg(long, default_value = "mis")]
@@ -78,9 +78,9 @@ pub struct RenderSettings {
     #[arg(long, default_value = "studio")]
     pub env: String,
     /// Image width and height in pixels.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = super::bounds::IMAGE_SIDE.parser::<usize>())]
     pub size: usize,
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = 64, value_parser = super::bounds::SPP.parser::<usize>())]
     pub spp: usize,
     /// Exposure multiplier before AgX.
     #[arg(long, default_value_t = 1.0)]

@@ -1,6 +1,7 @@
 //! `uplift shards OUT…`: what the shards of sharded batch runs (`--shard i/N`) did, read from
 //! their manifests under each OUT (uplift::shard): per stage, the shards started and complete,
-//! the assets finished, missing and duplicated. Exit 0 when every stage is complete with each
+//! the assets finished, missing, duplicated and damaged (a finished asset whose files, recorded
+//! with size and SHA-256, were deleted or changed since). Exit 0 when every stage is complete with each
 //! asset finished exactly once, 1 otherwise (what is left is listed).
 
 use clap::Args;
@@ -27,7 +28,7 @@ pub fn run(args: ShardsArgs) -> Result<(), String> {
         for s in stages {
             let never: Vec<String> = (0..s.shards).filter(|i| !s.started.contains(i)).map(|i| i.to_string()).collect();
             println!(
-                "{} {}: {}/{} shards complete ({} started); {} finished, {} missing, {} duplicated{}",
+                "{} {}: {}/{} shards complete ({} started); {} finished, {} missing, {} duplicated, {} damaged{}",
                 out.display(),
                 s.stage,
                 s.complete.len(),
@@ -36,6 +37,7 @@ pub fn run(args: ShardsArgs) -> Result<(), String> {
                 s.finished,
                 s.missing.len(),
                 s.duplicated.len(),
+                s.damaged.len(),
                 if never.is_empty() { String::new() } else { format!("; shards never started: {}", never.join(", ")) }
             );
             for a in &s.missing {
@@ -43,6 +45,9 @@ pub fn run(args: ShardsArgs) -> Result<(), String> {
             }
             for a in &s.duplicated {
                 println!("  duplicated: {a}");
+            }
+            for (a, why) in &s.damaged {
+                println!("  damaged: {a}: {why}");
             }
             if !s.is_done() {
                 unfinished.push(format!("{} {}", out.display(), s.stage));

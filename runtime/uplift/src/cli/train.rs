@@ -15,10 +15,10 @@ use std::path::PathBuf;
 #[derive(Args)]
 pub struct TrainArgs {
     /// Training steps.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = 1000, value_parser = super::bounds::STEPS.parser::<u64>())]
     pub steps: u64,
     /// Rows per step.
-    #[arg(long, default_value_t = 16384)]
+    #[arg(long, default_value_t = 16384, value_parser = super::bounds::BATCH.parser::<usize>())]
     pub batch: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -57,7 +57,7 @@ pub struct TrainArgs {
     pub views: String,
     /// Light directions per (parameter set, view) in the generated rows (`uplift datagen
     /// --directions-per-view`); a divisor of --batch.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = 1, value_parser = super::bounds::DIRECTIONS_PER_VIEW.parser::<usize>())]
     pub directions_per_view: usize,
     /// Latent values per texel (default: the --init file's, or the paper's 6 — two RGB
     /// textures); wider than the --init file's widens it (the new inputs start unused).

@@ -17,10 +17,10 @@ pub struct TrainSamplerArgs {
     #[arg(long, default_value = SHIPPED_DECODER)]
     pub decoder: PathBuf,
     /// Adam steps.
-    #[arg(long, default_value_t = 1500)]
+    #[arg(long, default_value_t = 1500, value_parser = super::bounds::STEPS.parser::<u64>())]
     pub steps: u64,
     /// Views (parameter rows of the training classes) per step.
-    #[arg(long, default_value_t = 512)]
+    #[arg(long, default_value_t = 512, value_parser = super::bounds::VIEWS.parser::<usize>())]
     pub views: usize,
     /// Reference directions per view (half from the stack's sampler, half cosine).
     #[arg(long, default_value_t = 32)]

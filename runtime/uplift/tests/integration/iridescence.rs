@@ -169,8 +169,8 @@ fn the_iridescence_option_writes_valid_materials() {
     let out = dir.join("out");
     let (code, _, err) = uplift(&["enhance", s(&repo().join("examples/pbr_materials.mtlx")), "--type", "2", "--iridescence", "--resolution", "8x8", "--mask-size", "32", "-o", s(&out)]);
     assert_eq!(code, 0, "{err}");
-    for entry in std::fs::read_dir(&out).unwrap() {
-        let m = entry.unwrap().path();
+    // Every material folder (not enhance's manifest beside them).
+    for m in std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().path()).filter(|p| p.is_dir()) {
         let img = uplift_base::exr::read(&m.join("params.exr")).unwrap();
         let t = img.channel("coat_film_thickness").unwrap();
         assert!(t.iter().all(|&x| (100.0..=1000.0).contains(&x) && x == t[0]), "{}: film thickness {}", m.display(), t[0]);

@@ -199,6 +199,13 @@ fn a_lobe_added_as_graph_nodes_runs_through_every_stage() {
     assert!(stack.signature().starts_with(&builtin.signature()));
     assert!(stack.signature().ends_with("tint_weight[0.0,1.0]linear tint_color.R[0.0,1.0]linear tint_color.G[0.0,1.0]linear tint_color.B[0.0,1.0]linear"), "{}", stack.signature());
 
+    // check and compile take the same --stack (issue 46): the rule, which uses the new lobe,
+    // checks with it and not without it.
+    run(&["check", "--stack", &lib_s, &rule_s]);
+    let (code, _, stderr) = uplift(&["check", &rule_s]);
+    assert_eq!(code, 1, "a rule using the new lobe checks without its --stack: {stderr}");
+    run(&["compile", "--stack", &lib_s, &rule_s, "--target", "wgsl", "-o", s(&dir.join("compiled"))]);
+
     // enhance: the user's rule, and a builtin Type (which leaves the lobe out: weight 0).
     let material = repo().join("examples/pbr_materials.mtlx");
     let enhanced = dir.join("enhanced");
