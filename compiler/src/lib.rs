@@ -16,6 +16,7 @@ pub mod compile;
 pub mod closure_fold;
 pub mod const_eval;
 pub mod fuzz_entry;
+pub mod fuzz_stable;
 pub mod graph_builder;
 pub mod ir;
 pub mod kernel;

@@ -1,4 +1,4 @@
-//! The fuzz targets on stable Rust, for CI: the bodies of `fuzz/fuzz_targets/*`
+//! The fuzz targets on stable Rust, for CI (`uplift_compiler::fuzz_stable`): the bodies of `fuzz/fuzz_targets/*`
 //! (`uplift_compiler::fuzz_entry::{read, check, compile}`) run over their seed corpus — the
 //! snapshot inputs `tests/in`, the malformed documents `tests/malformed` and, when
 //! `UPLIFT_MTLX_DATA` is set, MaterialX's TestSuite — and then over seeded random mutations of it
@@ -14,7 +14,6 @@
 //! input that takes longer than 10 s counts as a hang and fails too.
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
 
 /// The MaterialX words a mutation inserts: element and attribute names, types, values
 /// MaterialX rejects, XML syntax.
@@ -30,21 +29,6 @@ const TOKENS: &[&str] = &[
     " uniform=\"true\"", " default=\"0\"", " nodedef=\"ND_add_float\"", " node=\"add\"", " namespace=\"ns\"",
     "<!-- c -->", "<![CDATA[x]]>", "&amp;", "&#0;", "\u{0}", "<", ">", "/>", "\"", "=", " ",
 ];
-
-/// A small seeded generator (xorshift64*), so every run's input sequence is reproducible.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        if n == 0 { 0 } else { (self.next() % n as u64) as usize }
-    }
-}
 
 fn repo_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
@@ -70,69 +54,9 @@ fn corpus() -> Vec<Vec<u8>> {
     corpus
 }
 
-/// One mutation of `input` (1–4 edits), drawing on `corpus` for splices.
-fn mutate(rng: &mut Rng, corpus: &[Vec<u8>]) -> Vec<u8> {
-    let mut v = corpus[rng.below(corpus.len())].clone();
-    for _ in 0..1 + rng.below(4) {
-        let len = v.len();
-        let at = rng.below(len + 1);
-        match rng.below(6) {
-            0 if len > 0 => {
-                let i = rng.below(len);
-                v[i] ^= 1 << rng.below(8);
-            }
-            1 if len > 0 => {
-                let end = (at + 1 + rng.below(64)).min(len);
-                v.drain(at..end);
-            }
-            2 if len > 0 => {
-                let from = rng.below(len);
-                let end = (from + 1 + rng.below(256)).min(len);
-                let piece = v[from..end].to_vec();
-                v.splice(at..at, piece);
-            }
-            3 => {
-                let other = &corpus[rng.below(corpus.len())];
-                let from = rng.below(other.len());
-                let end = (from + 1 + rng.below(512)).min(other.len());
-                let cut_end = (at + rng.below(512)).min(len);
-                v.splice(at..cut_end, other[from..end].iter().copied());
-            }
-            _ => {
-                let t = TOKENS[rng.below(TOKENS.len())].as_bytes();
-                v.splice(at..at, t.iter().copied());
-            }
-        }
-    }
-    v
-}
-
 fn run_target(name: &str, target: fn(&[u8])) {
-    let seconds: u64 = std::env::var("UPLIFT_FUZZ_SECONDS").ok().map(|s| s.parse().expect("UPLIFT_FUZZ_SECONDS: a whole number of seconds")).unwrap_or(8);
-    let seed: u64 = std::env::var("UPLIFT_FUZZ_SEED").ok().map(|s| s.parse().expect("UPLIFT_FUZZ_SEED: a whole number")).unwrap_or(1);
-    let corpus = corpus();
     let last = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("fuzz-stable-{name}.mtlx"));
-    let mut rng = Rng(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1);
-    let start = Instant::now();
-    let budget = Duration::from_secs(seconds);
-    let mut runs = 0usize;
-    let mut slowest = Duration::ZERO;
-    while runs < corpus.len() || start.elapsed() < budget {
-        let input = if runs < corpus.len() { corpus[runs].clone() } else { mutate(&mut rng, &corpus) };
-        std::fs::write(&last, &input).unwrap();
-        let t = Instant::now();
-        let result = std::panic::catch_unwind(|| target(&input));
-        let took = t.elapsed();
-        if let Err(e) = result {
-            let msg = e.downcast_ref::<String>().cloned().or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string())).unwrap_or_default();
-            panic!("fuzz target `{name}` panicked on input {runs} (seed {seed}), saved as {}: {msg}", last.display());
-        }
-        assert!(took < Duration::from_secs(10), "fuzz target `{name}` took {took:?} on input {runs} (seed {seed}), saved as {}", last.display());
-        slowest = slowest.max(took);
-        runs += 1;
-    }
-    let secs = start.elapsed().as_secs_f64();
-    eprintln!("fuzz target `{name}`: {runs} inputs ({} seeds) in {secs:.1} s, {:.0}/s, slowest {slowest:?}", corpus.len(), runs as f64 / secs);
+    uplift_compiler::fuzz_stable::run(name, &corpus(), TOKENS, &last, target);
 }
 
 #[test]

@@ -5,6 +5,7 @@
 
 pub mod masks;
 pub mod glints;
+pub mod fuzz_entry;
 pub mod gltf_input;
 pub mod material_writer;
 pub mod pbr_input;

@@ -19,6 +19,7 @@ mod datagen_engines;
 mod demo_report;
 mod enhance;
 mod export;
+mod fuzz_enhance;
 mod glints;
 mod grazing_views;
 mod hostile;
