@@ -389,8 +389,13 @@ fn decode_prim(p: &gltf::Primitive, mesh: usize, bufs: &[Vec<u8>]) -> Result<Pri
     let vec3 = |v: Vec<f64>, k: usize| -> Vec<DVec3> { v.chunks_exact(k).map(|c| DVec3::new(c[0], c[1], c[2])).collect() };
     let nrm = checked(attr(Semantic::Normals, 3)?, 3, "NORMAL")?.map(|v| vec3(v, 3));
     let tan = checked(attr(Semantic::Tangents, 4)?, 4, "TANGENT")?.map(|v| vec3(v, 4));
-    let uv = checked(attr(Semantic::TexCoords(0), 2)?, 2, "TEXCOORD_0")?
+    let uv: Option<Vec<DVec2>> = checked(attr(Semantic::TexCoords(0), 2)?, 2, "TEXCOORD_0")?
         .map(|v| v.chunks_exact(2).map(|c| DVec2::new(c[0], c[1])).collect());
+    // Checked where they enter, like positions (non-finite normals and tangents fall back to
+    // the face's): a texture coordinate that is not finite is an error.
+    if let Some(i) = uv.as_ref().and_then(|uv| uv.iter().position(|t| !t.is_finite())) {
+        return Err(format!("TEXCOORD_0 of vertex {i} is not finite"));
+    }
     let idx: Vec<usize> = match p.indices() {
         None => (0..n).collect(),
         Some(a) => {

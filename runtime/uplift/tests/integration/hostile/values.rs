@@ -60,7 +60,11 @@ fn triangle_gltf(node: &str, material: &str) -> String {
 }
 
 fn mesh(positions: [f32; 9]) -> Vec<u8> {
-    positions.iter().chain(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0]).flat_map(|x| x.to_le_bytes()).collect()
+    mesh_with(positions, [0.0, 0.0, 1.0, 0.0, 0.0, 1.0])
+}
+
+fn mesh_with(positions: [f32; 9], uvs: [f32; 6]) -> Vec<u8> {
+    positions.iter().chain(&uvs).flat_map(|x| x.to_le_bytes()).collect()
 }
 
 #[test]
@@ -75,10 +79,18 @@ fn gltf_transforms_positions_and_factors_are_checked_where_the_asset_is_read() {
         (good, r#"{"mesh":0}"#.into(), r#"{"name":"m","pbrMetallicRoughness":{"metallicFactor":-3}}"#.into(), "materials[0] (`m`): pbrMetallicRoughness.metallicFactor `-3` is outside 0..1"),
         (good, r#"{"mesh":0}"#.into(), r#"{"name":"m","pbrMetallicRoughness":{"baseColorFactor":[50,0.5,0.5,1]}}"#.into(), "pbrMetallicRoughness.baseColorFactor `50` is outside 0..1"),
     ];
-    for (k, (positions, node, material, want)) in cases.iter().enumerate() {
+    // A NaN texture coordinate (found by `cargo fuzz run gltf`: it reached the world triangles
+    // the renderer and export read).
+    let nan_uv = mesh_with(good, [0.0, 0.0, f32::NAN, 0.0, 0.0, 1.0]);
+    let cases: Vec<(Vec<u8>, String, String, &str)> = cases
+        .into_iter()
+        .map(|(p, n, m, w)| (mesh(p), n, m, w))
+        .chain([(nan_uv, r#"{"mesh":0}"#.to_string(), plain.to_string(), "TEXCOORD_0 of vertex 1 is not finite")])
+        .collect();
+    for (k, (bytes, node, material, want)) in cases.iter().enumerate() {
         let dir = root.join(format!("case{k}"));
         std::fs::create_dir_all(&dir).unwrap();
-        std::fs::write(dir.join("mesh.bin"), mesh(*positions)).unwrap();
+        std::fs::write(dir.join("mesh.bin"), bytes).unwrap();
         let file = dir.join("a.gltf");
         std::fs::write(&file, triangle_gltf(node, material)).unwrap();
         let out = root.join(format!("out{k}"));
