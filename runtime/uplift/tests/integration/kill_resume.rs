@@ -131,7 +131,9 @@ fn datagen_killed_and_rerun_ends_as_an_uninterrupted_run() {
     let args = |out: &Path| -> Vec<String> { ["datagen", "--count", "98304", "--shard-rows", "16384", "--seed", "5", "-o", s(out)].map(String::from).to_vec() };
     let args_a = args(&a);
     let (_, d) = run_ok(&args_a.iter().map(String::as_str).collect::<Vec<_>>());
-    assert_eq!(tree(&a).len(), 6, "{:?}", tree(&a));
+    // Six shards and datagen's output manifest (uplift_base::output_folder).
+    assert_eq!(tree(&a).len(), 7, "{:?}", tree(&a));
+    assert!(tree(&a).contains(&".uplift-output-datagen".to_string()), "{:?}", tree(&a));
     let args_b = args(&b);
     let args_b: Vec<&str> = args_b.iter().map(String::as_str).collect();
     let finished = || inodes((0..6).map(|k| b.join(format!("all-{k:05}.safetensors"))));
